@@ -1,0 +1,28 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace tetrefine {
+
+// The unique edges of a tet mesh, each listed once, ordered by (smaller endpoint, larger
+// endpoint): an order that depends only on the mesh, never on threads.
+struct EdgeTable {
+  std::vector<uint32_t>
+      first;  // V + 1: edges whose smaller endpoint is v are [first[v], first[v+1])
+  std::vector<uint32_t> second;                    // E: the larger endpoint of each edge
+  std::vector<std::array<uint32_t, 6>> tet_edges;  // T x 6: edge ids in kTetEdges order
+
+  int64_t size() const { return static_cast<int64_t>(second.size()); }
+  // Smaller endpoint of edge e (binary search over `first`).
+  uint32_t FirstOf(uint32_t e) const;
+};
+
+// Builds the table in O(T) work plus small per-vertex sorts, in parallel on the current arena.
+// Indices must be valid (the mesh validated).
+EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points);
+
+}  // namespace tetrefine

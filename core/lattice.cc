@@ -1,0 +1,105 @@
+#include "core/lattice.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "core/parallel.h"
+
+namespace tetrefine {
+
+TetLattice SampleTetLattice(const Volume& volume, const Mesh& mesh, int64_t t, int n,
+                            double norm_coeff, double epsilon, bool clamp) {
+  const Tet& tet = mesh.tets[t];
+  const Vec3* p[4] = {&mesh.points[tet[0]], &mesh.points[tet[1]], &mesh.points[tet[2]],
+                      &mesh.points[tet[3]]};
+  const double v[4] = {mesh.values[tet[0]], mesh.values[tet[1]], mesh.values[tet[2]],
+                       mesh.values[tet[3]]};
+  TetLattice out;
+  const double inv_n = 1.0 / n;
+  for (int i = 0; i <= n; ++i) {
+    for (int j = 0; i + j <= n; ++j) {
+      for (int k = 0; i + j + k <= n; ++k) {
+        const int l = n - i - j - k;
+        const double b[4] = {i * inv_n, j * inv_n, k * inv_n, l * inv_n};
+        Vec3 x{0, 0, 0};
+        double approx = 0.0;
+        for (int c = 0; c < 4; ++c) {
+          for (int a = 0; a < 3; ++a) x[a] += b[c] * (*p[c])[a];
+          approx += b[c] * v[c];
+        }
+        Vec3 u = volume.ContinuousIndex(x);
+        if (clamp) u = volume.ClampToGrid(u);
+        const double error = std::abs(volume.SampleIndex(u) - approx) / norm_coeff;
+        out.sum_error += error;
+        ++out.points;
+        if (error > epsilon) ++out.above_epsilon;
+        if (error > out.max_error || out.points == 1) {
+          out.max_error = error;
+          const int zeros = (i == 0) + (j == 0) + (k == 0) + (l == 0);
+          const int halves = (2 * i == n) + (2 * j == n) + (2 * k == n) + (2 * l == n);
+          if (zeros == 3) {
+            out.max_location = MaxLocation::kVertex;
+          } else if (zeros == 2) {
+            out.max_location = halves == 2 ? MaxLocation::kEdgeMidpoint : MaxLocation::kEdge;
+          } else if (zeros == 1) {
+            out.max_location = MaxLocation::kFace;
+          } else {
+            out.max_location = MaxLocation::kInterior;
+          }
+        }
+      }
+    }
+  }
+  return out;
+}
+
+LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_t max_tets,
+                           uint64_t seed, double norm_coeff, double epsilon, bool clamp) {
+  LatticeStats stats;
+  stats.n = n;
+  const int64_t num_tets = static_cast<int64_t>(mesh.tets.size());
+  if (n <= 0 || num_tets == 0) return stats;
+  std::vector<int64_t> chosen;
+  const bool sample = max_tets > 0 && num_tets > max_tets;
+  if (sample) {
+    std::mt19937_64 rng(seed);
+    std::uniform_int_distribution<int64_t> pick(0, num_tets - 1);
+    chosen.resize(max_tets);
+    for (auto& c : chosen) c = pick(rng);
+    std::sort(chosen.begin(), chosen.end());
+  }
+  const int64_t count = sample ? max_tets : num_tets;
+  const int64_t blocks = BlockCount(count);
+  std::vector<TetLattice> partial(blocks);
+  ForEachBlock(count, [&](int64_t block, int64_t begin, int64_t end) {
+    TetLattice acc;
+    for (int64_t i = begin; i < end; ++i) {
+      const TetLattice r =
+          SampleTetLattice(volume, mesh, sample ? chosen[i] : i, n, norm_coeff, epsilon, clamp);
+      acc.max_error = std::max(acc.max_error, r.max_error);
+      acc.sum_error += r.sum_error;
+      acc.points += r.points;
+      acc.above_epsilon += r.above_epsilon;
+    }
+    partial[block] = acc;
+  });
+  double sum = 0.0;
+  int64_t above = 0;
+  for (const auto& p : partial) {
+    stats.max_error = std::max(stats.max_error, p.max_error);
+    sum += p.sum_error;
+    stats.points_sampled += p.points;
+    above += p.above_epsilon;
+  }
+  stats.tets_sampled = count;
+  if (stats.points_sampled > 0) {
+    stats.mean_error = sum / static_cast<double>(stats.points_sampled);
+    stats.share_above_epsilon =
+        static_cast<double>(above) / static_cast<double>(stats.points_sampled);
+  }
+  return stats;
+}
+
+}  // namespace tetrefine

@@ -1,0 +1,32 @@
+#pragma once
+
+#include <cstdint>
+
+#include "core/mesh.h"
+#include "core/refine.h"
+#include "core/volume.h"
+
+namespace tetrefine {
+
+// Where in a tet the largest lattice discrepancy lies (paper section 5.1).
+enum class MaxLocation : uint8_t { kVertex, kEdgeMidpoint, kEdge, kFace, kInterior };
+
+// Discrepancy of eq. 3 at the barycentric lattice points (i, j, k, l) / n, i + j + k + l = n,
+// of tet t of `mesh` (values per vertex): realValue by trilinear sampling of `volume` (clamped
+// to the grid when clamp is set), aproxValue by linear interpolation.
+struct TetLattice {
+  double max_error = 0.0;
+  double sum_error = 0.0;
+  int64_t points = 0;
+  int64_t above_epsilon = 0;
+  MaxLocation max_location = MaxLocation::kVertex;
+};
+TetLattice SampleTetLattice(const Volume& volume, const Mesh& mesh, int64_t t, int n,
+                            double norm_coeff, double epsilon, bool clamp);
+
+// The lattice statistics over all tets, or over max_tets tets drawn with `seed` when the mesh
+// has more. Deterministic for a given seed whatever the thread count.
+LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_t max_tets,
+                           uint64_t seed, double norm_coeff, double epsilon, bool clamp);
+
+}  // namespace tetrefine

@@ -1,0 +1,28 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/mesh.h"
+#include "core/refine.h"
+#include "core/volume.h"
+
+namespace tetrefine {
+
+// Checks a mesh before any work, in this order, and reports the first problem found, naming the
+// field and index: finite coordinates; tet indices in range and distinct; no degenerate tet
+// (|6V| <= 1e-12 L^3, L its longest edge); orientation (OrientationPolicy); every vertex inside
+// the volume's sampled box unless OutsidePolicy::kClamp; no face in more than two tets and no
+// two tets overlapping across a shared face.
+// Under OrientationPolicy::kNormalize, *tets receives the tets with inverted ones swapped and
+// *reoriented their count; otherwise *tets is a copy.
+absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy outside,
+                          OrientationPolicy orientation, std::vector<Tet>* tets,
+                          int64_t* reoriented);
+
+// The face check alone (no face in more than two tets, no overlap across a shared face), for
+// meshes whose tets are known to be positively oriented.
+absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>& tets);
+
+}  // namespace tetrefine

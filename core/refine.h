@@ -1,0 +1,114 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/configuration.h"
+#include "core/mesh.h"
+#include "core/quality.h"
+#include "core/volume.h"
+
+namespace tetrefine {
+
+// What to do with a mesh vertex outside the volume's sampled box.
+enum class OutsidePolicy : uint8_t {
+  kReject,  // error naming the first offending vertex (default)
+  kClamp,   // sample at the nearest point of the whole grid's box
+};
+
+// What to do with a negatively oriented (inverted) input tet.
+enum class OrientationPolicy : uint8_t {
+  kReject,     // error naming the first inverted tet (default: an inverted tet is a broken mesh)
+  kNormalize,  // swap its last two vertices (for meshes written with the opposite convention)
+};
+
+// Per-iteration statistics, as the paper reports them (Tables 3-7).
+struct IterationStats {
+  int iteration = 0;                     // 1-based
+  int64_t initial_tets = 0;              // INT: tets at the start of the iteration
+  int64_t final_tets = 0;                // FNT: tets after the iteration
+  int64_t tets_with_error = 0;           // NTwE: tets with at least one split edge
+  int64_t edges = 0;                     // unique edges evaluated
+  int64_t split_edges = 0;               // edges whose midpoint error exceeded epsilon
+  double max_error = 0.0;                // max edge-midpoint error at the start of the iteration
+  double mean_error = 0.0;               // mean over unique edges of the edge-midpoint error
+  ConfigurationCounts configurations{};  // tets by configuration (Tables 3 and 4)
+  int64_t schonhardt_prisms = 0;         // SP: prisms that needed a Steiner point
+  QualityStats quality;                  // mean-ratio quality after the iteration
+  double seconds = 0.0;                  // wall time of the iteration
+};
+
+// Discrepancy sampled inside tets on the barycentric lattice of the paper's section 5.1:
+// points (i, j, k, l) / n with i + j + k + l = n (165 points for n = 8).
+struct LatticeStats {
+  int n = 8;
+  int64_t tets_sampled = 0;
+  int64_t points_sampled = 0;
+  double max_error = 0.0;
+  double mean_error = 0.0;
+  double share_above_epsilon = 0.0;  // fraction of sampled points with error > epsilon
+};
+
+enum class StopReason : uint8_t {
+  kConverged,      // no edge exceeded epsilon
+  kMaxIterations,  // max_iterations reached with edges still above epsilon
+  kTetBudget,      // the next iteration would have produced more than max_tets tets
+  kCancelled,      // should_cancel returned true
+};
+std::string_view StopReasonName(StopReason r);
+
+// Options of refine(), in the spirit of Omega_h's AdaptOpts.
+struct RefineOptions {
+  double epsilon = 0.1;           // relative tolerance of eq. 3, > 0
+  int max_iterations = 16;        // >= 0
+  int64_t max_tets = 50'000'000;  // stop before an iteration that would exceed this
+  // normCoeff of eq. 3. Unset: the value range (max - min) of the volume given. A caller that
+  // sends a slab passes the whole volume's range here. A range of 0 is treated as 1.
+  std::optional<double> norm_coeff;
+  OutsidePolicy outside = OutsidePolicy::kReject;
+  OrientationPolicy orientation = OrientationPolicy::kReject;
+  int threads = 0;  // 0: all cores. The output does not depend on it.
+
+  // Final lattice verification: lattice_n = 0 skips it. Meshes with more tets than
+  // lattice_max_tets are verified on a sample of that many tets drawn with lattice_seed.
+  int lattice_n = 8;
+  int64_t lattice_max_tets = 200'000;
+  uint64_t lattice_seed = 1;
+
+  // Called after each completed iteration with its statistics and the mesh it produced.
+  std::function<void(const IterationStats&, const Mesh&)> on_iteration;
+  // Polled inside iterations (every few thousand tets) and between them, from worker threads:
+  // it must be thread-safe.
+  std::function<bool()> should_cancel;
+};
+
+struct RefineResult {
+  Mesh mesh;                           // refined mesh, values sampled from the volume
+  std::vector<int32_t> tet_iteration;  // per tet: iteration that created it (0 = input)
+  std::vector<float> tet_quality;      // per tet: mean-ratio quality eta
+  std::vector<IterationStats> iterations;
+  StopReason stop_reason = StopReason::kConverged;
+  int64_t next_iteration_tets = 0;  // for kTetBudget: tets the refused iteration needed
+  double norm_coeff = 1.0;          // the normalisation actually used
+  QualityStats initial_quality;
+  QualityStats final_quality;
+  LatticeStats lattice;
+  // Edge-midpoint error of the returned mesh (what the next iteration would start from).
+  double final_max_error = 0.0;
+  double final_mean_error = 0.0;
+  int64_t tets_reoriented = 0;  // inverted input tets fixed under kNormalize
+  double seconds = 0.0;
+};
+
+// Refines `mesh` inside `volume` until every edge-midpoint error is <= epsilon (or a limit).
+// Validates the input first: an invalid mesh, volume or option is an InvalidArgument error whose
+// message names the offending field and index. Cancellation is not an error: the result says
+// kCancelled and holds the mesh as of the last completed iteration.
+absl::StatusOr<RefineResult> Refine(const Volume& volume, const Mesh& mesh,
+                                    const RefineOptions& options);
+
+}  // namespace tetrefine

@@ -1,0 +1,179 @@
+#include "core/volume.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+
+namespace tetrefine {
+namespace {
+
+constexpr char kAxis[3] = {'x', 'y', 'z'};
+
+// Voxel data is little-endian on the wire and in files; this build targets little-endian hosts.
+static_assert(std::endian::native == std::endian::little, "tetrefine assumes a little-endian host");
+
+template <typename T>
+double Load(const std::byte* base, int64_t index) {
+  T value;
+  std::memcpy(&value, base + index * static_cast<int64_t>(sizeof(T)), sizeof(T));
+  return static_cast<double>(value);
+}
+
+double LoadAs(VoxelType type, const std::byte* base, int64_t index) {
+  switch (type) {
+    case VoxelType::kUint8:
+      return Load<uint8_t>(base, index);
+    case VoxelType::kInt16:
+      return Load<int16_t>(base, index);
+    case VoxelType::kUint16:
+      return Load<uint16_t>(base, index);
+    case VoxelType::kInt32:
+      return Load<int32_t>(base, index);
+    case VoxelType::kFloat32:
+      return Load<float>(base, index);
+    case VoxelType::kFloat64:
+      return Load<double>(base, index);
+  }
+  return 0.0;
+}
+
+double Lerp(double a, double b, double t) { return a * (1.0 - t) + b * t; }
+
+}  // namespace
+
+absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo, const Index3& hi,
+                                      VoxelType type, std::vector<std::byte> data) {
+  // A bound on samples keeps the byte count below int64 overflow whatever the caller declares.
+  constexpr int64_t kMaxAxis = int64_t{1} << 20;
+  for (int a = 0; a < 3; ++a) {
+    if (grid.dims[a] < 2 || grid.dims[a] > kMaxAxis) {
+      return absl::InvalidArgumentError(absl::StrCat("volume.dims.", std::string(1, kAxis[a]),
+                                                     " = ", grid.dims[a],
+                                                     ": must be in [2, 2^20] (trilinear needs a "
+                                                     "cell)"));
+    }
+    if (!std::isfinite(grid.origin[a])) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("volume.origin.", std::string(1, kAxis[a]), " is not finite"));
+    }
+    if (!std::isfinite(grid.spacing[a]) || grid.spacing[a] <= 0.0) {
+      return absl::InvalidArgumentError(absl::StrCat("volume.spacing.", std::string(1, kAxis[a]),
+                                                     " = ", grid.spacing[a],
+                                                     ": must be finite and > 0"));
+    }
+    if (lo[a] < 0 || hi[a] > grid.dims[a] || hi[a] - lo[a] < 2) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "volume slab range on ", std::string(1, kAxis[a]), " is [", lo[a], ", ", hi[a],
+          "): must lie in [0, ", grid.dims[a], ") and hold at least 2 samples"));
+    }
+  }
+  const int64_t count = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+  const uint64_t expected = static_cast<uint64_t>(count) * VoxelSize(type);
+  if (data.size() != expected) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("volume data holds ", data.size(), " bytes; the slab needs ", expected, " (",
+                     count, " ", std::string(VoxelTypeName(type)), " voxels)"));
+  }
+  Volume v;
+  v.grid_ = grid;
+  v.lo_ = lo;
+  v.hi_ = hi;
+  v.type_ = type;
+  v.data_ = std::move(data);
+  if (type == VoxelType::kFloat32 || type == VoxelType::kFloat64) {
+    for (int64_t i = 0; i < count; ++i) {
+      if (!std::isfinite(LoadAs(type, v.data_.data(), i))) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("volume voxel ", i, " of the slab is not finite"));
+      }
+    }
+  }
+  return v;
+}
+
+absl::StatusOr<Volume> Volume::CreateWhole(const GridGeometry& grid, VoxelType type,
+                                           std::vector<std::byte> data) {
+  return Create(grid, Index3{0, 0, 0}, grid.dims, type, std::move(data));
+}
+
+absl::StatusOr<Volume> Volume::FromDoubles(const GridGeometry& grid,
+                                           const std::vector<double>& values) {
+  std::vector<std::byte> bytes(values.size() * sizeof(double));
+  std::memcpy(bytes.data(), values.data(), bytes.size());
+  return CreateWhole(grid, VoxelType::kFloat64, std::move(bytes));
+}
+
+int64_t Volume::voxel_count() const {
+  return (hi_[0] - lo_[0]) * (hi_[1] - lo_[1]) * (hi_[2] - lo_[2]);
+}
+
+double Volume::At(int64_t i, int64_t j, int64_t k) const {
+  const int64_t nx = hi_[0] - lo_[0], ny = hi_[1] - lo_[1];
+  const int64_t index = (i - lo_[0]) + nx * ((j - lo_[1]) + ny * (k - lo_[2]));
+  return LoadAs(type_, data_.data(), index);
+}
+
+Vec3 Volume::ContinuousIndex(const Vec3& p) const {
+  return {(p[0] - grid_.origin[0]) / grid_.spacing[0], (p[1] - grid_.origin[1]) / grid_.spacing[1],
+          (p[2] - grid_.origin[2]) / grid_.spacing[2]};
+}
+
+bool Volume::Contains(const Vec3& u) const {
+  for (int a = 0; a < 3; ++a) {
+    // Written so that NaN fails the test.
+    if (!(u[a] >= static_cast<double>(lo_[a]) && u[a] <= static_cast<double>(hi_[a] - 1))) {
+      return false;
+    }
+  }
+  return true;
+}
+
+Vec3 Volume::ClampToGrid(const Vec3& u) const {
+  Vec3 c;
+  for (int a = 0; a < 3; ++a) {
+    c[a] = std::clamp(u[a], 0.0, static_cast<double>(grid_.dims[a] - 1));
+  }
+  return c;
+}
+
+double Volume::SampleIndex(const Vec3& u) const {
+  int64_t cell[3];
+  double t[3];
+  for (int a = 0; a < 3; ++a) {
+    // The cell is clamped into the slab: on a cell face either neighbour gives the same bits.
+    const int64_t c = static_cast<int64_t>(std::floor(u[a]));
+    cell[a] = std::clamp(c, lo_[a], hi_[a] - 2);
+    t[a] = u[a] - static_cast<double>(cell[a]);
+  }
+  const int64_t nx = hi_[0] - lo_[0], ny = hi_[1] - lo_[1];
+  const int64_t base = (cell[0] - lo_[0]) + nx * ((cell[1] - lo_[1]) + ny * (cell[2] - lo_[2]));
+  const int64_t dy = nx, dz = nx * ny;
+  const std::byte* d = data_.data();
+  const double c000 = LoadAs(type_, d, base), c100 = LoadAs(type_, d, base + 1);
+  const double c010 = LoadAs(type_, d, base + dy), c110 = LoadAs(type_, d, base + dy + 1);
+  const double c001 = LoadAs(type_, d, base + dz), c101 = LoadAs(type_, d, base + dz + 1);
+  const double c011 = LoadAs(type_, d, base + dz + dy);
+  const double c111 = LoadAs(type_, d, base + dz + dy + 1);
+  const double c00 = Lerp(c000, c100, t[0]), c10 = Lerp(c010, c110, t[0]);
+  const double c01 = Lerp(c001, c101, t[0]), c11 = Lerp(c011, c111, t[0]);
+  return Lerp(Lerp(c00, c10, t[1]), Lerp(c01, c11, t[1]), t[2]);
+}
+
+std::array<double, 2> Volume::ValueRange() const {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -lo;
+  const int64_t n = voxel_count();
+  for (int64_t i = 0; i < n; ++i) {
+    const double v = LoadAs(type_, data_.data(), i);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  return {lo, hi};
+}
+
+}  // namespace tetrefine

@@ -1,0 +1,80 @@
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "core/voxel_type.h"
+
+namespace tetrefine {
+
+using Vec3 = std::array<double, 3>;
+using Index3 = std::array<int64_t, 3>;
+
+// Geometry of a whole voxel grid: sample (i, j, k) sits at world position
+// origin + (i, j, k) * spacing, in the caller's world unit (millimetres for imaging data).
+// The grid is axis-aligned; callers with a rotated affine transform the mesh into this frame.
+struct GridGeometry {
+  Index3 dims{0, 0, 0};         // samples per axis, each >= 2 (trilinear needs a cell)
+  Vec3 origin{0.0, 0.0, 0.0};   // world position of sample (0, 0, 0)
+  Vec3 spacing{1.0, 1.0, 1.0};  // world distance between samples per axis, each > 0
+};
+
+// A scalar voxel volume, or a slab of one: the samples with indices in [lo, hi) of a larger grid.
+// Sampling uses the whole grid's geometry, so a point gives the same bits whether the volume is
+// whole or a slab that contains the point's cell.
+class Volume {
+ public:
+  // Checks geometry, range and data length. `data` holds the slab's samples as little-endian
+  // values of `type`, x fastest then y then z, size (hi-lo).prod() * VoxelSize(type) bytes.
+  static absl::StatusOr<Volume> Create(const GridGeometry& grid, const Index3& lo, const Index3& hi,
+                                       VoxelType type, std::vector<std::byte> data);
+  // A whole volume: lo = 0, hi = grid.dims.
+  static absl::StatusOr<Volume> CreateWhole(const GridGeometry& grid, VoxelType type,
+                                            std::vector<std::byte> data);
+  // Convenience for tests and generators: a whole float64 volume from values.
+  static absl::StatusOr<Volume> FromDoubles(const GridGeometry& grid,
+                                            const std::vector<double>& values);
+
+  const GridGeometry& grid() const { return grid_; }
+  const Index3& lo() const { return lo_; }
+  const Index3& hi() const { return hi_; }
+  VoxelType type() const { return type_; }
+  const std::vector<std::byte>& data() const { return data_; }
+  int64_t voxel_count() const;
+
+  // The sample at grid index (i, j, k), which must lie in [lo, hi).
+  double At(int64_t i, int64_t j, int64_t k) const;
+
+  // Continuous grid index of a world point: (p - origin) / spacing per axis.
+  Vec3 ContinuousIndex(const Vec3& p) const;
+
+  // True when the continuous index u lies in the slab's sampled box [lo, hi - 1] on every axis.
+  bool Contains(const Vec3& u) const;
+
+  // Clamps a continuous index into the whole grid's box [0, dims - 1].
+  Vec3 ClampToGrid(const Vec3& u) const;
+
+  // Trilinear value (paper eq. 1) at continuous index u, which must satisfy Contains(u).
+  // Evaluated as nested linear interpolations x, then y, then z: at a cell face the weight of the
+  // far corners is exactly zero, so the neighbouring cell gives the same bits. That is what makes
+  // a slab and the whole volume agree to the bit.
+  double SampleIndex(const Vec3& u) const;
+
+  // Trilinear value at world point p (which must lie in the sampled box).
+  double Sample(const Vec3& p) const { return SampleIndex(ContinuousIndex(p)); }
+
+  // Smallest and largest sample of this volume (slab): the default normalisation range.
+  std::array<double, 2> ValueRange() const;
+
+ private:
+  GridGeometry grid_;
+  Index3 lo_{0, 0, 0};
+  Index3 hi_{0, 0, 0};
+  VoxelType type_ = VoxelType::kFloat64;
+  std::vector<std::byte> data_;
+};
+
+}  // namespace tetrefine

@@ -1,0 +1,67 @@
+#include "tests/core/test_geometry.h"
+
+#include <cstdlib>
+#include <string>
+
+#include "core/quality.h"
+
+namespace tetrefine::testing {
+
+std::vector<uint64_t> Seeds(int count) {
+  if (const char* pinned = std::getenv("TETREFINE_SEED")) {
+    return {std::stoull(pinned)};
+  }
+  std::vector<uint64_t> seeds;
+  for (int i = 0; i < count; ++i) seeds.push_back(20261122 + 7919 * static_cast<uint64_t>(i));
+  return seeds;
+}
+
+std::array<Vec3, 4> RandomTet(std::mt19937_64& rng, double min_quality) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (;;) {
+    std::array<Vec3, 4> p;
+    for (auto& q : p) q = {u(rng), u(rng), u(rng)};
+    if (MeanRatio(p[0], p[1], p[2], p[3]) < min_quality) continue;
+    if (SignedVolume6(p[0], p[1], p[2], p[3]) < 0) std::swap(p[2], p[3]);
+    return p;
+  }
+}
+
+Mesh FiveTetMesh(const Vec3& lo, const Vec3& hi, const std::array<int, 3>& cells) {
+  Mesh m;
+  const int nx = cells[0] + 1, ny = cells[1] + 1, nz = cells[2] + 1;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        m.points.push_back({lo[0] + (hi[0] - lo[0]) * i / cells[0],
+                            lo[1] + (hi[1] - lo[1]) * j / cells[1],
+                            lo[2] + (hi[2] - lo[2]) * k / cells[2]});
+  auto id = [&](int i, int j, int k) { return static_cast<uint32_t>(i + nx * (j + ny * k)); };
+  for (int k = 0; k < cells[2]; ++k)
+    for (int j = 0; j < cells[1]; ++j)
+      for (int i = 0; i < cells[0]; ++i) {
+        uint32_t c[8];
+        for (int b = 0; b < 8; ++b) c[b] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+        // Even cells cut off corners 1, 2, 4, 7 around the central tet (0, 3, 5, 6); odd cells
+        // the mirror image. Alternating by parity makes neighbouring cells split their shared
+        // square face by the same diagonal.
+        const bool even = ((i + j + k) % 2) == 0;
+        std::array<std::array<int, 4>, 5> t;
+        if (even) {
+          t = {{{0, 3, 5, 6}, {1, 0, 3, 5}, {2, 0, 6, 3}, {4, 0, 5, 6}, {7, 3, 6, 5}}};
+        } else {
+          t = {{{1, 2, 4, 7}, {0, 1, 4, 2}, {3, 1, 2, 7}, {5, 1, 7, 4}, {6, 2, 4, 7}}};
+        }
+        for (const auto& q : t) {
+          Tet tet = {c[q[0]], c[q[1]], c[q[2]], c[q[3]]};
+          if (SignedVolume6(m.points[tet[0]], m.points[tet[1]], m.points[tet[2]],
+                            m.points[tet[3]]) < 0) {
+            std::swap(tet[2], tet[3]);
+          }
+          m.tets.push_back(tet);
+        }
+      }
+  return m;
+}
+
+}  // namespace tetrefine::testing

@@ -1,0 +1,38 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/volume.h"
+
+namespace tetrefine::testing {
+
+// Seeds for property tests: TETREFINE_SEED in the environment pins one; otherwise `count` seeds
+// starting from a fixed base. Each test prints the seed it runs with.
+std::vector<uint64_t> Seeds(int count);
+
+// A random tet with positive orientation and quality above min_quality.
+std::array<Vec3, 4> RandomTet(std::mt19937_64& rng, double min_quality = 0.05);
+
+// A grid-aligned volume from a function of world position.
+template <typename F>
+Volume AnalyticVolume(const GridGeometry& g, F f) {
+  std::vector<double> v(g.dims[0] * g.dims[1] * g.dims[2]);
+  for (int64_t k = 0; k < g.dims[2]; ++k)
+    for (int64_t j = 0; j < g.dims[1]; ++j)
+      for (int64_t i = 0; i < g.dims[0]; ++i)
+        v[i + g.dims[0] * (j + g.dims[1] * k)] =
+            f(Vec3{g.origin[0] + i * g.spacing[0], g.origin[1] + j * g.spacing[1],
+                   g.origin[2] + k * g.spacing[2]});
+  return *Volume::FromDoubles(g, v);
+}
+
+// A structured mesh of the box [lo, hi] with `cells` cells per axis, 5 tets per cell with
+// alternating orientation so that faces match (the paper's voxel tetrahedrization).
+Mesh FiveTetMesh(const Vec3& lo, const Vec3& hi, const std::array<int, 3>& cells);
+
+}  // namespace tetrefine::testing
