@@ -54,6 +54,15 @@ absl::Status CheckOptions(const RefineOptions& o) {
     return absl::InvalidArgumentError(
         absl::StrCat("options.lattice_n = ", o.lattice_n, ": must be in [0, 64]"));
   }
+  if (o.min_edge_length.has_value() &&
+      (!(*o.min_edge_length >= 0.0) || !std::isfinite(*o.min_edge_length))) {
+    return absl::InvalidArgumentError(absl::StrCat("options.min_edge_length = ", *o.min_edge_length,
+                                                   ": must be finite and >= 0"));
+  }
+  if (!(o.min_quality >= 0.0 && o.min_quality < 1.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("options.min_quality = ", o.min_quality, ": must be in [0, 1)"));
+  }
   if (o.threads < 0) {
     return absl::InvalidArgumentError(
         absl::StrCat("options.threads = ", o.threads, ": must be >= 0 (0: all cores)"));
@@ -102,24 +111,6 @@ Vec3 Midpoint(const Vec3& a, const Vec3& b) {
   return {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
 }
 
-bool LexLess(const Vec3& a, const Vec3& b) {
-  if (a[0] != b[0]) return a[0] < b[0];
-  if (a[1] != b[1]) return a[1] < b[1];
-  return a[2] < b[2];
-}
-
-// The Steiner point of Algorithm 1: the centroid of the prism's six points, summed in
-// lexicographic order of the points so that its bits do not depend on vertex numbering.
-Vec3 SteinerPoint(std::array<Vec3, 6> pts) {
-  std::sort(pts.begin(), pts.end(), LexLess);
-  Vec3 s{0, 0, 0};
-  for (const Vec3& p : pts) {
-    for (int a = 0; a < 3; ++a) s[a] += p[a];
-  }
-  for (int a = 0; a < 3; ++a) s[a] /= 6.0;
-  return s;
-}
-
 // Cancellation polled from worker threads; once seen it stays set.
 class CancelFlag {
  public:
@@ -142,30 +133,41 @@ struct EdgeErrors {
   std::vector<double> mid_value;
   std::vector<uint8_t> split;
   int64_t split_count = 0;
+  int64_t short_kept = 0;
   double max_error = 0.0;
   double mean_error = 0.0;
 };
 
 EdgeErrors EvaluateEdges(const Volume& volume, const Mesh& m, const EdgeTable& edges, double norm,
-                         double epsilon, bool clamp, CancelFlag& cancel) {
+                         double epsilon, double min_edge_length, bool clamp, CancelFlag& cancel) {
+  const double min_length2 = min_edge_length * min_edge_length;
   EdgeErrors out;
   const int64_t nv = static_cast<int64_t>(m.points.size());
   out.mid_value.resize(edges.size());
   out.split.resize(edges.size());
   const int64_t blocks = BlockCount(nv);
   std::vector<double> sums(blocks, 0.0), maxs(blocks, 0.0);
-  std::vector<int64_t> splits(blocks, 0);
+  std::vector<int64_t> splits(blocks, 0), kept(blocks, 0);
   ForEachBlock(nv, [&](int64_t b, int64_t begin, int64_t end) {
     if (cancel.Check()) return;
     double s = 0.0, mx = 0.0;
-    int64_t n_split = 0;
+    int64_t n_split = 0, n_kept = 0;
     for (int64_t v = begin; v < end; ++v) {
       for (uint32_t e = edges.first[v]; e < edges.first[v + 1]; ++e) {
         const uint32_t w = edges.second[e];
         const double real = SampleInside(volume, Midpoint(m.points[v], m.points[w]), clamp);
         const double error = std::abs(real - 0.5 * (m.values[v] + m.values[w])) / norm;
         out.mid_value[e] = real;
-        const bool split = error > epsilon;
+        bool split = error > epsilon;
+        if (split && min_length2 > 0.0) {
+          const Vec3& a = m.points[v];
+          const Vec3& c = m.points[w];
+          const double dx = a[0] - c[0], dy = a[1] - c[1], dz = a[2] - c[2];
+          if (dx * dx + dy * dy + dz * dz < min_length2) {
+            split = false;
+            ++n_kept;
+          }
+        }
         out.split[e] = split;
         n_split += split;
         s += error;
@@ -175,22 +177,26 @@ EdgeErrors EvaluateEdges(const Volume& volume, const Mesh& m, const EdgeTable& e
     sums[b] = s;
     maxs[b] = mx;
     splits[b] = n_split;
+    kept[b] = n_kept;
   });
   double sum = 0.0;
   for (int64_t b = 0; b < blocks; ++b) {
     sum += sums[b];
     out.max_error = std::max(out.max_error, maxs[b]);
     out.split_count += splits[b];
+    out.short_kept += kept[b];
   }
   out.mean_error = edges.size() > 0 ? sum / static_cast<double>(edges.size()) : 0.0;
   return out;
 }
 
-// One subdivision step. Returns false (and leaves `state` alone) when cancelled or when the
-// result would exceed max_tets (then *next_tets says how many it needed).
-bool Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& errors,
-               int iteration, const RefineOptions& options, CancelFlag& cancel, State& state,
-               IterationStats& stats, int64_t* next_tets) {
+enum class StepOutcome { kApplied, kCancelled, kTetBudget, kQualityFloor };
+
+// One subdivision step. Leaves `state` alone unless it returns kApplied; for kTetBudget
+// *next_tets says how many tets it needed, for kQualityFloor *next_quality its worst tet.
+StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& errors,
+                      int iteration, const RefineOptions& options, CancelFlag& cancel, State& state,
+                      IterationStats& stats, int64_t* next_tets, double* next_quality) {
   const Mesh& m = state.mesh;
   const bool clamp = options.outside == OutsidePolicy::kClamp;
   const int64_t nt = static_cast<int64_t>(m.tets.size());
@@ -233,12 +239,12 @@ bool Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& e
     steiner_offset[b] = steiner;
     config_counts[b] = counts;
   });
-  if (cancel.IsSet()) return false;
+  if (cancel.IsSet()) return StepOutcome::kCancelled;
   const int64_t total_children = ExclusivePrefixSum(child_offset);
   const int64_t total_steiner = ExclusivePrefixSum(steiner_offset);
   if (total_children > options.max_tets) {
     *next_tets = total_children;
-    return false;
+    return StepOutcome::kTetBudget;
   }
   for (const auto& c : config_counts) {
     for (int i = 0; i < kNumConfigurations; ++i) stats.configurations[i] += c[i];
@@ -280,8 +286,10 @@ bool Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& e
   next.tet_iteration.resize(total_children);
   next.tet_quality.resize(total_children);
   const int64_t steiner_base = nv + total_mid;
+  std::vector<double> worst(tet_blocks, 1.0);
   ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
     if (cancel.Check()) return;
+    double block_worst = 1.0;
     int64_t out = child_offset[b];
     int64_t steiner_id = steiner_base + steiner_offset[b];
     for (int64_t t = begin; t < end; ++t) {
@@ -312,14 +320,26 @@ bool Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& e
         const Tet child = {global[lt[0]], global[lt[1]], global[lt[2]], global[lt[3]]};
         next.mesh.tets[out] = child;
         next.tet_iteration[out] = iteration;
-        next.tet_quality[out] = TetQuality(next.mesh, child);
+        const float q = TetQuality(next.mesh, child);
+        next.tet_quality[out] = q;
+        const auto& np = next.mesh.points;
+        if (SignedVolume6(np[child[0]], np[child[1]], np[child[2]], np[child[3]]) <= 0.0) {
+          block_worst = -1.0;
+        }
+        block_worst = std::min(block_worst, static_cast<double>(q));
         ++out;
       }
     }
+    worst[b] = block_worst;
   });
-  if (cancel.IsSet()) return false;
+  if (cancel.IsSet()) return StepOutcome::kCancelled;
+  const double worst_quality = *std::min_element(worst.begin(), worst.end());
+  if (worst_quality <= 0.0 || worst_quality < options.min_quality) {
+    *next_quality = worst_quality;
+    return StepOutcome::kQualityFloor;
+  }
   state = std::move(next);
-  return true;
+  return StepOutcome::kApplied;
 }
 
 absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& input,
@@ -340,6 +360,9 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   }
   const bool clamp = options.outside == OutsidePolicy::kClamp;
   const double norm = result.norm_coeff;
+  const GridGeometry& grid = volume.grid();
+  const double min_edge_length = options.min_edge_length.value_or(
+      std::min({grid.spacing[0], grid.spacing[1], grid.spacing[2]}) / 64.0);
 
   state.mesh.points = input.points;
   state.mesh.values.resize(input.points.size());
@@ -377,8 +400,8 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     }
     const EdgeTable edges =
         BuildEdgeTable(state.mesh.tets, static_cast<int64_t>(state.mesh.points.size()));
-    const EdgeErrors errors =
-        EvaluateEdges(volume, state.mesh, edges, norm, options.epsilon, clamp, cancel);
+    const EdgeErrors errors = EvaluateEdges(volume, state.mesh, edges, norm, options.epsilon,
+                                            min_edge_length, clamp, cancel);
     if (cancel.IsSet()) {
       result.stop_reason = StopReason::kCancelled;
       break;
@@ -398,11 +421,16 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     stats.initial_tets = static_cast<int64_t>(state.mesh.tets.size());
     stats.edges = edges.size();
     stats.split_edges = errors.split_count;
+    stats.short_edges_kept = errors.short_kept;
     stats.max_error = errors.max_error;
     stats.mean_error = errors.mean_error;
-    if (!Subdivide(volume, edges, errors, iteration, options, cancel, state, stats,
-                   &result.next_iteration_tets)) {
-      result.stop_reason = cancel.IsSet() ? StopReason::kCancelled : StopReason::kTetBudget;
+    const StepOutcome outcome =
+        Subdivide(volume, edges, errors, iteration, options, cancel, state, stats,
+                  &result.next_iteration_tets, &result.next_iteration_min_quality);
+    if (outcome != StepOutcome::kApplied) {
+      result.stop_reason = outcome == StepOutcome::kCancelled   ? StopReason::kCancelled
+                           : outcome == StepOutcome::kTetBudget ? StopReason::kTetBudget
+                                                                : StopReason::kQualityFloor;
       break;
     }
     stats.final_tets = static_cast<int64_t>(state.mesh.tets.size());
@@ -435,6 +463,8 @@ std::string_view StopReasonName(StopReason r) {
       return "tet_budget";
     case StopReason::kCancelled:
       return "cancelled";
+    case StopReason::kQualityFloor:
+      return "quality_floor";
   }
   return "unknown";
 }

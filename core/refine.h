@@ -28,14 +28,15 @@ enum class OrientationPolicy : uint8_t {
 
 // Per-iteration statistics, as the paper reports them (Tables 3-7).
 struct IterationStats {
-  int iteration = 0;                     // 1-based
-  int64_t initial_tets = 0;              // INT: tets at the start of the iteration
-  int64_t final_tets = 0;                // FNT: tets after the iteration
-  int64_t tets_with_error = 0;           // NTwE: tets with at least one split edge
-  int64_t edges = 0;                     // unique edges evaluated
-  int64_t split_edges = 0;               // edges whose midpoint error exceeded epsilon
-  double max_error = 0.0;                // max edge-midpoint error at the start of the iteration
-  double mean_error = 0.0;               // mean over unique edges of the edge-midpoint error
+  int iteration = 0;             // 1-based
+  int64_t initial_tets = 0;      // INT: tets at the start of the iteration
+  int64_t final_tets = 0;        // FNT: tets after the iteration
+  int64_t tets_with_error = 0;   // NTwE: tets with at least one split edge
+  int64_t edges = 0;             // unique edges evaluated
+  int64_t split_edges = 0;       // edges whose midpoint error exceeded epsilon
+  int64_t short_edges_kept = 0;  // edges above epsilon left whole: shorter than min_edge_length
+  double max_error = 0.0;        // max edge-midpoint error at the start of the iteration
+  double mean_error = 0.0;       // mean over unique edges of the edge-midpoint error
   ConfigurationCounts configurations{};  // tets by configuration (Tables 3 and 4)
   int64_t schonhardt_prisms = 0;         // SP: prisms that needed a Steiner point
   QualityStats quality;                  // mean-ratio quality after the iteration
@@ -58,6 +59,7 @@ enum class StopReason : uint8_t {
   kMaxIterations,  // max_iterations reached with edges still above epsilon
   kTetBudget,      // the next iteration would have produced more than max_tets tets
   kCancelled,      // should_cancel returned true
+  kQualityFloor,   // the next iteration would have made a tet of quality below min_quality
 };
 std::string_view StopReasonName(StopReason r);
 
@@ -72,6 +74,20 @@ struct RefineOptions {
   OutsidePolicy outside = OutsidePolicy::kReject;
   OrientationPolicy orientation = OrientationPolicy::kReject;
   int threads = 0;  // 0: all cores. The output does not depend on it.
+  // Edges shorter than this (world units) are never split. Unset: 1/64 of the smallest voxel
+  // spacing. Why: the paper's scheme splits only marked edges, so the edges joining a new
+  // midpoint to far corners stay long; near a feature much sharper than the mesh, those are split
+  // again and again at halving distances, the tets become needles, and after ~30 iterations
+  // rounding inverts them. Below 1/64 voxel the trilinear field is linear along an edge to
+  // within about 1% of its range (a cell-face kink at worst), so splitting further buys little
+  // and this bound keeps every tet far from degenerate. The decision stays local to the edge.
+  // 0 disables the guard.
+  std::optional<double> min_edge_length;
+  // The scheme can still flatten tets step by step near such a feature (long edges split inside
+  // tets that are already slivers). An iteration that would create a tet whose mean-ratio
+  // quality is below this, or whose volume is not positive, is not applied: refinement stops
+  // before it (kQualityFloor) and the output keeps no degenerate tet. In [0, 1).
+  double min_quality = 1e-6;
 
   // Final lattice verification: lattice_n = 0 skips it. Meshes with more tets than
   // lattice_max_tets are verified on a sample of that many tets drawn with lattice_seed.
@@ -92,8 +108,9 @@ struct RefineResult {
   std::vector<float> tet_quality;      // per tet: mean-ratio quality eta
   std::vector<IterationStats> iterations;
   StopReason stop_reason = StopReason::kConverged;
-  int64_t next_iteration_tets = 0;  // for kTetBudget: tets the refused iteration needed
-  double norm_coeff = 1.0;          // the normalisation actually used
+  int64_t next_iteration_tets = 0;          // for kTetBudget: tets the refused iteration needed
+  double next_iteration_min_quality = 0.0;  // for kQualityFloor: its worst tet
+  double norm_coeff = 1.0;                  // the normalisation actually used
   QualityStats initial_quality;
   QualityStats final_quality;
   LatticeStats lattice;

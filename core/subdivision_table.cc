@@ -482,6 +482,33 @@ bool ChooseFirstDiagonal(const Vec3& a0, const Vec3& a1, const Vec3& b0, const V
   return LexLess(min_a, min_b);
 }
 
+Vec3 SteinerPoint(std::array<Vec3, 6> points) {
+  std::sort(points.begin(), points.end(), LexLess);
+  Vec3 s{0, 0, 0};
+  for (const Vec3& p : points) {
+    for (int a = 0; a < 3; ++a) s[a] += p[a];
+  }
+  for (int a = 0; a < 3; ++a) s[a] /= 6.0;
+  return s;
+}
+
+std::array<Vec3, kNumLocalPoints> LocalPoints(const std::array<Vec3, 4>& corners,
+                                              const SubdivisionEntry& entry) {
+  std::array<Vec3, kNumLocalPoints> p{};
+  for (int c = 0; c < 4; ++c) p[c] = corners[c];
+  for (int e = 0; e < 6; ++e) {
+    const Vec3& a = corners[kTetEdges[e][0]];
+    const Vec3& b = corners[kTetEdges[e][1]];
+    p[4 + e] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+  }
+  if (entry.steiner) {
+    std::array<Vec3, 6> prism;
+    for (int i = 0; i < 6; ++i) prism[i] = p[entry.steiner_of[i]];
+    p[kSteinerLocal] = SteinerPoint(prism);
+  }
+  return p;
+}
+
 FaceQuad FaceQuadOf(uint32_t pattern, int face) {
   const auto [x, y, z] = kTetFaces[face];
   const bool sxy = (pattern & EdgeBit(EdgeIndex(x, y))) != 0;

@@ -64,4 +64,13 @@ FaceQuad FaceQuadOf(uint32_t pattern, int face);
 // unsplit edges are not read).
 uint32_t SubdivisionKey(uint32_t pattern, const std::array<Vec3, 10>& points);
 
+// The Steiner point of Algorithm 1: the centroid of a prism's six points, summed in
+// lexicographic order of the points so that its bits do not depend on vertex numbering.
+Vec3 SteinerPoint(std::array<Vec3, 6> points);
+
+// The local points 0..10 of a tet with `corners` under `entry` (midpoints of all six edges; the
+// Steiner point when the entry has one). For tests and tools that subdivide one tet.
+std::array<Vec3, kNumLocalPoints> LocalPoints(const std::array<Vec3, 4>& corners,
+                                              const SubdivisionEntry& entry);
+
 }  // namespace tetrefine

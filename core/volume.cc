@@ -125,10 +125,14 @@ Vec3 Volume::ContinuousIndex(const Vec3& p) const {
 
 bool Volume::Contains(const Vec3& u) const {
   for (int a = 0; a < 3; ++a) {
+    double lo = static_cast<double>(lo_[a]);
+    double hi = static_cast<double>(hi_[a] - 1);
+    // Only where the slab ends at the grid's own boundary: inside the grid a slab must hold the
+    // cell, or it would not sample the same bits as the whole volume.
+    if (lo_[a] == 0) lo -= kGridBoundaryTolerance;
+    if (hi_[a] == grid_.dims[a]) hi += kGridBoundaryTolerance;
     // Written so that NaN fails the test.
-    if (!(u[a] >= static_cast<double>(lo_[a]) && u[a] <= static_cast<double>(hi_[a] - 1))) {
-      return false;
-    }
+    if (!(u[a] >= lo && u[a] <= hi)) return false;
   }
   return true;
 }
@@ -145,10 +149,12 @@ double Volume::SampleIndex(const Vec3& u) const {
   int64_t cell[3];
   double t[3];
   for (int a = 0; a < 3; ++a) {
-    // The cell is clamped into the slab: on a cell face either neighbour gives the same bits.
-    const int64_t c = static_cast<int64_t>(std::floor(u[a]));
+    // Clamped to the grid first (a vertex within tolerance outside samples the boundary), then
+    // the cell clamped into the slab: on a cell face either neighbour gives the same bits.
+    const double x = std::clamp(u[a], 0.0, static_cast<double>(grid_.dims[a] - 1));
+    const int64_t c = static_cast<int64_t>(std::floor(x));
     cell[a] = std::clamp(c, lo_[a], hi_[a] - 2);
-    t[a] = u[a] - static_cast<double>(cell[a]);
+    t[a] = x - static_cast<double>(cell[a]);
   }
   const int64_t nx = hi_[0] - lo_[0], ny = hi_[1] - lo_[1];
   const int64_t base = (cell[0] - lo_[0]) + nx * ((cell[1] - lo_[1]) + ny * (cell[2] - lo_[2]));

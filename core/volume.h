@@ -51,13 +51,19 @@ class Volume {
   // Continuous grid index of a world point: (p - origin) / spacing per axis.
   Vec3 ContinuousIndex(const Vec3& p) const;
 
-  // True when the continuous index u lies in the slab's sampled box [lo, hi - 1] on every axis.
+  // A point this far (in voxels) outside the grid's own box still counts as inside it: meshes
+  // built to span a volume land there by rounding (origin + 11 * 5.74 gives index 11 + 2e-15).
+  static constexpr double kGridBoundaryTolerance = 1e-6;
+
+  // True when the continuous index u lies in the slab's sampled box [lo, hi - 1] on every axis
+  // (widened by kGridBoundaryTolerance on sides where the slab reaches the grid's boundary).
   bool Contains(const Vec3& u) const;
 
   // Clamps a continuous index into the whole grid's box [0, dims - 1].
   Vec3 ClampToGrid(const Vec3& u) const;
 
-  // Trilinear value (paper eq. 1) at continuous index u, which must satisfy Contains(u).
+  // Trilinear value (paper eq. 1) at continuous index u, which must satisfy Contains(u); u is
+  // clamped to the grid's box first.
   // Evaluated as nested linear interpolations x, then y, then z: at a cell face the weight of the
   // far corners is exactly zero, so the neighbouring cell gives the same bits. That is what makes
   // a slab and the whole volume agree to the bit.

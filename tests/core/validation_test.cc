@@ -1,0 +1,145 @@
+// Bad input gets an InvalidArgument error that names the field and the index.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/refine.h"
+#include "tests/core/test_geometry.h"
+
+namespace tetrefine {
+namespace {
+
+Volume UnitVolume() {
+  GridGeometry g;
+  g.dims = {5, 5, 5};
+  return testing::AnalyticVolume(g, [](const Vec3& p) { return p[0] * p[1] + p[2]; });
+}
+
+Mesh TwoTets() {
+  Mesh m;
+  m.points = {{1, 1, 1}, {2, 1, 1}, {1, 2, 1}, {1, 1, 2}, {2, 2, 2}};
+  m.tets = {{0, 1, 2, 3}, {1, 2, 3, 4}};
+  // The second shares face (1 2 3) with the first, on the other side.
+  if (SignedVolume6(m.points[1], m.points[2], m.points[3], m.points[4]) < 0) {
+    std::swap(m.tets[1][2], m.tets[1][3]);
+  }
+  return m;
+}
+
+struct BadCase {
+  const char* name;
+  void (*mutate)(Mesh&, RefineOptions&);
+  const char* expected;  // a fragment of the message
+};
+
+const BadCase kCases[] = {
+    {"nan coordinate", [](Mesh& m, RefineOptions&) { m.points[3][1] = std::nan(""); },
+     "mesh.points[3]"},
+    {"infinite coordinate",
+     [](Mesh& m, RefineOptions&) { m.points[2][0] = std::numeric_limits<double>::infinity(); },
+     "mesh.points[2]"},
+    {"index out of range", [](Mesh& m, RefineOptions&) { m.tets[1][2] = 9; },
+     "mesh.tets[1][2] = 9 is out of range"},
+    {"repeated vertex", [](Mesh& m, RefineOptions&) { m.tets[0][3] = m.tets[0][0]; },
+     "mesh.tets[0] repeats vertex"},
+    {"inverted", [](Mesh& m, RefineOptions&) { std::swap(m.tets[0][0], m.tets[0][1]); },
+     "mesh.tets[0] is inverted"},
+    {"degenerate",
+     [](Mesh& m, RefineOptions&) {
+       m.points[3] = {1.5, 1.5, 1.0};
+     },
+     "mesh.tets[0] is degenerate"},
+    {"outside",
+     [](Mesh& m, RefineOptions&) {
+       m.points[4] = {2, 2, 4.5};
+     },
+     "mesh.points[4] = (2, 2, 4.5) lies outside"},
+    {"overlap", [](Mesh& m, RefineOptions&) { m.tets[1] = m.tets[0]; }, "overlap"},
+    {"empty", [](Mesh& m, RefineOptions&) { m.tets.clear(); }, "mesh.tets is empty"},
+    {"epsilon zero", [](Mesh&, RefineOptions& o) { o.epsilon = 0; }, "options.epsilon"},
+    {"epsilon negative", [](Mesh&, RefineOptions& o) { o.epsilon = -1; }, "options.epsilon"},
+    {"epsilon nan", [](Mesh&, RefineOptions& o) { o.epsilon = std::nan(""); }, "options.epsilon"},
+    {"norm zero", [](Mesh&, RefineOptions& o) { o.norm_coeff = 0.0; }, "options.norm_coeff"},
+    {"max tets", [](Mesh&, RefineOptions& o) { o.max_tets = 0; }, "options.max_tets"},
+    {"iterations", [](Mesh&, RefineOptions& o) { o.max_iterations = -1; },
+     "options.max_iterations"},
+};
+
+TEST(Validation, EveryBadInputIsNamed) {
+  for (const BadCase& c : kCases) {
+    Mesh m = TwoTets();
+    RefineOptions o;
+    c.mutate(m, o);
+    auto r = Refine(UnitVolume(), m, o);
+    ASSERT_FALSE(r.ok()) << c.name;
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << c.name;
+    EXPECT_NE(r.status().message().find(c.expected), std::string::npos)
+        << c.name << ": " << r.status().message();
+  }
+}
+
+TEST(Validation, FaceInThreeTetsIsRefused) {
+  Mesh m = TwoTets();
+  m.points.push_back({1.2, 1.2, 0.5});
+  Tet t = {1, 2, 3, 5};
+  if (SignedVolume6(m.points[1], m.points[2], m.points[3], m.points[5]) < 0) std::swap(t[2], t[3]);
+  m.tets.push_back(t);
+  auto r = Refine(UnitVolume(), m, RefineOptions{});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("is shared by 3 tets"), std::string::npos)
+      << r.status().message();
+}
+
+TEST(Validation, PoliciesNormalizeAndClamp) {
+  Mesh m = TwoTets();
+  std::swap(m.tets[0][0], m.tets[0][1]);
+  m.points[4] = {2, 2, 4.5};
+  RefineOptions o;
+  o.orientation = OrientationPolicy::kNormalize;
+  o.outside = OutsidePolicy::kClamp;
+  auto r = Refine(UnitVolume(), m, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->tets_reoriented, 1);
+}
+
+TEST(Volume, TrilinearMatchesEquation1AndEveryVoxelType) {
+  GridGeometry g;
+  g.dims = {3, 4, 5};
+  g.spacing = {0.5, 2.0, 1.5};
+  g.origin = {-1, 2, 3};
+  std::vector<std::byte> bytes;
+  std::vector<double> values;
+  for (int i = 0; i < 60; ++i) {
+    const int16_t v = static_cast<int16_t>((i * 37) % 101 - 50);
+    values.push_back(v);
+    const auto* b = reinterpret_cast<const std::byte*>(&v);
+    bytes.insert(bytes.end(), b, b + 2);
+  }
+  auto vol16 = Volume::CreateWhole(g, VoxelType::kInt16, bytes);
+  auto vol64 = Volume::FromDoubles(g, values);
+  ASSERT_TRUE(vol16.ok() && vol64.ok());
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int n = 0; n < 1000; ++n) {
+    const Vec3 idx = {u(rng) * 2, u(rng) * 3, u(rng) * 4};
+    const Vec3 p = {g.origin[0] + idx[0] * 0.5, g.origin[1] + idx[1] * 2.0,
+                    g.origin[2] + idx[2] * 1.5};
+    const int i = std::min(1, static_cast<int>(idx[0]));
+    const int j = std::min(2, static_cast<int>(idx[1]));
+    const int k = std::min(3, static_cast<int>(idx[2]));
+    const double x = idx[0] - i, y = idx[1] - j, z = idx[2] - k;
+    auto I = [&](int a, int b, int c) { return values[(i + a) + 3 * ((j + b) + 4 * (k + c))]; };
+    const double eq1 = (1 - x) * (1 - y) * (1 - z) * I(0, 0, 0) +
+                       x * (1 - y) * (1 - z) * I(1, 0, 0) + (1 - x) * y * (1 - z) * I(0, 1, 0) +
+                       x * y * (1 - z) * I(1, 1, 0) + (1 - x) * (1 - y) * z * I(0, 0, 1) +
+                       x * (1 - y) * z * I(1, 0, 1) + (1 - x) * y * z * I(0, 1, 1) +
+                       x * y * z * I(1, 1, 1);
+    EXPECT_NEAR(vol16->Sample(p), eq1, 1e-9);
+    EXPECT_EQ(vol16->Sample(p), vol64->Sample(p));
+  }
+  EXPECT_FALSE(Volume::CreateWhole(g, VoxelType::kInt16, {}).ok());
+}
+
+}  // namespace
+}  // namespace tetrefine
