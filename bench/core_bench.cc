@@ -1,0 +1,62 @@
+// One refinement iteration of a structured mesh of about a million tets, at 1 and 2 threads.
+// Run: build/bench/core_bench --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <map>
+
+#include "core/refine.h"
+#include "tests/core/test_geometry.h"
+
+namespace tetrefine {
+namespace {
+
+struct Fixture {
+  Volume volume;
+  Mesh mesh;
+};
+
+const Fixture& Setup(int cells) {
+  static std::map<int, Fixture>* cache = new std::map<int, Fixture>();
+  auto it = cache->find(cells);
+  if (it != cache->end()) return it->second;
+  GridGeometry g;
+  g.dims = {128, 128, 64};
+  g.spacing = {1.0, 1.0, 2.0};
+  // Ripples of a few voxels: about a third of the edges split in the first iteration.
+  Volume volume = testing::AnalyticVolume(g, [](const Vec3& p) {
+    return 100.0 * std::sin(p[0] * 0.35) * std::cos(p[1] * 0.29) * std::sin(p[2] * 0.11);
+  });
+  Mesh mesh = testing::FiveTetMesh({0, 0, 0}, {127, 127, 126}, {cells, cells, cells});
+  return cache->emplace(cells, Fixture{std::move(volume), std::move(mesh)}).first->second;
+}
+
+void BM_OneIteration(benchmark::State& state) {
+  const Fixture& f = Setup(static_cast<int>(state.range(0)));
+  RefineOptions o;
+  o.epsilon = 0.05;
+  o.max_iterations = 1;
+  o.lattice_n = 0;
+  o.threads = static_cast<int>(state.range(1));
+  int64_t out = 0;
+  for (auto _ : state) {
+    auto r = Refine(f.volume, f.mesh, o);
+    out = static_cast<int64_t>(r->mesh.tets.size());
+    benchmark::DoNotOptimize(r);
+  }
+  state.counters["tets_in"] = static_cast<double>(f.mesh.tets.size());
+  state.counters["tets_out"] = static_cast<double>(out);
+  state.counters["out_tets_per_s"] =
+      benchmark::Counter(static_cast<double>(out), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_OneIteration)
+    ->Args({20, 1})
+    ->Args({58, 1})
+    ->Args({58, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+}  // namespace
+}  // namespace tetrefine
+
+BENCHMARK_MAIN();
