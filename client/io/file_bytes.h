@@ -1,0 +1,22 @@
+#pragma once
+
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+
+namespace tetrefine::io {
+
+// The whole file as bytes (std::string used as a byte buffer).
+absl::StatusOr<std::string> ReadFileBytes(const std::string& path);
+
+// The whole file, gunzipped when it starts with the gzip magic (1f 8b); otherwise as stored.
+// Decided by content rather than name so a mislabelled ".nii" that is really gzip still reads.
+absl::StatusOr<std::string> ReadFileMaybeGzip(const std::string& path);
+
+// Writes `content` to a temporary file in the same directory as `path`, then renames it over
+// `path`. rename() within a directory is atomic on POSIX, so readers see either the old file or
+// the complete new one, and a failed write never leaves half a file behind.
+absl::Status WriteFileAtomically(const std::string& path, absl::string_view content);
+
+}  // namespace tetrefine::io

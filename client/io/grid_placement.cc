@@ -1,0 +1,106 @@
+#include "client/io/grid_placement.h"
+
+#include <cmath>
+#include <cstring>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/io/io_error.h"
+
+namespace tetrefine::io {
+namespace {
+
+double ColumnLength(const Affine& affine, int column) {
+  return std::hypot(affine[0][column], affine[1][column], affine[2][column]);
+}
+
+bool IsDiagonalUpToSigns(const Affine& affine) {
+  for (int column = 0; column < 3; ++column) {
+    const double tolerance = kObliqueTolerance * ColumnLength(affine, column);
+    for (int row = 0; row < 3; ++row) {
+      if (row != column && std::abs(affine[row][column]) > tolerance) return false;
+    }
+  }
+  return true;
+}
+
+// Reverses the sample order along every axis with flip[axis] set.
+std::vector<std::byte> Flip(const std::vector<std::byte>& data, const Index3& dims, size_t width,
+                            const std::array<bool, 3>& flip) {
+  std::vector<std::byte> out(data.size());
+  const int64_t nx = dims[0], ny = dims[1], nz = dims[2];
+  for (int64_t k = 0; k < nz; ++k) {
+    const int64_t sk = flip[2] ? nz - 1 - k : k;
+    for (int64_t j = 0; j < ny; ++j) {
+      const int64_t sj = flip[1] ? ny - 1 - j : j;
+      const std::byte* src_row = data.data() + ((sk * ny + sj) * nx) * width;
+      std::byte* dst_row = out.data() + ((k * ny + j) * nx) * width;
+      if (!flip[0]) {
+        std::memcpy(dst_row, src_row, nx * width);
+        continue;
+      }
+      for (int64_t i = 0; i < nx; ++i) {
+        std::memcpy(dst_row + i * width, src_row + (nx - 1 - i) * width, width);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& affine,
+                                       const Index3& dims, VoxelType type,
+                                       std::vector<std::byte> data) {
+  for (int row = 0; row < 3; ++row) {
+    for (int column = 0; column < 4; ++column) {
+      if (!std::isfinite(affine[row][column])) {
+        return FileError(path, "index-to-world transform has a non-finite entry");
+      }
+    }
+  }
+  for (int column = 0; column < 3; ++column) {
+    if (!(ColumnLength(affine, column) > 0.0)) {
+      return FileError(path, absl::StrCat("index-to-world transform is singular: axis ", column,
+                                          " has zero length"));
+    }
+  }
+  VolumeFile result;
+  result.affine = affine;
+  GridGeometry grid;
+  grid.dims = dims;
+  if (IsDiagonalUpToSigns(affine)) {
+    std::array<bool, 3> flip{};
+    Index3 first{0, 0, 0};  // file index of the sample that becomes (0, 0, 0)
+    for (int a = 0; a < 3; ++a) {
+      flip[a] = affine[a][a] < 0.0;
+      grid.spacing[a] = std::abs(affine[a][a]);
+      if (flip[a]) first[a] = dims[a] - 1;
+    }
+    for (int row = 0; row < 3; ++row) {
+      grid.origin[row] = affine[row][3];
+      for (int column = 0; column < 3; ++column) {
+        grid.origin[row] += affine[row][column] * static_cast<double>(first[column]);
+      }
+    }
+    if (flip[0] || flip[1] || flip[2]) data = Flip(data, dims, VoxelSize(type), flip);
+  } else {
+    for (int a = 0; a < 3; ++a) {
+      grid.origin[a] = affine[a][3];
+      grid.spacing[a] = ColumnLength(affine, a);
+    }
+    result.warnings.push_back(absl::StrFormat(
+        "%s: index-to-world transform is oblique (rotated, sheared or axis-permuted); the volume "
+        "is placed axis-aligned at origin (%g, %g, %g) mm with spacing (%g, %g, %g) mm, ignoring "
+        "the rotation, so it is not in world RAS coordinates",
+        path, grid.origin[0], grid.origin[1], grid.origin[2], grid.spacing[0], grid.spacing[1],
+        grid.spacing[2]));
+  }
+  absl::StatusOr<Volume> volume = Volume::CreateWhole(grid, type, std::move(data));
+  if (!volume.ok()) return WithPath(path, volume.status());
+  result.volume = *std::move(volume);
+  return result;
+}
+
+}  // namespace tetrefine::io

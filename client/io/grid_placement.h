@@ -1,0 +1,27 @@
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "client/io/volume_file.h"
+#include "core/volume.h"
+#include "core/voxel_type.h"
+
+namespace tetrefine::io {
+
+// Relative size below which an off-diagonal affine entry counts as zero. Affines computed from
+// float32 quaternions carry rounding of about 1e-7 of the column length; real obliquity is far
+// larger (a 0.1 degree tilt is 1.7e-3).
+inline constexpr double kObliqueTolerance = 1e-5;
+
+// Builds the VolumeFile for samples stored in index order (x fastest) with index-to-world (RAS
+// mm) transform `affine`, following the frame rules documented on VolumeFile: flips axes with a
+// negative scale when the affine is diagonal up to signs, otherwise keeps the samples and adds an
+// "oblique" warning. `data` holds dims.prod() little-endian samples of `type`.
+absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& affine,
+                                       const Index3& dims, VoxelType type,
+                                       std::vector<std::byte> data);
+
+}  // namespace tetrefine::io

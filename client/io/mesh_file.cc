@@ -1,0 +1,60 @@
+#include "client/io/mesh_file.h"
+
+#include <cmath>
+#include <limits>
+
+#include "absl/strings/str_cat.h"
+#include "client/io/io_error.h"
+
+namespace tetrefine::io {
+
+absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path) {
+  const Mesh& mesh = file.mesh;
+  const size_t v = mesh.points.size();
+  const size_t t = mesh.tets.size();
+  if (v > std::numeric_limits<uint32_t>::max()) {
+    return FileError(path, absl::StrCat(v, " vertices is more than 32-bit indices address"));
+  }
+  if (!mesh.values.empty() && mesh.values.size() != v) {
+    return FileError(path, absl::StrCat("point data \"value\" has ", mesh.values.size(),
+                                        " entries for ", v, " vertices"));
+  }
+  if (!file.tet_iteration.empty() && file.tet_iteration.size() != t) {
+    return FileError(path, absl::StrCat("cell data \"iteration\" has ", file.tet_iteration.size(),
+                                        " entries for ", t, " tetrahedra"));
+  }
+  if (!file.tet_quality.empty() && file.tet_quality.size() != t) {
+    return FileError(path, absl::StrCat("cell data \"quality\" has ", file.tet_quality.size(),
+                                        " entries for ", t, " tetrahedra"));
+  }
+  for (size_t i = 0; i < v; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite(mesh.points[i][a])) {
+        return FileError(path, absl::StrCat("vertex ", i, " has a non-finite coordinate (",
+                                            mesh.points[i][a], ")"));
+      }
+    }
+  }
+  for (size_t i = 0; i < mesh.values.size(); ++i) {
+    if (!std::isfinite(mesh.values[i])) {
+      return FileError(
+          path, absl::StrCat("value of vertex ", i, " is not finite (", mesh.values[i], ")"));
+    }
+  }
+  for (size_t i = 0; i < t; ++i) {
+    for (int c = 0; c < 4; ++c) {
+      if (mesh.tets[i][c] >= v) {
+        return FileError(path, absl::StrCat("tetrahedron ", i, " uses vertex ", mesh.tets[i][c],
+                                            ", out of range for ", v, " vertices"));
+      }
+    }
+  }
+  for (size_t i = 0; i < file.tet_quality.size(); ++i) {
+    if (!std::isfinite(file.tet_quality[i])) {
+      return FileError(path, absl::StrCat("quality of tetrahedron ", i, " is not finite"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace tetrefine::io

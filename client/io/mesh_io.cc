@@ -1,0 +1,83 @@
+#include "client/io/mesh_io.h"
+
+#include "absl/strings/match.h"
+#include "client/io/file_bytes.h"
+#include "client/io/gmsh_format.h"
+#include "client/io/io_error.h"
+#include "client/io/medit_format.h"
+#include "client/io/vtk_legacy_format.h"
+#include "client/io/vtu_format.h"
+
+namespace tetrefine::io {
+namespace {
+
+enum class MeshFormat { kVtu, kVtkLegacy, kGmsh, kMedit, kUnknown };
+
+MeshFormat FormatOf(const std::string& path) {
+  if (absl::EndsWithIgnoreCase(path, ".vtu")) return MeshFormat::kVtu;
+  if (absl::EndsWithIgnoreCase(path, ".vtk")) return MeshFormat::kVtkLegacy;
+  if (absl::EndsWithIgnoreCase(path, ".msh")) return MeshFormat::kGmsh;
+  if (absl::EndsWithIgnoreCase(path, ".mesh")) return MeshFormat::kMedit;
+  return MeshFormat::kUnknown;
+}
+
+absl::Status UnknownExtension(const std::string& path) {
+  return FileError(path, "unknown extension for a mesh: expected .vtu, .vtk, .msh or .mesh");
+}
+
+}  // namespace
+
+absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
+  const MeshFormat format = FormatOf(path);
+  if (format == MeshFormat::kUnknown) return UnknownExtension(path);
+  absl::StatusOr<std::string> text = ReadFileBytes(path);
+  if (!text.ok()) return text.status();
+  absl::StatusOr<MeshFile> file;
+  switch (format) {
+    case MeshFormat::kVtu:
+      file = ParseVtu(*text, path);
+      break;
+    case MeshFormat::kVtkLegacy:
+      file = ParseVtkLegacy(*text, path);
+      break;
+    case MeshFormat::kGmsh:
+      file = ParseGmsh(*text, path);
+      break;
+    case MeshFormat::kMedit:
+      file = ParseMedit(*text, path);
+      break;
+    case MeshFormat::kUnknown:
+      break;
+  }
+  if (!file.ok()) return file.status();
+  // Every parser checks its own structure; this catches what they share (finite numbers,
+  // indices in range, array lengths) in one place.
+  if (absl::Status s = ValidateMeshFile(*file, path); !s.ok()) return s;
+  return file;
+}
+
+absl::Status WriteMesh(const std::string& path, const MeshFile& file) {
+  const MeshFormat format = FormatOf(path);
+  if (format == MeshFormat::kUnknown) return UnknownExtension(path);
+  if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
+  std::string bytes;
+  switch (format) {
+    case MeshFormat::kVtu:
+      bytes = FormatVtu(file);
+      break;
+    case MeshFormat::kVtkLegacy:
+      bytes = FormatVtkLegacy(file);
+      break;
+    case MeshFormat::kGmsh:
+      bytes = FormatGmsh41(file);
+      break;
+    case MeshFormat::kMedit:
+      bytes = FormatMedit(file);
+      break;
+    case MeshFormat::kUnknown:
+      break;
+  }
+  return WriteFileAtomically(path, bytes);
+}
+
+}  // namespace tetrefine::io

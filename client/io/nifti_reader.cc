@@ -1,0 +1,158 @@
+#include "client/io/nifti_reader.h"
+
+#include <optional>
+#include <utility>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "client/io/file_bytes.h"
+#include "client/io/grid_placement.h"
+#include "client/io/io_error.h"
+#include "client/io/nifti_header.h"
+#include "client/io/voxel_decode.h"
+
+namespace tetrefine::io {
+namespace {
+
+constexpr int64_t kMaxAxis = int64_t{1} << 20;
+
+std::optional<VoxelType> VoxelTypeOfDatatype(int datatype) {
+  switch (datatype) {
+    case 2:
+      return VoxelType::kUint8;
+    case 4:
+      return VoxelType::kInt16;
+    case 8:
+      return VoxelType::kInt32;
+    case 16:
+      return VoxelType::kFloat32;
+    case 64:
+      return VoxelType::kFloat64;
+    case 512:
+      return VoxelType::kUint16;
+    default:
+      return std::nullopt;
+  }
+}
+
+absl::string_view DatatypeName(int datatype) {
+  switch (datatype) {
+    case 1:
+      return "binary";
+    case 32:
+      return "complex64";
+    case 128:
+      return "rgb24";
+    case 256:
+      return "int8";
+    case 768:
+      return "uint32";
+    case 1024:
+      return "int64";
+    case 1280:
+      return "uint64";
+    case 1536:
+      return "float128";
+    case 1792:
+      return "complex128";
+    case 2048:
+      return "complex256";
+    case 2304:
+      return "rgba32";
+    default:
+      return "unknown";
+  }
+}
+
+// "x.hdr" -> "x.img", "x.hdr.gz" -> "x.img.gz".
+std::string ImagePathFor(const std::string& header_path) {
+  const bool gz = absl::EndsWithIgnoreCase(header_path, ".gz");
+  const size_t stem = header_path.size() - (gz ? 7 : 4);
+  const bool upper = header_path[stem + 1] == 'H';
+  return absl::StrCat(header_path.substr(0, stem), upper ? ".IMG" : ".img", gz ? ".gz" : "");
+}
+
+absl::StatusOr<Index3> SpatialDims(const NiftiHeader& header, absl::string_view path) {
+  const int64_t rank = header.dim[0];
+  if (rank < 1 || rank > 7) {
+    return FileError(path, absl::StrCat("dim[0] = ", rank, ": must be in [1, 7]"));
+  }
+  Index3 dims{1, 1, 1};
+  for (int a = 1; a <= rank; ++a) {
+    const int64_t size = header.dim[a];
+    if (size < 1 || size > kMaxAxis) {
+      return FileError(path, absl::StrCat("dim[", a, "] = ", size, ": must be in [1, 2^20]"));
+    }
+    if (a <= 3) {
+      dims[a - 1] = size;
+    } else if (size != 1) {
+      return FileUnsupported(
+          path, absl::StrCat("dim[", a, "] = ", size, ": only 3D volumes are read (this is a ",
+                             rank, "D series)"));
+    }
+  }
+  return dims;
+}
+
+}  // namespace
+
+absl::StatusOr<VolumeFile> ReadNifti(const std::string& path) {
+  absl::StatusOr<std::string> file = ReadFileMaybeGzip(path);
+  if (!file.ok()) return file.status();
+  absl::StatusOr<NiftiHeader> header = ParseNiftiHeader(*file, path);
+  if (!header.ok()) return header.status();
+
+  const bool is_header_file =
+      absl::EndsWithIgnoreCase(path, ".hdr") || absl::EndsWithIgnoreCase(path, ".hdr.gz");
+  std::string image_path = path;
+  std::string image_storage;
+  absl::string_view image = *file;
+  if (!header->single_file) {
+    if (!is_header_file) {
+      return FileError(path,
+                       "header says the samples are in a separate .img file (magic "
+                       "ni1/ni2), but this is not a .hdr file");
+    }
+    image_path = ImagePathFor(path);
+    absl::StatusOr<std::string> img = ReadFileMaybeGzip(image_path);
+    if (!img.ok()) return WithPath(path, img.status());
+    image_storage = *std::move(img);
+    image = image_storage;
+  }
+
+  absl::StatusOr<Index3> dims = SpatialDims(*header, path);
+  if (!dims.ok()) return dims.status();
+  const std::optional<VoxelType> type = VoxelTypeOfDatatype(header->datatype);
+  if (!type.has_value()) {
+    return FileUnsupported(
+        path,
+        absl::StrCat("NIfTI datatype ", header->datatype, " (", DatatypeName(header->datatype),
+                     ") is not supported; supported: uint8, int16, uint16, int32, "
+                     "float32, float64"));
+  }
+  // The standard asks for 352 / 544 (room for the extension flag); old writers used the bare
+  // header size, which is still unambiguous.
+  const size_t min_offset =
+      header->single_file ? (header->version == 1 ? kNifti1HeaderSize : kNifti2HeaderSize) : 0;
+  if (header->vox_offset < 0 || static_cast<uint64_t>(header->vox_offset) < min_offset) {
+    return FileError(
+        path, absl::StrCat("vox_offset = ", header->vox_offset, ": must be at least ", min_offset));
+  }
+  const uint64_t offset = static_cast<uint64_t>(header->vox_offset);
+  // Each axis is at most 2^20, so the product fits in 2^60 and times 8 bytes in uint64.
+  const uint64_t count = static_cast<uint64_t>((*dims)[0]) * static_cast<uint64_t>((*dims)[1]) *
+                         static_cast<uint64_t>((*dims)[2]);
+  const uint64_t need = count * VoxelSize(*type);
+  const uint64_t have = image.size() > offset ? image.size() - offset : 0;
+  if (have < need) {
+    return FileError(
+        image_path, absl::StrCat("truncated: header says ", need, " voxel bytes at offset ", offset,
+                                 ", file has ", have));
+  }
+  absl::StatusOr<DecodedVoxels> voxels = DecodeVoxels(
+      image.substr(offset, need), *type, header->order, header->scl_slope, header->scl_inter);
+  if (!voxels.ok()) return WithPath(path, voxels.status());
+  return PlaceOnGrid(path, NiftiAffine(*header), *dims, voxels->type, std::move(voxels->data));
+}
+
+}  // namespace tetrefine::io

@@ -1,0 +1,338 @@
+#include "client/io/nrrd_reader.h"
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <optional>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
+#include "client/io/file_bytes.h"
+#include "client/io/grid_placement.h"
+#include "client/io/header_lines.h"
+#include "client/io/io_error.h"
+#include "client/io/number_text.h"
+#include "client/io/voxel_decode.h"
+#include "client/io/world_frame.h"
+#include "client/io/zlib_codec.h"
+
+namespace tetrefine::io {
+namespace {
+
+constexpr int64_t kMaxAxis = int64_t{1} << 20;
+
+std::optional<VoxelType> NrrdType(absl::string_view name) {
+  static const auto* const kTypes = new std::map<absl::string_view, VoxelType>{
+      {"uchar", VoxelType::kUint8},
+      {"unsigned char", VoxelType::kUint8},
+      {"uint8", VoxelType::kUint8},
+      {"uint8_t", VoxelType::kUint8},
+      {"short", VoxelType::kInt16},
+      {"short int", VoxelType::kInt16},
+      {"signed short", VoxelType::kInt16},
+      {"signed short int", VoxelType::kInt16},
+      {"int16", VoxelType::kInt16},
+      {"int16_t", VoxelType::kInt16},
+      {"ushort", VoxelType::kUint16},
+      {"unsigned short", VoxelType::kUint16},
+      {"unsigned short int", VoxelType::kUint16},
+      {"uint16", VoxelType::kUint16},
+      {"uint16_t", VoxelType::kUint16},
+      {"int", VoxelType::kInt32},
+      {"signed int", VoxelType::kInt32},
+      {"int32", VoxelType::kInt32},
+      {"int32_t", VoxelType::kInt32},
+      {"float", VoxelType::kFloat32},
+      {"double", VoxelType::kFloat64},
+  };
+  const auto it = kTypes->find(name);
+  if (it == kTypes->end()) return std::nullopt;
+  return it->second;
+}
+
+// Sign per world axis that turns the file's space into RAS; nullopt for an unsupported space.
+std::optional<Vec3> RasSigns(absl::string_view space) {
+  const std::string s = absl::AsciiStrToLower(space);
+  if (s == "right-anterior-superior" || s == "ras") return Vec3{1, 1, 1};
+  if (s == "left-anterior-superior" || s == "las") return Vec3{-1, 1, 1};
+  if (s == "left-posterior-superior" || s == "lps") return Vec3{-1, -1, 1};
+  // No anatomical meaning stated: keep the coordinates as they are.
+  if (s == "scanner-xyz" || s == "3d-right-handed" || s == "3d-left-handed") return Vec3{1, 1, 1};
+  return std::nullopt;
+}
+
+// Parses "(a,b,c)" into a vector; false on anything else.
+bool ParseVector(absl::string_view text, Vec3& v) {
+  text = absl::StripAsciiWhitespace(text);
+  if (!absl::ConsumePrefix(&text, "(") || !absl::ConsumeSuffix(&text, ")")) return false;
+  const std::vector<absl::string_view> parts = absl::StrSplit(text, ',');
+  if (parts.size() != 3) return false;
+  for (int i = 0; i < 3; ++i) {
+    if (!ParseDouble(absl::StripAsciiWhitespace(parts[i]), v[i]) || !std::isfinite(v[i])) {
+      return false;
+    }
+  }
+  return true;
+}
+
+std::vector<absl::string_view> Words(absl::string_view text) {
+  return absl::StrSplit(text, absl::ByAnyChar(" \t"), absl::SkipEmpty());
+}
+
+struct NrrdFields {
+  std::map<std::string, std::string> values;  // field name (lower case) -> value
+  size_t data_offset = 0;                     // first byte after the header's blank line
+};
+
+absl::StatusOr<NrrdFields> ParseHeader(absl::string_view bytes, const std::string& path) {
+  HeaderLines lines(bytes);
+  absl::string_view line;
+  if (!lines.Next(line) || !absl::StartsWith(line, "NRRD000")) {
+    return FileError(path, "not a NRRD file: first line is not NRRD000<version>");
+  }
+  NrrdFields fields;
+  bool blank_seen = false;
+  while (lines.Next(line)) {
+    if (line.empty()) {
+      blank_seen = true;
+      break;
+    }
+    if (line[0] == '#') continue;
+    if (absl::StrContains(line, ":=")) continue;  // key/value pair: free-form metadata
+    const size_t colon = line.find(": ");
+    if (colon == absl::string_view::npos) {
+      return FileLineError(path, lines.line_number(),
+                           absl::StrCat("expected \"field: value\", got \"", line, "\""));
+    }
+    fields.values[absl::AsciiStrToLower(line.substr(0, colon))] =
+        std::string(absl::StripAsciiWhitespace(line.substr(colon + 2)));
+  }
+  fields.data_offset = lines.offset();
+  const bool detached = fields.values.count("data file") > 0 || fields.values.count("datafile");
+  if (!blank_seen && !detached) {
+    return FileError(path, "truncated: header has no blank line before the data");
+  }
+  return fields;
+}
+
+absl::string_view Field(const NrrdFields& fields, const std::string& name) {
+  const auto it = fields.values.find(name);
+  return it == fields.values.end() ? absl::string_view() : absl::string_view(it->second);
+}
+
+template <typename T>
+bool AppendIfFits(std::string& out, double value) {
+  if constexpr (std::is_integral_v<T>) {
+    if (!(value >= static_cast<double>(std::numeric_limits<T>::min()) &&
+          value <= static_cast<double>(std::numeric_limits<T>::max()))) {
+      return false;
+    }
+  }
+  AppendLittle(out, static_cast<T>(value));
+  return true;
+}
+
+// Appends `value` as a little-endian `type`; false when it does not fit.
+bool AppendSample(std::string& out, VoxelType type, double value) {
+  switch (type) {
+    case VoxelType::kUint8:
+      return AppendIfFits<uint8_t>(out, value);
+    case VoxelType::kInt16:
+      return AppendIfFits<int16_t>(out, value);
+    case VoxelType::kUint16:
+      return AppendIfFits<uint16_t>(out, value);
+    case VoxelType::kInt32:
+      return AppendIfFits<int32_t>(out, value);
+    case VoxelType::kFloat32:
+      return AppendIfFits<float>(out, value);
+    case VoxelType::kFloat64:
+      return AppendIfFits<double>(out, value);
+  }
+  return false;
+}
+
+absl::StatusOr<std::string> DecodeAscii(absl::string_view text, VoxelType type, uint64_t count,
+                                        absl::string_view path) {
+  std::string out;
+  out.reserve(std::min<uint64_t>(count, text.size()) * VoxelSize(type));
+  uint64_t seen = 0;
+  for (absl::string_view word :
+       absl::StrSplit(text, absl::ByAnyChar(" \t\r\n,"), absl::SkipEmpty())) {
+    if (seen == count) break;
+    double value;
+    if (!ParseDouble(word, value)) {
+      return FileError(path, absl::StrCat("ascii sample ", seen, " is not a number: \"",
+                                          word.substr(0, 32), "\""));
+    }
+    if (!AppendSample(out, type, value)) {
+      return FileError(path, absl::StrCat("ascii sample ", seen, " = ", word.substr(0, 32),
+                                          " does not fit type ", std::string(VoxelTypeName(type))));
+    }
+    ++seen;
+  }
+  if (seen < count) {
+    return FileError(path, absl::StrCat("truncated: header says ", count,
+                                        " ascii samples, file "
+                                        "has ",
+                                        seen));
+  }
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
+  absl::StatusOr<std::string> file = ReadFileBytes(path);
+  if (!file.ok()) return file.status();
+  absl::StatusOr<NrrdFields> fields = ParseHeader(*file, path);
+  if (!fields.ok()) return fields.status();
+
+  const absl::string_view type_name = Field(*fields, "type");
+  const std::optional<VoxelType> type = NrrdType(type_name);
+  if (!type.has_value()) {
+    return FileUnsupported(path, absl::StrCat("NRRD type \"", type_name,
+                                              "\" is not supported; "
+                                              "supported: uchar, short, ushort, int, float, "
+                                              "double"));
+  }
+  if (Field(*fields, "dimension") != "3") {
+    return FileUnsupported(path, absl::StrCat("dimension \"", Field(*fields, "dimension"),
+                                              "\": only 3D volumes are read"));
+  }
+  const std::vector<absl::string_view> sizes = Words(Field(*fields, "sizes"));
+  if (sizes.size() != 3) return FileError(path, "\"sizes\" must give 3 sizes");
+  Index3 dims;
+  for (int a = 0; a < 3; ++a) {
+    if (!ParseInt64(sizes[a], dims[a]) || dims[a] < 1 || dims[a] > kMaxAxis) {
+      return FileError(path, absl::StrCat("size \"", sizes[a], "\" must be in [1, 2^20]"));
+    }
+  }
+
+  std::array<Vec3, 3> axes{};
+  Vec3 origin{0, 0, 0};
+  Vec3 signs{1, 1, 1};
+  if (const absl::string_view space = Field(*fields, "space"); !space.empty()) {
+    const std::optional<Vec3> ras = RasSigns(space);
+    if (!ras.has_value()) {
+      return FileUnsupported(path, absl::StrCat("space \"", space, "\" is not supported"));
+    }
+    signs = *ras;
+  }
+  if (const absl::string_view directions = Field(*fields, "space directions");
+      !directions.empty()) {
+    const std::vector<absl::string_view> vectors = Words(directions);
+    if (vectors.size() != 3) return FileError(path, "\"space directions\" must give 3 vectors");
+    for (int a = 0; a < 3; ++a) {
+      if (!ParseVector(vectors[a], axes[a])) {
+        return FileError(path, absl::StrCat("space direction \"", vectors[a],
+                                            "\" is not a finite (x,y,z) vector"));
+      }
+    }
+    if (const absl::string_view o = Field(*fields, "space origin"); !o.empty()) {
+      if (!ParseVector(o, origin)) {
+        return FileError(path, absl::StrCat("space origin \"", o, "\" is not a finite (x,y,z)"));
+      }
+    }
+  } else {
+    const std::vector<absl::string_view> spacings = Words(Field(*fields, "spacings"));
+    for (int a = 0; a < 3; ++a) {
+      double step = 1.0;
+      if (a < static_cast<int>(spacings.size()) && ParseDouble(spacings[a], step) &&
+          std::isfinite(step) && step != 0.0) {
+        step = std::abs(step);
+      } else {
+        step = 1.0;  // "nan" or absent: unknown spacing
+      }
+      axes[a][a] = step;
+    }
+  }
+  Affine affine = AffineFromAxes(axes, origin);
+  for (int row = 0; row < 3; ++row) {
+    for (int column = 0; column < 4; ++column) affine[row][column] *= signs[row];
+  }
+
+  // Locate the (possibly detached) payload.
+  std::string detached_storage;
+  absl::string_view payload = absl::string_view(*file).substr(fields->data_offset);
+  std::string data_path = path;
+  absl::string_view data_file = Field(*fields, "data file");
+  if (data_file.empty()) data_file = Field(*fields, "datafile");
+  if (!data_file.empty()) {
+    if (absl::StartsWith(data_file, "LIST") || Words(data_file).size() > 1) {
+      return FileUnsupported(path, "multi-file NRRD data (LIST or pattern) is not supported");
+    }
+    std::filesystem::path p(std::string{data_file});
+    if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
+    data_path = p.string();
+    absl::StatusOr<std::string> bytes = ReadFileBytes(data_path);
+    if (!bytes.ok()) return WithPath(path, bytes.status());
+    detached_storage = *std::move(bytes);
+    payload = detached_storage;
+  }
+  int64_t line_skip = 0;
+  if (const absl::string_view s = Field(*fields, "line skip"); !s.empty()) {
+    if (!ParseInt64(s, line_skip) || line_skip < 0) return FileError(path, "bad \"line skip\"");
+  }
+  for (int64_t i = 0; i < line_skip; ++i) {
+    const size_t end = payload.find('\n');
+    if (end == absl::string_view::npos) {
+      return FileError(data_path, "truncated: fewer lines than \"line skip\"");
+    }
+    payload.remove_prefix(end + 1);
+  }
+
+  const std::string encoding = absl::AsciiStrToLower(Field(*fields, "encoding"));
+  const uint64_t count = static_cast<uint64_t>(dims[0]) * static_cast<uint64_t>(dims[1]) *
+                         static_cast<uint64_t>(dims[2]);
+  const uint64_t need = count * VoxelSize(*type);
+  std::string decoded;
+  if (encoding == "gzip" || encoding == "gz") {
+    absl::StatusOr<std::string> inflated = Inflate(payload);
+    if (!inflated.ok()) return WithPath(data_path, inflated.status());
+    decoded = *std::move(inflated);
+    payload = decoded;
+  } else if (encoding == "ascii" || encoding == "text" || encoding == "txt") {
+    absl::StatusOr<std::string> values = DecodeAscii(payload, *type, count, data_path);
+    if (!values.ok()) return values.status();
+    decoded = *std::move(values);
+    payload = decoded;
+  } else if (encoding != "raw") {
+    return FileUnsupported(path, absl::StrCat("encoding \"", encoding,
+                                              "\" is not supported; "
+                                              "supported: raw, gzip, ascii"));
+  }
+  int64_t byte_skip = 0;
+  if (const absl::string_view s = Field(*fields, "byte skip"); !s.empty()) {
+    if (!ParseInt64(s, byte_skip) || byte_skip < -1) return FileError(path, "bad \"byte skip\"");
+  }
+  if (byte_skip == -1) {
+    // -1: the samples are the last bytes of the payload.
+    byte_skip = payload.size() >= need ? static_cast<int64_t>(payload.size() - need) : 0;
+  }
+  const uint64_t have =
+      payload.size() > static_cast<uint64_t>(byte_skip) ? payload.size() - byte_skip : 0;
+  if (have < need) {
+    return FileError(data_path, absl::StrCat("truncated: header says ", need,
+                                             " voxel bytes, "
+                                             "file has ",
+                                             have));
+  }
+  ByteOrder order = ByteOrder::kLittle;
+  if (absl::AsciiStrToLower(Field(*fields, "endian")) == "big" && encoding != "ascii" &&
+      encoding != "text" && encoding != "txt") {
+    order = ByteOrder::kBig;
+  }
+  absl::StatusOr<DecodedVoxels> voxels =
+      DecodeVoxels(payload.substr(byte_skip, need), *type, order, 0.0, 0.0);
+  if (!voxels.ok()) return WithPath(path, voxels.status());
+  return PlaceOnGrid(path, affine, dims, voxels->type, std::move(voxels->data));
+}
+
+}  // namespace tetrefine::io

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <cstdint>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+
+namespace tetrefine::io {
+
+// Splits an ASCII mesh file into whitespace-separated tokens, tracking line numbers so every
+// error can say "<path>:<line>: <problem>".
+class TextScanner {
+ public:
+  // `comment` (if not '\0') starts a comment running to the end of its line.
+  TextScanner(absl::string_view text, absl::string_view path, char comment = '\0')
+      : text_(text), path_(path), comment_(comment) {}
+
+  // True when only whitespace (and comments) remain.
+  bool AtEnd();
+
+  // The next token; an "unexpected end of file" error naming `what` when there is none.
+  absl::StatusOr<absl::string_view> Token(absl::string_view what);
+  // The next token as a number; errors name `what` and quote the bad token.
+  absl::StatusOr<double> Double(absl::string_view what);
+  absl::StatusOr<double> FiniteDouble(absl::string_view what);
+  absl::StatusOr<int64_t> Int(absl::string_view what);
+  // An integer in [lo, hi].
+  absl::StatusOr<int64_t> IntIn(absl::string_view what, int64_t lo, int64_t hi);
+
+  // Consumes the next token if it equals `word` (ASCII case-insensitive); false otherwise.
+  bool ConsumeIf(absl::string_view word);
+
+  // The rest of the current line (after the last token), without the terminator, and moves to
+  // the next line. Used for free-text lines such as titles.
+  absl::string_view RestOfLine();
+
+  // Fails unless at least `count` entries of at least `min_bytes` each can still follow. Called
+  // before reserving memory for a declared count, so a corrupt count cannot allocate more than
+  // the file could describe.
+  absl::Status CheckCount(int64_t count, int64_t min_bytes, absl::string_view what);
+
+  // "<path>:<line>: <problem>" at the current line.
+  absl::Status Error(absl::string_view problem) const;
+
+  int64_t line() const { return line_; }
+  size_t remaining() const { return text_.size() - pos_; }
+
+ private:
+  void SkipSpace();
+
+  absl::string_view text_;
+  absl::string_view path_;
+  char comment_;
+  size_t pos_ = 0;
+  int64_t line_ = 1;
+};
+
+}  // namespace tetrefine::io

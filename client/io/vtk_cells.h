@@ -1,0 +1,36 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/strings/string_view.h"
+#include "client/io/mesh_file.h"
+
+namespace tetrefine::io {
+
+// VTK's cell type code for a linear tetrahedron.
+inline constexpr int kVtkTetra = 10;
+
+// A VTK cell list in the offsets/connectivity layout (legacy 5.x and XML); legacy 2.x-4.x files
+// are converted to it. Cell c uses connectivity[offsets[c] .. offsets[c + 1]).
+struct VtkCells {
+  std::vector<int64_t> offsets;  // cells + 1 entries, offsets[0] = 0
+  std::vector<int64_t> connectivity;
+  std::vector<int64_t> types;  // one VTK cell type per cell
+};
+
+// Per-cell arrays as read ("iteration", "quality"), one entry per cell of any type.
+struct VtkCellData {
+  std::vector<double> iteration;
+  std::vector<double> quality;
+};
+
+// Fills file.mesh.tets from the tetrahedra (type 10) of `cells`, ignoring every other cell type,
+// and the per-tet arrays from the entries of `data` for those cells. Checks the layout, that each
+// tet has 4 indices below `num_points`, that iterations are int32 and qualities float-finite.
+// `ignored_cells` receives how many cells were not tets.
+absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t num_points,
+                         absl::string_view path, MeshFile& file, int64_t& ignored_cells);
+
+}  // namespace tetrefine::io
