@@ -1,0 +1,123 @@
+#include "client/refine_client.h"
+
+#include <atomic>
+#include <thread>
+#include <utility>
+
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "grpcpp/grpcpp.h"
+#include "server/wire_request_writer.h"
+#include "tetrefine/v1/tetrefine.grpc.pb.h"
+
+namespace tetrefine::client {
+namespace {
+
+void ApplyDeadline(const std::optional<std::chrono::system_clock::time_point>& deadline,
+                   grpc::ClientContext* context) {
+  if (deadline.has_value()) context->set_deadline(*deadline);
+}
+
+// Cancels `context` once should_cancel() says so, polling until destroyed. Blocking reads give
+// the caller no other chance to stop a long iteration.
+class CancelWatcher {
+ public:
+  CancelWatcher(std::function<bool()> should_cancel, grpc::ClientContext* context) {
+    if (!should_cancel) return;
+    thread_ = std::jthread(
+        [should_cancel = std::move(should_cancel), context, this](std::stop_token stop) {
+          while (!stop.stop_requested()) {
+            if (should_cancel()) {
+              cancelled_.store(true);
+              context->TryCancel();
+              return;
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+          }
+        });
+  }
+  bool cancelled() const { return cancelled_.load(); }
+
+ private:
+  std::atomic<bool> cancelled_{false};
+  std::jthread thread_;  // last: joined before the flag goes away
+};
+
+}  // namespace
+
+absl::StatusOr<ClientResult> RefineViaService(std::shared_ptr<grpc::Channel> channel,
+                                              const Volume& volume, const Mesh& mesh,
+                                              const RefineRequestOptions& options,
+                                              const RefineCallbacks& callbacks,
+                                              const CallOptions& call) {
+  RefineRequestOptions sent = options;
+  if (callbacks.on_mesh) sent.stream_every_iteration = true;
+
+  v1::Refiner::Stub stub(channel);
+  grpc::ClientContext context;
+  ApplyDeadline(call.deadline, &context);
+  context.set_wait_for_ready(call.wait_for_ready);
+  auto stream = stub.Refine(&context);
+  absl::Status reader_status;
+  {
+    CancelWatcher watcher(callbacks.should_cancel, &context);
+    // The server reads the whole input before it answers, so writing everything first cannot
+    // deadlock. A failed write means the server has already ended the call: its status tells.
+    if (wire::WriteRequest(sent, volume, mesh, call.chunk_bytes,
+                           [&](const v1::RefineRequest& r) { return stream->Write(r); })) {
+      stream->WritesDone();
+    }
+    wire::ResponseReader reader(callbacks.on_iteration, callbacks.on_mesh, !sent.skip_final_mesh);
+    v1::RefineResponse response;
+    while (reader_status.ok() && stream->Read(&response)) {
+      reader_status = reader.Add(response);
+    }
+    if (!reader_status.ok()) context.TryCancel();
+    grpc::Status status = stream->Finish();
+    if (!reader_status.ok()) return reader_status;
+    if (!status.ok()) {
+      if (watcher.cancelled()) return absl::CancelledError("cancelled by should_cancel");
+      return wire::FromGrpcStatus(status);
+    }
+    if (!reader.complete()) {
+      return absl::InternalError("the Refine response stream ended before its summary");
+    }
+    return reader.Take();
+  }
+}
+
+absl::StatusOr<ServerInfo> GetServerInfo(
+    std::shared_ptr<grpc::Channel> channel,
+    std::optional<std::chrono::system_clock::time_point> deadline) {
+  v1::Refiner::Stub stub(channel);
+  grpc::ClientContext context;
+  ApplyDeadline(deadline, &context);
+  v1::ServerInfo info;
+  grpc::Status status = stub.GetServerInfo(&context, v1::GetServerInfoRequest(), &info);
+  if (!status.ok()) return wire::FromGrpcStatus(status);
+  return ServerInfo{.version = info.version(), .limits = wire::LimitsFromWire(info.limits())};
+}
+
+absl::StatusOr<ServingStatus> CheckHealth(
+    std::shared_ptr<grpc::Channel> channel, std::string_view service,
+    std::optional<std::chrono::system_clock::time_point> deadline) {
+  grpc::health::v1::Health::Stub stub(channel);
+  grpc::ClientContext context;
+  ApplyDeadline(deadline, &context);
+  grpc::health::v1::HealthCheckRequest request;
+  request.set_service(std::string(service));
+  grpc::health::v1::HealthCheckResponse response;
+  grpc::Status status = stub.Check(&context, request, &response);
+  if (!status.ok()) return wire::FromGrpcStatus(status);
+  switch (response.status()) {
+    case grpc::health::v1::HealthCheckResponse::SERVING:
+      return ServingStatus::kServing;
+    case grpc::health::v1::HealthCheckResponse::NOT_SERVING:
+      return ServingStatus::kNotServing;
+    case grpc::health::v1::HealthCheckResponse::SERVICE_UNKNOWN:
+      return ServingStatus::kServiceUnknown;
+    default:
+      return ServingStatus::kUnknown;
+  }
+}
+
+}  // namespace tetrefine::client

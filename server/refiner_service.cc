@@ -1,0 +1,73 @@
+#include "server/refiner_service.h"
+
+#include <chrono>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "server/refine_call.h"
+#include "server/wire_conversion.h"
+#include "spdlog/spdlog.h"
+
+#ifndef TETREFINE_VERSION
+#define TETREFINE_VERSION "unknown"
+#endif
+
+namespace tetrefine::server {
+namespace {
+
+// Holds one of `limit` slots of `active` for its lifetime, if one was free.
+class Slot {
+ public:
+  Slot(std::atomic<int>& active, int limit) : active_(active) {
+    acquired_ = active_.fetch_add(1) < limit;
+    if (!acquired_) active_.fetch_sub(1);
+  }
+  ~Slot() {
+    if (acquired_) active_.fetch_sub(1);
+  }
+  Slot(const Slot&) = delete;
+  Slot& operator=(const Slot&) = delete;
+  bool acquired() const { return acquired_; }
+
+ private:
+  std::atomic<int>& active_;
+  bool acquired_;
+};
+
+}  // namespace
+
+grpc::Status RefinerService::Refine(grpc::ServerContext* context, RefineStream* stream) {
+  const auto start = std::chrono::steady_clock::now();
+  CallRecord record;
+  grpc::Status status;
+  {
+    Slot slot(active_, config_.limits.max_concurrent_refinements);
+    if (slot.acquired()) {
+      status = RunRefineCall(config_, context, stream, &record);
+    } else {
+      status = grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                            absl::StrCat("this server already runs its limit of ",
+                                         config_.limits.max_concurrent_refinements,
+                                         " concurrent refinements; retry later"));
+    }
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  spdlog::info(
+      "Refine peer={} bytes_in={} tets_in={} tets_out={} iterations={} duration={:.3f}s "
+      "status={} {}",
+      context->peer(), record.bytes_in, record.tets_in, record.tets_out, record.iterations, seconds,
+      absl::StatusCodeToString(static_cast<absl::StatusCode>(status.error_code())),
+      status.error_message());
+  return status;
+}
+
+grpc::Status RefinerService::GetServerInfo(grpc::ServerContext* /*context*/,
+                                           const v1::GetServerInfoRequest* /*request*/,
+                                           v1::ServerInfo* response) {
+  response->set_version(TETREFINE_VERSION);
+  wire::LimitsToWire(config_.limits, response->mutable_limits());
+  return grpc::Status::OK;
+}
+
+}  // namespace tetrefine::server

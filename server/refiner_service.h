@@ -1,0 +1,39 @@
+#pragma once
+
+#include <atomic>
+
+#include "grpcpp/grpcpp.h"
+#include "server/service_limits.h"
+#include "tetrefine/v1/tetrefine.grpc.pb.h"
+
+namespace tetrefine::server {
+
+struct ServiceConfig {
+  wire::ServiceLimits limits;
+  int refine_threads = 0;  // core worker threads per refinement; 0: all cores
+};
+
+// The tetrefine.v1.Refiner service. Stateless: a call keeps nothing once it returns; the only
+// shared state is the count of refinements in flight, which enforces the concurrency limit.
+class RefinerService final : public v1::Refiner::Service {
+ public:
+  explicit RefinerService(const ServiceConfig& config) : config_(config) {}
+
+  grpc::Status Refine(
+      grpc::ServerContext* context,
+      grpc::ServerReaderWriter<v1::RefineResponse, v1::RefineRequest>* stream) override;
+
+  grpc::Status GetServerInfo(grpc::ServerContext* context, const v1::GetServerInfoRequest* request,
+                             v1::ServerInfo* response) override;
+
+  // Refine calls admitted and not yet returned.
+  int active_refinements() const { return active_.load(); }
+
+  const ServiceConfig& config() const { return config_; }
+
+ private:
+  ServiceConfig config_;
+  std::atomic<int> active_{0};
+};
+
+}  // namespace tetrefine::server

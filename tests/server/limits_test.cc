@@ -1,0 +1,151 @@
+// Server limits answer RESOURCE_EXHAUSTED, checked on declared sizes before any allocation.
+
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "client/refine_client.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "server/wire_request_writer.h"
+#include "tests/server/service_test_support.h"
+#include "tetrefine/v1/tetrefine.grpc.pb.h"
+
+namespace tetrefine::testing {
+namespace {
+
+using ::testing::HasSubstr;
+using Requests = std::vector<v1::RefineRequest>;
+
+server::ServiceConfig SmallLimits() {
+  server::ServiceConfig config;
+  config.limits.max_voxels = 2000;
+  config.limits.max_input_tets = 100;
+  config.limits.max_output_tets = 5000;
+  config.limits.max_concurrent_refinements = 1;
+  config.limits.max_message_bytes = 4096;
+  return config;
+}
+
+Requests GoodRequests(size_t chunk_bytes = 1000) {
+  const Volume volume = TestVolume({10, 10, 10});
+  const Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {8.0, 8.0, 8.0}, {2, 2, 2});
+  RefineOptions options;
+  options.epsilon = 0.05;
+  options.max_iterations = 2;
+  wire::RequestOptions request = wire::RequestOptionsFromCore(options);
+  request.max_tets.reset();
+  Requests requests;
+  wire::WriteRequest(request, volume, mesh, chunk_bytes, [&](const v1::RefineRequest& r) {
+    requests.push_back(r);
+    return true;
+  });
+  return requests;
+}
+
+// The request stream cut right after its n-th message, which `edit` changes first: what
+// follows a header would never be read.
+template <typename Edit>
+Requests CutAfter(v1::RefineRequest::KindCase kind, Edit edit) {
+  Requests requests = GoodRequests();
+  for (size_t i = 0; i < requests.size(); ++i) {
+    if (requests[i].kind_case() == kind) {
+      edit(requests[i]);
+      requests.resize(i + 1);
+      return requests;
+    }
+  }
+  ADD_FAILURE() << "no message of kind " << kind;
+  return requests;
+}
+
+class ServiceLimitsTest : public ::testing::Test {
+ protected:
+  void ExpectExhausted(const Requests& requests, const std::vector<std::string>& parts) {
+    const auto start = std::chrono::steady_clock::now();
+    const grpc::Status status = SendRaw(server_.NewChannel(), requests);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
+    for (const std::string& part : parts) EXPECT_THAT(status.error_message(), HasSubstr(part));
+    // Nothing the size of the declared counts was allocated, or this would take long (or abort).
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+    EXPECT_TRUE(SendRaw(server_.NewChannel(), GoodRequests()).ok());
+  }
+
+  LoopbackServer server_{SmallLimits()};
+};
+
+TEST_F(ServiceLimitsTest, VolumeAboveMaxVoxels) {
+  ExpectExhausted(CutAfter(v1::RefineRequest::kVolumeHeader,
+                           [](v1::RefineRequest& r) {
+                             r.mutable_volume_header()->mutable_dims()->set_x(30);
+                             r.mutable_volume_header()->mutable_slab_hi()->set_x(30);
+                           }),
+                  {"volume_header", "limit of 2000 voxels"});
+}
+
+TEST_F(ServiceLimitsTest, HugeDeclaredVolume) {
+  ExpectExhausted(CutAfter(v1::RefineRequest::kVolumeHeader,
+                           [](v1::RefineRequest& r) {
+                             v1::VolumeHeader* h = r.mutable_volume_header();
+                             h->mutable_dims()->set_x(int64_t{1} << 31);
+                             h->mutable_dims()->set_y(int64_t{1} << 31);
+                             h->mutable_dims()->set_z(int64_t{1} << 31);
+                             h->clear_slab_lo();
+                             h->clear_slab_hi();
+                             h->set_total_bytes(~uint64_t{0});
+                           }),
+                  {"volume_header", "voxels"});
+}
+
+TEST_F(ServiceLimitsTest, MeshAboveMaxInputTets) {
+  ExpectExhausted(CutAfter(v1::RefineRequest::kMeshHeader,
+                           [](v1::RefineRequest& r) {
+                             r.mutable_mesh_header()->set_tet_count(int64_t{1} << 40);
+                           }),
+                  {"mesh_header.tet_count", "limit of 100 input tets"});
+}
+
+TEST_F(ServiceLimitsTest, MeshAboveMaxInputVertices) {
+  ExpectExhausted(CutAfter(v1::RefineRequest::kMeshHeader,
+                           [](v1::RefineRequest& r) {
+                             r.mutable_mesh_header()->set_vertex_count(int64_t{1} << 50);
+                           }),
+                  {"mesh_header.vertex_count", "limit of 400 input vertices"});
+}
+
+TEST_F(ServiceLimitsTest, MaxTetsAboveMaxOutputTets) {
+  Requests requests = GoodRequests();
+  requests[0].mutable_options()->set_max_tets(5001);
+  ExpectExhausted(requests, {"options.max_tets: 5001", "limit of 5000 output tets"});
+}
+
+TEST_F(ServiceLimitsTest, MessageAboveMaxMessageBytes) {
+  ExpectExhausted(GoodRequests(/*chunk_bytes=*/8000), {});
+}
+
+TEST_F(ServiceLimitsTest, ConcurrentRefinementsBeyondTheLimit) {
+  // Hold the only slot with a call that has sent its options and waits for more.
+  v1::Refiner::Stub stub(server_.NewChannel());
+  grpc::ClientContext holder;
+  auto stream = stub.Refine(&holder);
+  ASSERT_TRUE(stream->Write(GoodRequests()[0]));
+  for (int i = 0; i < 500 && server_.service().active_refinements() == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(server_.service().active_refinements(), 1);
+
+  const grpc::Status refused = SendRaw(server_.NewChannel(), GoodRequests());
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_THAT(refused.error_message(), HasSubstr("limit of 1 concurrent refinements"));
+
+  holder.TryCancel();
+  EXPECT_EQ(stream->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  for (int i = 0; i < 500 && server_.service().active_refinements() != 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(server_.service().active_refinements(), 0);
+  EXPECT_TRUE(SendRaw(server_.NewChannel(), GoodRequests()).ok());
+}
+
+}  // namespace
+}  // namespace tetrefine::testing
