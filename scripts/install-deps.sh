@@ -10,8 +10,13 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libabsl-dev libspdlog-dev libtbb-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  prometheus-cpp-dev openssl
   python3 python3-grpcio python3-numpy python3-meshio python3-yaml
 )
+# Fuzzing and sanitizer runs (clang's libFuzzer) only when asked: TETREFINE_WITH_FUZZ=1.
+if [ "${TETREFINE_WITH_FUZZ:-0}" = "1" ]; then
+  packages+=(clang-14 libclang-rt-14-dev llvm-14)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
