@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "core/parallel.h"
+#include "core/sorted_tet.h"
 #include "core/tet_topology.h"
 
 namespace tetrefine {
@@ -20,12 +21,13 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
   // each small bucket. Atomic fills make the order inside a bucket racy; the sort removes that.
   std::unique_ptr<std::atomic<uint32_t>[]> count(new std::atomic<uint32_t>[num_points + 1]);
   for (int64_t v = 0; v <= num_points; ++v) count[v].store(0, std::memory_order_relaxed);
+  // With the tet's vertices sorted, its smallest vertex starts 3 edges, the next 2, the next 1.
   ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t t = begin; t < end; ++t) {
-      for (const auto& e : kTetEdges) {
-        const uint32_t a = tets[t][e[0]], b = tets[t][e[1]];
-        count[std::min(a, b)].fetch_add(1, std::memory_order_relaxed);
-      }
+      const SortedTet s = SortTet(tets[t]);
+      count[s.v[0]].fetch_add(3, std::memory_order_relaxed);
+      count[s.v[1]].fetch_add(2, std::memory_order_relaxed);
+      count[s.v[2]].fetch_add(1, std::memory_order_relaxed);
     }
   });
   std::vector<uint64_t> start(num_points + 1);
@@ -39,11 +41,12 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
   std::vector<uint32_t> raw(total);
   ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t t = begin; t < end; ++t) {
-      for (const auto& e : kTetEdges) {
-        const uint32_t a = tets[t][e[0]], b = tets[t][e[1]];
-        const uint32_t lo = std::min(a, b);
-        const uint32_t slot = count[lo].fetch_add(1, std::memory_order_relaxed);
-        raw[start[lo] + slot] = std::max(a, b);
+      const SortedTet s = SortTet(tets[t]);
+      for (int i = 0; i < 3; ++i) {
+        const uint32_t lo = s.v[i];
+        const uint32_t n = static_cast<uint32_t>(3 - i);
+        uint32_t* out = raw.data() + start[lo] + count[lo].fetch_add(n, std::memory_order_relaxed);
+        for (int j = i + 1; j < 4; ++j) *out++ = s.v[j];
       }
     }
   });
@@ -52,7 +55,7 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
     for (int64_t v = begin; v < end; ++v) {
       auto* b = raw.data() + start[v];
       auto* e = raw.data() + start[v + 1];
-      std::sort(b, e);
+      SortSmall(b, e);
       unique_count[v] = static_cast<uint32_t>(std::unique(b, e) - b);
     }
   });
@@ -71,20 +74,27 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
     }
   });
   raw = {};
-  table.tet_edges.resize(num_tets);
+  return table;
+}
+
+void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table) {
+  const int64_t num_tets = static_cast<int64_t>(tets.size());
+  table->tet_edges.resize(num_tets);
   ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t t = begin; t < end; ++t) {
-      for (int k = 0; k < 6; ++k) {
-        const uint32_t a = tets[t][kTetEdges[k][0]], b = tets[t][kTetEdges[k][1]];
-        const uint32_t lo = std::min(a, b), hi = std::max(a, b);
-        const uint32_t* first = table.second.data() + table.first[lo];
-        const uint32_t* last = table.second.data() + table.first[lo + 1];
-        table.tet_edges[t][k] =
-            static_cast<uint32_t>(std::lower_bound(first, last, hi) - table.second.data());
+      // One pass over each of the three buckets the tet's edges start in: the bucket of v[i]
+      // is sorted and holds v[i+1..3] in increasing order.
+      const SortedTet s = SortTet(tets[t]);
+      for (int i = 0; i < 3; ++i) {
+        const uint32_t* p = table->second.data() + table->first[s.v[i]];
+        for (int j = i + 1; j < 4; ++j) {
+          while (*p < s.v[j]) ++p;
+          table->tet_edges[t][EdgeIndex(s.local[i], s.local[j])] =
+              static_cast<uint32_t>(p - table->second.data());
+        }
       }
     }
   });
-  return table;
 }
 
 }  // namespace tetrefine

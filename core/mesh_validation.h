@@ -21,8 +21,9 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
                           OrientationPolicy orientation, std::vector<Tet>* tets,
                           int64_t* reoriented);
 
-// The face check alone (no face in more than two tets, no overlap across a shared face), for
-// meshes whose tets are known to be positively oriented.
+// The face check alone (no face in more than two tets, no overlap across a shared face). The
+// tets must be positively oriented: which side of a face a tet lies on is read from the parity
+// of its vertex order, not computed.
 absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>& tets);
 
 }  // namespace tetrefine

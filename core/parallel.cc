@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <atomic>
+
 namespace tetrefine {
 
 void ForEachBlock(int64_t n, const std::function<void(int64_t, int64_t, int64_t)>& body) {
@@ -14,6 +16,20 @@ void ForEachBlock(int64_t n, const std::function<void(int64_t, int64_t, int64_t)
       body(b, begin, end);
     }
   });
+}
+
+int64_t FirstIndexWhere(int64_t n, const std::function<bool(int64_t)>& bad) {
+  std::atomic<int64_t> first{n};
+  ForEachBlock(n, [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t i = begin; i < end && i < first.load(std::memory_order_relaxed); ++i) {
+      if (!bad(i)) continue;
+      int64_t cur = first.load();
+      while (i < cur && !first.compare_exchange_weak(cur, i)) {
+      }
+      return;
+    }
+  });
+  return first.load();
 }
 
 int64_t ExclusivePrefixSum(std::vector<int64_t>& counts) {

@@ -15,7 +15,12 @@ double SquaredDistance(const Vec3& a, const Vec3& b) {
 }  // namespace
 
 double MeanRatio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  const double volume = std::abs(SignedVolume6(a, b, c, d)) / 6.0;
+  return MeanRatioWithVolume6(a, b, c, d, SignedVolume6(a, b, c, d));
+}
+
+double MeanRatioWithVolume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                            double volume6) {
+  const double volume = std::abs(volume6) / 6.0;
   const double sum_l2 = SquaredDistance(a, b) + SquaredDistance(a, c) + SquaredDistance(a, d) +
                         SquaredDistance(b, c) + SquaredDistance(b, d) + SquaredDistance(c, d);
   if (sum_l2 <= 0.0) return 0.0;

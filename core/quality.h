@@ -11,6 +11,10 @@ namespace tetrefine {
 // rotation and uniform scaling. Uses |v|.
 double MeanRatio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
+// The same, for a caller that already has six times the signed volume.
+double MeanRatioWithVolume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                            double volume6);
+
 struct QualityStats {
   double min = 0.0;
   double mean = 0.0;

@@ -320,12 +320,12 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
         const Tet child = {global[lt[0]], global[lt[1]], global[lt[2]], global[lt[3]]};
         next.mesh.tets[out] = child;
         next.tet_iteration[out] = iteration;
-        const float q = TetQuality(next.mesh, child);
-        next.tet_quality[out] = q;
         const auto& np = next.mesh.points;
-        if (SignedVolume6(np[child[0]], np[child[1]], np[child[2]], np[child[3]]) <= 0.0) {
-          block_worst = -1.0;
-        }
+        const Vec3 &a = np[child[0]], &b = np[child[1]], &c = np[child[2]], &d = np[child[3]];
+        const double v6 = SignedVolume6(a, b, c, d);
+        const float q = static_cast<float>(MeanRatioWithVolume6(a, b, c, d, v6));
+        next.tet_quality[out] = q;
+        if (v6 <= 0.0) block_worst = -1.0;
         block_worst = std::min(block_worst, static_cast<double>(q));
         ++out;
       }
@@ -398,7 +398,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       result.stop_reason = StopReason::kCancelled;
       break;
     }
-    const EdgeTable edges =
+    EdgeTable edges =
         BuildEdgeTable(state.mesh.tets, static_cast<int64_t>(state.mesh.points.size()));
     const EdgeErrors errors = EvaluateEdges(volume, state.mesh, edges, norm, options.epsilon,
                                             min_edge_length, clamp, cancel);
@@ -416,6 +416,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       result.stop_reason = StopReason::kMaxIterations;
       break;
     }
+    AddTetEdges(state.mesh.tets, &edges);
     IterationStats stats;
     stats.iteration = iteration;
     stats.initial_tets = static_cast<int64_t>(state.mesh.tets.size());

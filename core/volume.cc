@@ -44,6 +44,18 @@ double LoadAs(VoxelType type, const std::byte* base, int64_t index) {
 
 double Lerp(double a, double b, double t) { return a * (1.0 - t) + b * t; }
 
+// The 8 corners of a cell, read as T, interpolated along x, then y, then z.
+template <typename T>
+double Trilerp(const std::byte* d, int64_t base, int64_t dy, int64_t dz, const double t[3]) {
+  const double c000 = Load<T>(d, base), c100 = Load<T>(d, base + 1);
+  const double c010 = Load<T>(d, base + dy), c110 = Load<T>(d, base + dy + 1);
+  const double c001 = Load<T>(d, base + dz), c101 = Load<T>(d, base + dz + 1);
+  const double c011 = Load<T>(d, base + dz + dy), c111 = Load<T>(d, base + dz + dy + 1);
+  const double c00 = Lerp(c000, c100, t[0]), c10 = Lerp(c010, c110, t[0]);
+  const double c01 = Lerp(c001, c101, t[0]), c11 = Lerp(c011, c111, t[0]);
+  return Lerp(Lerp(c00, c10, t[1]), Lerp(c01, c11, t[1]), t[2]);
+}
+
 }  // namespace
 
 absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo, const Index3& hi,
@@ -152,7 +164,8 @@ double Volume::SampleIndex(const Vec3& u) const {
     // Clamped to the grid first (a vertex within tolerance outside samples the boundary), then
     // the cell clamped into the slab: on a cell face either neighbour gives the same bits.
     const double x = std::clamp(u[a], 0.0, static_cast<double>(grid_.dims[a] - 1));
-    const int64_t c = static_cast<int64_t>(std::floor(x));
+    // x >= 0 here, so truncation is floor (and needs no libm call on baseline x86-64).
+    const int64_t c = static_cast<int64_t>(x);
     cell[a] = std::clamp(c, lo_[a], hi_[a] - 2);
     t[a] = x - static_cast<double>(cell[a]);
   }
@@ -160,14 +173,21 @@ double Volume::SampleIndex(const Vec3& u) const {
   const int64_t base = (cell[0] - lo_[0]) + nx * ((cell[1] - lo_[1]) + ny * (cell[2] - lo_[2]));
   const int64_t dy = nx, dz = nx * ny;
   const std::byte* d = data_.data();
-  const double c000 = LoadAs(type_, d, base), c100 = LoadAs(type_, d, base + 1);
-  const double c010 = LoadAs(type_, d, base + dy), c110 = LoadAs(type_, d, base + dy + 1);
-  const double c001 = LoadAs(type_, d, base + dz), c101 = LoadAs(type_, d, base + dz + 1);
-  const double c011 = LoadAs(type_, d, base + dz + dy);
-  const double c111 = LoadAs(type_, d, base + dz + dy + 1);
-  const double c00 = Lerp(c000, c100, t[0]), c10 = Lerp(c010, c110, t[0]);
-  const double c01 = Lerp(c001, c101, t[0]), c11 = Lerp(c011, c111, t[0]);
-  return Lerp(Lerp(c00, c10, t[1]), Lerp(c01, c11, t[1]), t[2]);
+  switch (type_) {
+    case VoxelType::kUint8:
+      return Trilerp<uint8_t>(d, base, dy, dz, t);
+    case VoxelType::kInt16:
+      return Trilerp<int16_t>(d, base, dy, dz, t);
+    case VoxelType::kUint16:
+      return Trilerp<uint16_t>(d, base, dy, dz, t);
+    case VoxelType::kInt32:
+      return Trilerp<int32_t>(d, base, dy, dz, t);
+    case VoxelType::kFloat32:
+      return Trilerp<float>(d, base, dy, dz, t);
+    case VoxelType::kFloat64:
+      return Trilerp<double>(d, base, dy, dz, t);
+  }
+  return 0.0;
 }
 
 std::array<double, 2> Volume::ValueRange() const {
