@@ -72,26 +72,44 @@ LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_
   }
   const int64_t count = sample ? max_tets : num_tets;
   const int64_t blocks = BlockCount(count);
-  std::vector<TetLattice> partial(blocks);
+  struct Partial {
+    TetLattice sums;
+    double volume = 0.0, weighted_mean = 0.0, weighted_above = 0.0;
+  };
+  std::vector<Partial> partial(blocks);
   ForEachBlock(count, [&](int64_t block, int64_t begin, int64_t end) {
-    TetLattice acc;
+    Partial acc;
     for (int64_t i = begin; i < end; ++i) {
-      const TetLattice r =
-          SampleTetLattice(volume, mesh, sample ? chosen[i] : i, n, norm_coeff, epsilon, clamp);
-      acc.max_error = std::max(acc.max_error, r.max_error);
-      acc.sum_error += r.sum_error;
-      acc.points += r.points;
-      acc.above_epsilon += r.above_epsilon;
+      const int64_t t = sample ? chosen[i] : i;
+      const TetLattice r = SampleTetLattice(volume, mesh, t, n, norm_coeff, epsilon, clamp);
+      acc.sums.max_error = std::max(acc.sums.max_error, r.max_error);
+      acc.sums.sum_error += r.sum_error;
+      acc.sums.points += r.points;
+      acc.sums.above_epsilon += r.above_epsilon;
+      const Tet& q = mesh.tets[t];
+      const double v = std::abs(SignedVolume6(mesh.points[q[0]], mesh.points[q[1]],
+                                              mesh.points[q[2]], mesh.points[q[3]]));
+      const double points = static_cast<double>(r.points);
+      acc.volume += v;
+      acc.weighted_mean += v * r.sum_error / points;
+      acc.weighted_above += v * static_cast<double>(r.above_epsilon) / points;
     }
     partial[block] = acc;
   });
-  double sum = 0.0;
+  double sum = 0.0, volume_sum = 0.0, weighted_mean = 0.0, weighted_above = 0.0;
   int64_t above = 0;
   for (const auto& p : partial) {
-    stats.max_error = std::max(stats.max_error, p.max_error);
-    sum += p.sum_error;
-    stats.points_sampled += p.points;
-    above += p.above_epsilon;
+    stats.max_error = std::max(stats.max_error, p.sums.max_error);
+    sum += p.sums.sum_error;
+    stats.points_sampled += p.sums.points;
+    above += p.sums.above_epsilon;
+    volume_sum += p.volume;
+    weighted_mean += p.weighted_mean;
+    weighted_above += p.weighted_above;
+  }
+  if (volume_sum > 0.0) {
+    stats.volume_mean_error = weighted_mean / volume_sum;
+    stats.volume_share_above_epsilon = weighted_above / volume_sum;
   }
   stats.tets_sampled = count;
   if (stats.points_sampled > 0) {

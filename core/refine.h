@@ -52,6 +52,11 @@ struct LatticeStats {
   double max_error = 0.0;
   double mean_error = 0.0;
   double share_above_epsilon = 0.0;  // fraction of sampled points with error > epsilon
+  // The same two weighted by tet volume: the discrepancy per unit of volume. Refinement packs
+  // small tets where the error is, so per-point figures overweight those regions and can rise
+  // while the field gets better everywhere; these do not.
+  double volume_mean_error = 0.0;
+  double volume_share_above_epsilon = 0.0;
 };
 
 enum class StopReason : uint8_t {

@@ -290,6 +290,8 @@ void SummaryToWire(const RefineResult& r, const ServiceSummary& service, int64_t
   lattice->set_max_error(r.lattice.max_error);
   lattice->set_mean_error(r.lattice.mean_error);
   lattice->set_share_above_epsilon(r.lattice.share_above_epsilon);
+  lattice->set_volume_mean_error(r.lattice.volume_mean_error);
+  lattice->set_volume_share_above_epsilon(r.lattice.volume_share_above_epsilon);
   out->set_tets_reoriented(r.tets_reoriented);
   out->set_next_iteration_tets(r.next_iteration_tets);
   out->set_next_iteration_min_quality(r.next_iteration_min_quality);
@@ -318,7 +320,9 @@ absl::Status SummaryFromWire(const v1::Summary& in, RefineResult* r, ServiceSumm
                             .points_sampled = lattice.points_sampled(),
                             .max_error = lattice.max_error(),
                             .mean_error = lattice.mean_error(),
-                            .share_above_epsilon = lattice.share_above_epsilon()};
+                            .share_above_epsilon = lattice.share_above_epsilon(),
+                            .volume_mean_error = lattice.volume_mean_error(),
+                            .volume_share_above_epsilon = lattice.volume_share_above_epsilon()};
   r->tets_reoriented = in.tets_reoriented();
   r->seconds = in.refine_seconds();
   service->max_tets = in.max_tets();

@@ -219,6 +219,10 @@ void ExpectSameResult(const RefineResult& e, const RefineResult& a) {
   ExpectSameDouble(e.lattice.mean_error, a.lattice.mean_error, "lattice.mean_error");
   ExpectSameDouble(e.lattice.share_above_epsilon, a.lattice.share_above_epsilon,
                    "lattice.share_above_epsilon");
+  ExpectSameDouble(e.lattice.volume_mean_error, a.lattice.volume_mean_error,
+                   "lattice.volume_mean_error");
+  ExpectSameDouble(e.lattice.volume_share_above_epsilon, a.lattice.volume_share_above_epsilon,
+                   "lattice.volume_share_above_epsilon");
   EXPECT_EQ(e.tets_reoriented, a.tets_reoriented);
 }
 
