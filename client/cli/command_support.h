@@ -1,0 +1,30 @@
+#pragma once
+
+// What every subcommand does the same way: parse its flags (printing help or a one-line error)
+// and load its input files with messages that name them.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "client/cli/arg_parser.h"
+#include "client/io/mesh_file.h"
+#include "client/io/volume_file.h"
+
+namespace tetrefine::cli {
+
+// Parses `args`. When the command should not go on, returns nullopt with *exit_code set: 0 after
+// printing the help to stdout, kExitUsage after printing the error.
+std::optional<ParsedArgs> ParseCommandLine(const CommandSpec& spec,
+                                           const std::vector<std::string>& args, int* exit_code);
+
+// io::ReadVolume / io::ReadMesh, with the flag named when the extension is not one of that kind
+// (a mesh given to --volume). Errors start with the path.
+absl::StatusOr<io::VolumeFile> LoadVolume(const std::string& path, const std::string& flag);
+absl::StatusOr<io::MeshFile> LoadMesh(const std::string& path, const std::string& flag);
+
+// The volume's reading warnings, one stderr line each.
+void PrintVolumeWarnings(const io::VolumeFile& volume);
+
+}  // namespace tetrefine::cli

@@ -1,0 +1,82 @@
+#include "client/cli/file_kind.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <initializer_list>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+
+namespace tetrefine::cli {
+namespace {
+
+bool EndsWithAny(const std::string& path, std::initializer_list<const char*> suffixes) {
+  for (const char* suffix : suffixes) {
+    if (absl::EndsWithIgnoreCase(path, suffix)) return true;
+  }
+  return false;
+}
+
+size_t ExtensionStart(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) {
+    return std::string::npos;
+  }
+  // A leading dot names a hidden file, not an extension.
+  if (dot == (slash == std::string::npos ? 0 : slash + 1)) return std::string::npos;
+  return dot;
+}
+
+}  // namespace
+
+bool IsVolumePath(const std::string& path) {
+  return EndsWithAny(path,
+                     {".nii", ".nii.gz", ".hdr", ".hdr.gz", ".nrrd", ".nhdr", ".mha", ".mhd"});
+}
+
+bool IsMeshPath(const std::string& path) {
+  return EndsWithAny(path, {".vtu", ".vtk", ".msh", ".mesh"});
+}
+
+std::string PathStem(const std::string& path) {
+  const size_t dot = ExtensionStart(path);
+  return dot == std::string::npos ? path : path.substr(0, dot);
+}
+
+std::string PathExtension(const std::string& path) {
+  const size_t dot = ExtensionStart(path);
+  return dot == std::string::npos ? std::string() : path.substr(dot);
+}
+
+std::string FileStem(const std::string& path) {
+  const std::string stem = PathStem(path);
+  const size_t slash = stem.find_last_of('/');
+  return slash == std::string::npos ? stem : stem.substr(slash + 1);
+}
+
+absl::Status CheckOutputPath(const std::string& path, const std::string& flag, bool mesh) {
+  if (path.empty()) return absl::InvalidArgumentError(absl::StrCat(flag, ": empty path"));
+  if (mesh && !IsMeshPath(path)) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": unknown extension for a mesh (", flag,
+                                                   "): expected .vtu, .vtk, .msh or .mesh"));
+  }
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": is a directory (", flag, ")"));
+  }
+  std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  if (parent.empty()) parent = ".";
+  if (!std::filesystem::is_directory(parent, ec)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": directory ", parent.string(), " does not exist (", flag, ")"));
+  }
+  if (access(parent.c_str(), W_OK) != 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": directory ", parent.string(), " is not writable (", flag, ")"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace tetrefine::cli

@@ -1,0 +1,33 @@
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "client/cli/arg_parser.h"
+#include "grpcpp/channel.h"
+
+namespace tetrefine::cli {
+
+// PEM files for a TLS connection to a tetrefine_server (started with --tls_cert/--tls_key, and
+// --tls_client_ca for mutual TLS). Any of them set turns TLS on; without --tls-ca the system's
+// root certificates verify the server.
+struct TlsFiles {
+  std::string ca;    // --tls-ca: CA bundle that signed the server's certificate
+  std::string cert;  // --tls-cert: client certificate chain (mutual TLS)
+  std::string key;   // --tls-key: private key of --tls-cert
+  bool enabled() const { return !ca.empty() || !cert.empty() || !key.empty(); }
+};
+
+// The --tls-ca, --tls-cert and --tls-key flags, for a subcommand's spec.
+std::vector<FlagSpec> TlsFlagSpecs();
+// Their values; --tls-cert and --tls-key must come together.
+absl::StatusOr<TlsFiles> TlsFilesFromArgs(const ParsedArgs& args);
+
+// A channel to `address` (host:port, or any gRPC target such as unix:/path), plain or TLS.
+// Errors: an unreadable PEM file, named with its flag.
+absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
+                                                           const TlsFiles& tls);
+
+}  // namespace tetrefine::cli

@@ -1,0 +1,31 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "absl/status/status.h"
+#include "core/mesh.h"
+#include "core/volume.h"
+
+namespace tetrefine::cli {
+
+using Box = std::array<Vec3, 2>;  // min and max corner, world units
+
+// The world box spanned by the volume's samples (the box refinement may sample in).
+Box VolumeWorldBox(const Volume& volume);
+
+// "[-32, 32] x [-40, 40] x [-16, 32]".
+std::string FormatBox(const Box& box);
+
+// Index of the first vertex outside the volume's sampled box (with the core's tolerance), or -1.
+int64_t FirstVertexOutside(const Volume& volume, const Mesh& mesh);
+
+// --fit-mesh-to-volume: scales each axis and translates so that the mesh's bounding box becomes
+// the volume's world box shrunk by a margin of one voxel on every side (a quarter of the box when
+// the volume is thinner than four voxels). Positive scales, so orientation is kept. Meant for
+// meshes in their own unit frame, like examples/unit_cube_1782tets.mesh. Error: a mesh that is
+// flat along an axis.
+absl::Status FitMeshToVolume(const Volume& volume, Mesh* mesh);
+
+}  // namespace tetrefine::cli

@@ -1,0 +1,70 @@
+#include "client/cli/refine_backend.h"
+
+#include <algorithm>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "server/embedded_server.h"
+
+namespace tetrefine::cli {
+namespace {
+
+class ChannelBackend : public RefineBackend {
+ public:
+  ChannelBackend(std::string name, std::shared_ptr<grpc::Channel> channel)
+      : name_(std::move(name)), channel_(std::move(channel)) {}
+
+  std::string Name() const override { return name_; }
+
+  absl::StatusOr<client::ClientResult> Refine(const Volume& volume, const Mesh& mesh,
+                                              const client::RefineRequestOptions& options,
+                                              const client::RefineCallbacks& callbacks) override {
+    return client::RefineViaService(channel_, volume, mesh, options, callbacks);
+  }
+
+ private:
+  std::string name_;
+  std::shared_ptr<grpc::Channel> channel_;
+};
+
+class EmbeddedBackend : public ChannelBackend {
+ public:
+  explicit EmbeddedBackend(std::unique_ptr<server::EmbeddedServer> server)
+      : ChannelBackend("embedded service", server->Channel()), server_(std::move(server)) {}
+
+ private:
+  std::unique_ptr<server::EmbeddedServer> server_;
+};
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<RefineBackend>> StartEmbeddedBackend(
+    const server::ServiceConfig& config) {
+  absl::StatusOr<std::unique_ptr<server::EmbeddedServer>> server =
+      server::EmbeddedServer::Start(config);
+  if (!server.ok()) return server.status();
+  return std::make_unique<EmbeddedBackend>(std::move(*server));
+}
+
+std::unique_ptr<RefineBackend> MakeRemoteBackend(std::string address,
+                                                 std::shared_ptr<grpc::Channel> channel) {
+  return std::make_unique<ChannelBackend>(absl::StrCat("server ", address), std::move(channel));
+}
+
+absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice& choice) {
+  if (!choice.server.empty()) {
+    absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(choice.server, choice.tls);
+    if (!channel.ok()) return channel.status();
+    return MakeRemoteBackend(choice.server, *channel);
+  }
+  server::ServiceConfig config;
+  config.refine_threads = choice.threads;
+  wire::ServiceLimits& limits = config.limits;
+  limits.max_voxels = std::max(limits.max_voxels, choice.voxels);
+  // The service admits 4 vertices per admitted tet.
+  limits.max_input_tets = std::max({limits.max_input_tets, choice.tets, (choice.vertices + 3) / 4});
+  limits.max_output_tets = std::max(limits.max_output_tets, choice.max_tets.value_or(0));
+  return StartEmbeddedBackend(config);
+}
+
+}  // namespace tetrefine::cli

@@ -1,0 +1,62 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "client/cli/grpc_channel.h"
+#include "client/refine_client.h"
+#include "core/mesh.h"
+#include "core/volume.h"
+#include "grpcpp/channel.h"
+#include "server/refiner_service.h"
+
+namespace tetrefine::cli {
+
+// Where `tetrefine refine` sends its work. The refine command talks only to this interface, so
+// another way of running a refinement (e.g. splitting the volume into slabs over several servers,
+// a future --shards) slots in as one more implementation without touching the command.
+class RefineBackend {
+ public:
+  virtual ~RefineBackend() = default;
+
+  // For messages: "embedded service" or "server host:port".
+  virtual std::string Name() const = 0;
+
+  // Refines `mesh` in the whole `volume`; the result is what core Refine returns, plus the
+  // service's summary. Errors are the service's status (INVALID_ARGUMENT for bad input, ...).
+  virtual absl::StatusOr<client::ClientResult> Refine(const Volume& volume, const Mesh& mesh,
+                                                      const client::RefineRequestOptions& options,
+                                                      const client::RefineCallbacks& callbacks) = 0;
+};
+
+// The service started inside this process (server::EmbeddedServer), called through the same
+// client code as a remote server. `config` sets its limits and worker threads.
+absl::StatusOr<std::unique_ptr<RefineBackend>> StartEmbeddedBackend(
+    const server::ServiceConfig& config);
+
+// A tetrefine_server reached through `channel`; `address` is only for messages.
+std::unique_ptr<RefineBackend> MakeRemoteBackend(std::string address,
+                                                 std::shared_ptr<grpc::Channel> channel);
+
+// What `tetrefine refine`'s flags say about where to run, plus the job's size.
+struct BackendChoice {
+  std::string server;  // --server; empty: the embedded service
+  TlsFiles tls;        // --tls-*, with --server only
+  int threads = 0;     // --threads, embedded only
+  // The job, so that the embedded service's limits admit it.
+  int64_t voxels = 0;
+  int64_t vertices = 0;
+  int64_t tets = 0;
+  std::optional<int64_t> max_tets;
+};
+
+// The one place the refine command's backend is decided: a remote server when `server` is set,
+// else the embedded service with limits raised to fit the job (it is the user's own process).
+// Errors: an unreadable TLS file (INVALID_ARGUMENT or NOT_FOUND naming it), or the embedded
+// service failing to start.
+absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice& choice);
+
+}  // namespace tetrefine::cli

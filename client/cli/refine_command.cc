@@ -1,0 +1,336 @@
+// tetrefine refine: refines a mesh in a volume through the tetrefine service (embedded in this
+// process, or a tetrefine_server), prints progress and the paper's tables, writes the result.
+
+#include <csignal>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/cli/command_support.h"
+#include "client/cli/commands.h"
+#include "client/cli/exit_codes.h"
+#include "client/cli/file_kind.h"
+#include "client/cli/grpc_channel.h"
+#include "client/cli/mesh_placement.h"
+#include "client/cli/refine_backend.h"
+#include "client/cli/refine_report.h"
+#include "client/cli/stats_json.h"
+#include "client/io/file_bytes.h"
+#include "client/io/mesh_io.h"
+#include "core/quality.h"
+
+namespace tetrefine::cli {
+namespace {
+
+struct RefineSettings {
+  std::string volume_path;
+  std::string mesh_path;
+  std::string output_path;
+  std::string stats_json_path;  // empty: none
+  std::string server;           // empty: embedded service
+  TlsFiles tls;
+  client::RefineRequestOptions options;
+  int threads = 0;
+  bool every_iteration = false;
+  bool fit_mesh_to_volume = false;
+  bool quiet = false;
+};
+
+absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
+  s->volume_path = *args.Get("volume");
+  s->mesh_path = *args.Get("mesh");
+  absl::StatusOr<double> epsilon = ParseFiniteDouble("epsilon", *args.Get("epsilon"));
+  if (!epsilon.ok()) return epsilon.status();
+  if (*epsilon <= 0.0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--epsilon: must be > 0, got '", *args.Get("epsilon"), "'"));
+  }
+  s->options.epsilon = *epsilon;
+  if (auto text = args.Get("max-iterations")) {
+    absl::StatusOr<int64_t> n = ParseInteger("max-iterations", *text, 0, 1000);
+    if (!n.ok()) return n.status();
+    s->options.max_iterations = static_cast<int>(*n);
+  }
+  if (auto text = args.Get("max-tets")) {
+    absl::StatusOr<int64_t> n =
+        ParseInteger("max-tets", *text, 1, std::numeric_limits<int64_t>::max());
+    if (!n.ok()) return n.status();
+    s->options.max_tets = *n;
+  }
+  if (auto text = args.Get("norm-coeff")) {
+    absl::StatusOr<double> x = ParseFiniteDouble("norm-coeff", *text);
+    if (!x.ok()) return x.status();
+    if (*x <= 0.0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--norm-coeff: must be > 0, got '", *text, "'"));
+    }
+    s->options.norm_coeff = *x;
+  }
+  if (auto text = args.Get("threads")) {
+    absl::StatusOr<int64_t> n = ParseInteger("threads", *text, 0, 4096);
+    if (!n.ok()) return n.status();
+    s->threads = static_cast<int>(*n);
+  }
+  if (args.Has("clamp")) s->options.outside = OutsidePolicy::kClamp;
+  if (args.Has("fix-orientation")) s->options.orientation = OrientationPolicy::kNormalize;
+  s->every_iteration = args.Has("every-iteration");
+  s->fit_mesh_to_volume = args.Has("fit-mesh-to-volume");
+  s->quiet = args.Has("quiet");
+  s->server = args.Get("server").value_or("");
+  if (args.Has("server") && s->server.empty()) {
+    return absl::InvalidArgumentError("--server: empty address");
+  }
+  absl::StatusOr<TlsFiles> tls = TlsFilesFromArgs(args);
+  if (!tls.ok()) return tls.status();
+  s->tls = *tls;
+  if (s->tls.enabled() && s->server.empty()) {
+    return absl::InvalidArgumentError(
+        "--tls-ca/--tls-cert/--tls-key apply to --server; the embedded service needs none");
+  }
+  s->output_path =
+      args.Get("output").value_or(absl::StrCat(FileStem(s->mesh_path), ".refined.vtu"));
+  absl::Status output = CheckOutputPath(s->output_path, "--output", /*mesh=*/true);
+  if (!output.ok()) return output;
+  s->stats_json_path = args.Get("stats-json").value_or("");
+  if (args.Has("stats-json")) {
+    absl::Status stats = CheckOutputPath(s->stats_json_path, "--stats-json", /*mesh=*/false);
+    if (!stats.ok()) return stats;
+  }
+  return absl::OkStatus();
+}
+
+// Checks what is cheap to check here, so the common mistakes get a message naming the file and
+// the flag that helps, before anything is sent.
+absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const Mesh& mesh) {
+  if (mesh.tets.empty()) return absl::InvalidArgumentError(absl::StrCat(s.mesh_path, ": no tets"));
+  if (s.options.outside != OutsidePolicy::kClamp) {
+    const int64_t out = FirstVertexOutside(volume, mesh);
+    if (out >= 0) {
+      const Vec3& p = mesh.points[static_cast<size_t>(out)];
+      return absl::InvalidArgumentError(
+          absl::StrCat(s.mesh_path, ": vertex ", out, " at (", p[0], ", ", p[1], ", ", p[2],
+                       ") lies outside the volume ", s.volume_path, " (world box ",
+                       FormatBox(VolumeWorldBox(volume)),
+                       "); use --fit-mesh-to-volume to place the mesh inside it, or --clamp"));
+    }
+  }
+  if (s.options.orientation != OrientationPolicy::kNormalize) {
+    for (size_t t = 0; t < mesh.tets.size(); ++t) {
+      const Tet& k = mesh.tets[t];
+      if (SignedVolume6(mesh.points[k[0]], mesh.points[k[1]], mesh.points[k[2]],
+                        mesh.points[k[3]]) < 0.0) {
+        return absl::InvalidArgumentError(
+            absl::StrCat(s.mesh_path, ": tet ", t,
+                         " is inverted (negative volume); use --fix-orientation to flip inverted "
+                         "tets"));
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void OnInterrupt(int) { g_interrupted = 1; }
+
+// Ctrl-C cancels the call (the embedded service stops within an iteration's polling interval) so
+// nothing is left half-written; a second Ctrl-C kills as usual.
+class InterruptGuard {
+ public:
+  InterruptGuard() {
+    struct sigaction action = {};
+    action.sa_handler = OnInterrupt;
+    action.sa_flags = SA_RESETHAND;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &previous_);
+  }
+  ~InterruptGuard() { sigaction(SIGINT, &previous_, nullptr); }
+
+ private:
+  struct sigaction previous_ = {};
+};
+
+std::string IterationPath(const std::string& output, int iteration) {
+  return absl::StrFormat("%s.iter%02d%s", PathStem(output), iteration, PathExtension(output));
+}
+
+io::MeshFile WithQuality(const Mesh& mesh) {
+  io::MeshFile file{.mesh = mesh, .tet_iteration = {}, .tet_quality = {}};
+  file.tet_quality.reserve(mesh.tets.size());
+  for (const Tet& t : mesh.tets) {
+    file.tet_quality.push_back(static_cast<float>(
+        MeanRatio(mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]], mesh.points[t[3]])));
+  }
+  return file;
+}
+
+int RunRefinement(const RefineSettings& s) {
+  absl::StatusOr<io::VolumeFile> volume = LoadVolume(s.volume_path, "--volume");
+  if (!volume.ok()) return Fail(volume.status(), kExitUsage);
+  PrintVolumeWarnings(*volume);
+  absl::StatusOr<io::MeshFile> mesh_file = LoadMesh(s.mesh_path, "--mesh");
+  if (!mesh_file.ok()) return Fail(mesh_file.status(), kExitUsage);
+  Mesh mesh = std::move(mesh_file->mesh);
+  // The service samples the volume at the vertices; values stored in the file are not inputs.
+  mesh.values.clear();
+  if (s.fit_mesh_to_volume) {
+    absl::Status fit = FitMeshToVolume(volume->volume, &mesh);
+    if (!fit.ok()) return Fail(absl::StrCat(s.mesh_path, ": ", fit.message()), kExitUsage);
+  }
+  absl::Status placement = CheckPlacement(s, volume->volume, mesh);
+  if (!placement.ok()) return Fail(placement, kExitUsage);
+
+  absl::StatusOr<std::unique_ptr<RefineBackend>> backend =
+      ChooseBackend({.server = s.server,
+                     .tls = s.tls,
+                     .threads = s.threads,
+                     .voxels = volume->volume.voxel_count(),
+                     .vertices = static_cast<int64_t>(mesh.points.size()),
+                     .tets = static_cast<int64_t>(mesh.tets.size()),
+                     .max_tets = s.options.max_tets});
+  if (!backend.ok()) {
+    // A TLS file that cannot be used is the user's input; an embedded service that does not start
+    // is not.
+    return Fail(backend.status(),
+                backend.status().code() == absl::StatusCode::kInternal ? kExitFailed : kExitUsage);
+  }
+  if (!s.server.empty() && s.threads != 0) {
+    PrintWarning("--threads applies to the embedded service; a server uses its own --threads");
+  }
+  const Index3& dims = volume->volume.grid().dims;
+  if (!s.quiet) {
+    std::fprintf(stderr,
+                 "tetrefine: refining %s (%zu vertices, %zu tets) in %s (%lldx%lldx%lld %s) at "
+                 "epsilon %g on the %s\n",
+                 s.mesh_path.c_str(), mesh.points.size(), mesh.tets.size(), s.volume_path.c_str(),
+                 static_cast<long long>(dims[0]), static_cast<long long>(dims[1]),
+                 static_cast<long long>(dims[2]),
+                 std::string(VoxelTypeName(volume->volume.type())).c_str(), s.options.epsilon,
+                 (*backend)->Name().c_str());
+  }
+
+  absl::Status iteration_write;
+  client::RefineCallbacks callbacks;
+  callbacks.on_iteration = [&](const IterationStats& stats) {
+    if (!s.quiet) std::fprintf(stderr, "tetrefine: %s\n", FormatProgressLine(stats).c_str());
+  };
+  if (s.every_iteration) {
+    callbacks.on_mesh = [&](int iteration, const Mesh& m) {
+      if (!iteration_write.ok()) return;
+      iteration_write = io::WriteMesh(IterationPath(s.output_path, iteration), WithQuality(m));
+    };
+  }
+  InterruptGuard interrupt_guard;
+  callbacks.should_cancel = [&] { return g_interrupted != 0 || !iteration_write.ok(); };
+
+  absl::StatusOr<client::ClientResult> reply =
+      (*backend)->Refine(volume->volume, mesh, s.options, callbacks);
+  if (!iteration_write.ok()) return Fail(iteration_write, kExitUsage);
+  if (g_interrupted != 0) return Fail("interrupted; no output written", 130);
+  if (!reply.ok()) {
+    if (reply.status().code() == absl::StatusCode::kInvalidArgument) {
+      return Fail(absl::StrCat(s.mesh_path, ": ", reply.status().message()), kExitUsage);
+    }
+    return Fail(
+        absl::StrCat((*backend)->Name(), ": ", absl::StatusCodeToString(reply.status().code()),
+                     ": ", reply.status().message()),
+        kExitFailed);
+  }
+  RefineResult& result = reply->result;
+  // Everything that reads the result's mesh is done before the mesh moves into the file.
+  const std::string report = FormatRefineReport(result, s.options.epsilon);
+  std::string stats_json;
+  if (!s.stats_json_path.empty()) {
+    RunDescription run{.volume_path = s.volume_path,
+                       .mesh_path = s.mesh_path,
+                       .output_path = s.output_path,
+                       .backend = (*backend)->Name(),
+                       .options = s.options,
+                       .fit_mesh_to_volume = s.fit_mesh_to_volume,
+                       .input_vertices = static_cast<int64_t>(mesh.points.size()),
+                       .input_tets = static_cast<int64_t>(mesh.tets.size())};
+    stats_json = RefineStatsJson(run, *reply);
+  }
+  const size_t out_vertices = result.mesh.points.size();
+  const size_t out_tets = result.mesh.tets.size();
+  io::MeshFile out{.mesh = std::move(result.mesh),
+                   .tet_iteration = std::move(result.tet_iteration),
+                   .tet_quality = std::move(result.tet_quality)};
+  absl::Status written = io::WriteMesh(s.output_path, out);
+  if (!written.ok()) return Fail(written, kExitUsage);
+  if (!s.stats_json_path.empty()) {
+    absl::Status json = io::WriteFileAtomically(s.stats_json_path, stats_json);
+    if (!json.ok()) return Fail(json, kExitUsage);
+  }
+  std::fputs(report.c_str(), stdout);
+  std::printf(
+      "Wrote %s: %zu vertices, %zu tets%s\n", s.output_path.c_str(), out_vertices, out_tets,
+      s.stats_json_path.empty() ? "" : absl::StrCat("; statistics in ", s.stats_json_path).c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+const CommandSpec& RefineSpec() {
+  static const CommandSpec* spec = [] {
+    auto* s = new CommandSpec{
+        .name = "refine",
+        .summary = "Refine a tet mesh until it matches the volume within epsilon",
+        .usage = "tetrefine refine --volume V --mesh M --epsilon E [flags]",
+        .description =
+            "Splits every edge whose midpoint error |trilinear - linear| / normCoeff exceeds\n"
+            "epsilon, iteration after iteration, through the tetrefine service: embedded in\n"
+            "this process, or a tetrefine_server with --server. Progress goes to stderr; the\n"
+            "per-iteration tables (the paper's Tables 3-7) to stdout. The mesh must lie inside\n"
+            "the volume's world box (RAS mm) with positively oriented tets, unless --clamp,\n"
+            "--fit-mesh-to-volume or --fix-orientation say otherwise. Vertex values are always\n"
+            "sampled from the volume. The output carries per-vertex `value` and per-tet\n"
+            "`iteration` and `quality`.\n"
+            "Exit: 0 done (also when a limit stopped it: see the stop reason), 1 service\n"
+            "failure, 2 bad flags or input.",
+        .flags =
+            {
+                {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
+                {"mesh", "FILE", "input tet mesh: .vtu .vtk .msh .mesh", true},
+                {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},
+                {"max-iterations", "N", "stop after N iterations (default 16)"},
+                {"max-tets", "N",
+                 "stop before an iteration that would exceed N tets (default: the "
+                 "service's limit, 50000000)"},
+                {"output", "FILE",
+                 "refined mesh, .vtu .vtk .msh .mesh (default <mesh name>.refined.vtu "
+                 "in the working directory)"},
+                {"every-iteration", "",
+                 "also write each iteration's mesh as <output stem>.iterNN.<ext>"},
+                {"stats-json", "FILE", "write the statistics as JSON"},
+                {"server", "HOST:PORT",
+                 "use this tetrefine_server instead of the embedded service"},
+                {"threads", "N", "worker threads of the embedded service (default 0: all cores)"},
+                {"norm-coeff", "X", "normCoeff of the error (default: the volume's max - min)"},
+                {"clamp", "", "sample vertices outside the volume at the nearest point of its box"},
+                {"fix-orientation", "", "flip inverted input tets instead of refusing the mesh"},
+                {"fit-mesh-to-volume", "",
+                 "scale and move the mesh (per axis) to fill the volume's box less one voxel"},
+                {"quiet", "", "no progress lines on stderr"},
+            },
+        .positional = ""};
+    for (FlagSpec& flag : TlsFlagSpecs()) s->flags.push_back(std::move(flag));
+    return s;
+  }();
+  return *spec;
+}
+
+int RunRefine(const std::vector<std::string>& args) {
+  int exit_code = kExitOk;
+  std::optional<ParsedArgs> parsed = ParseCommandLine(RefineSpec(), args, &exit_code);
+  if (!parsed.has_value()) return exit_code;
+  RefineSettings settings;
+  absl::Status status = SettingsFromArgs(*parsed, &settings);
+  if (!status.ok()) return Fail(status, kExitUsage);
+  return RunRefinement(settings);
+}
+
+}  // namespace tetrefine::cli

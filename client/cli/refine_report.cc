@@ -1,0 +1,114 @@
+#include "client/cli/refine_report.h"
+
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/cli/text_table.h"
+#include "core/configuration.h"
+
+namespace tetrefine::cli {
+namespace {
+
+std::string Fixed(double value, int digits = 6) { return absl::StrFormat("%.*f", digits, value); }
+
+std::string DiscrepancyTable(const RefineResult& result) {
+  std::vector<std::vector<std::string>> rows = {
+      {"iter", "INT", "FNT", "NTwE", "max error", "mean error", "split edges", "seconds"}};
+  for (const IterationStats& s : result.iterations) {
+    rows.push_back({absl::StrCat(s.iteration), absl::StrCat(s.initial_tets),
+                    absl::StrCat(s.final_tets), absl::StrCat(s.tets_with_error), Fixed(s.max_error),
+                    Fixed(s.mean_error), absl::StrCat(s.split_edges, "/", s.edges),
+                    Fixed(s.seconds, 3)});
+  }
+  return FormatTable(rows);
+}
+
+std::string ConfigurationTable(const RefineResult& result) {
+  std::vector<std::string> header = {"iter"};
+  for (int c = 0; c < kNumConfigurations; ++c) {
+    header.emplace_back(ConfigurationName(static_cast<Configuration>(c)));
+  }
+  header.emplace_back("SP");
+  std::vector<std::vector<std::string>> rows = {header};
+  for (const IterationStats& s : result.iterations) {
+    std::vector<std::string> row = {absl::StrCat(s.iteration)};
+    for (int64_t count : s.configurations) row.push_back(absl::StrCat(count));
+    row.push_back(absl::StrCat(s.schonhardt_prisms));
+    rows.push_back(std::move(row));
+  }
+  return FormatTable(rows);
+}
+
+std::string QualityTable(const RefineResult& result) {
+  return FormatTable({{"", "tets", "min", "mean"},
+                      {"before", absl::StrCat(result.initial_quality.count),
+                       Fixed(result.initial_quality.min), Fixed(result.initial_quality.mean)},
+                      {"after", absl::StrCat(result.final_quality.count),
+                       Fixed(result.final_quality.min), Fixed(result.final_quality.mean)}},
+                     /*first_left=*/true);
+}
+
+}  // namespace
+
+std::string FormatProgressLine(const IterationStats& s) {
+  return absl::StrFormat(
+      "iteration %d: %d -> %d tets, %d with error, max error %.6f, mean %.6f "
+      "(%.3f s)",
+      s.iteration, s.initial_tets, s.final_tets, s.tets_with_error, s.max_error, s.mean_error,
+      s.seconds);
+}
+
+std::string DescribeStop(const RefineResult& result) {
+  const std::string name(StopReasonName(result.stop_reason));
+  switch (result.stop_reason) {
+    case StopReason::kConverged:
+      return absl::StrCat(name, ": no edge-midpoint error above epsilon");
+    case StopReason::kMaxIterations:
+      return absl::StrCat(name, ": --max-iterations reached with edges still above epsilon");
+    case StopReason::kTetBudget:
+      return absl::StrCat(name, ": the next iteration would have made ", result.next_iteration_tets,
+                          " tets, more than --max-tets");
+    case StopReason::kQualityFloor:
+      return absl::StrCat(name, ": the next iteration would have made a tet of quality ",
+                          absl::StrFormat("%.3g", result.next_iteration_min_quality),
+                          ", below the quality floor; it was not applied");
+    case StopReason::kCancelled:
+      return absl::StrCat(name, ": cancelled");
+  }
+  return name;
+}
+
+std::string FormatRefineReport(const RefineResult& result, double epsilon) {
+  std::string out;
+  absl::StrAppend(&out, "Discrepancy per iteration (paper Tables 5-6; epsilon ", epsilon,
+                  ", normCoeff ", result.norm_coeff, ")\n");
+  if (result.iterations.empty()) {
+    absl::StrAppend(&out, "  no iteration ran\n");
+  } else {
+    absl::StrAppend(
+        &out, DiscrepancyTable(result), "\n",
+        "Tets by configuration per iteration (paper Tables 3-4; SP: Schonhardt prisms)\n",
+        ConfigurationTable(result));
+  }
+  absl::StrAppend(&out, "\nMean-ratio quality (paper Table 7)\n", QualityTable(result), "\n");
+  const LatticeStats& l = result.lattice;
+  if (l.tets_sampled > 0) {
+    absl::StrAppend(
+        &out,
+        absl::StrFormat("Lattice-sampled error (n = %d, %d points in %d tets): max %.6f, mean "
+                        "%.6f, %.4f%% of points above epsilon\n",
+                        l.n, l.points_sampled, l.tets_sampled, l.max_error, l.mean_error,
+                        100.0 * l.share_above_epsilon));
+  }
+  absl::StrAppend(&out, absl::StrFormat("Edge-midpoint error of the result: max %.6f, mean %.6f\n",
+                                        result.final_max_error, result.final_mean_error));
+  if (result.tets_reoriented > 0) {
+    absl::StrAppend(&out, "Inverted input tets reoriented: ", result.tets_reoriented, "\n");
+  }
+  absl::StrAppend(&out, "Stopped after ", result.iterations.size(), " iteration",
+                  result.iterations.size() == 1 ? "" : "s", ": ", DescribeStop(result), "\n");
+  return out;
+}
+
+}  // namespace tetrefine::cli

@@ -1,0 +1,169 @@
+#include "client/cli/stats_json.h"
+
+#include "client/cli/json_writer.h"
+#include "core/configuration.h"
+
+namespace tetrefine::cli {
+namespace {
+
+void WriteQuality(JsonWriter& json, const QualityStats& q) {
+  json.BeginObject();
+  json.Key("min");
+  json.Number(q.min);
+  json.Key("mean");
+  json.Number(q.mean);
+  json.Key("count");
+  json.Int(q.count);
+  json.EndObject();
+}
+
+void WriteIteration(JsonWriter& json, const IterationStats& s) {
+  json.BeginObject();
+  json.Key("iteration");
+  json.Int(s.iteration);
+  json.Key("initial_tets");
+  json.Int(s.initial_tets);
+  json.Key("final_tets");
+  json.Int(s.final_tets);
+  json.Key("tets_with_error");
+  json.Int(s.tets_with_error);
+  json.Key("edges");
+  json.Int(s.edges);
+  json.Key("split_edges");
+  json.Int(s.split_edges);
+  json.Key("short_edges_kept");
+  json.Int(s.short_edges_kept);
+  json.Key("max_error");
+  json.Number(s.max_error);
+  json.Key("mean_error");
+  json.Number(s.mean_error);
+  json.Key("configurations");
+  json.BeginObject();
+  for (int c = 0; c < kNumConfigurations; ++c) {
+    json.Key(ConfigurationName(static_cast<Configuration>(c)));
+    json.Int(s.configurations[c]);
+  }
+  json.EndObject();
+  json.Key("schonhardt_prisms");
+  json.Int(s.schonhardt_prisms);
+  json.Key("quality");
+  WriteQuality(json, s.quality);
+  json.Key("seconds");
+  json.Number(s.seconds);
+  json.EndObject();
+}
+
+void WriteOptions(JsonWriter& json, const RunDescription& run) {
+  const client::RefineRequestOptions& o = run.options;
+  json.BeginObject();
+  json.Key("epsilon");
+  json.Number(o.epsilon);
+  json.Key("max_iterations");
+  json.Int(o.max_iterations);
+  json.Key("max_tets");
+  if (o.max_tets.has_value()) {
+    json.Int(*o.max_tets);
+  } else {
+    json.Null();
+  }
+  json.Key("norm_coeff");
+  if (o.norm_coeff.has_value()) {
+    json.Number(*o.norm_coeff);
+  } else {
+    json.Null();
+  }
+  json.Key("clamp");
+  json.Bool(o.outside == OutsidePolicy::kClamp);
+  json.Key("fix_orientation");
+  json.Bool(o.orientation == OrientationPolicy::kNormalize);
+  json.Key("fit_mesh_to_volume");
+  json.Bool(run.fit_mesh_to_volume);
+  json.EndObject();
+}
+
+}  // namespace
+
+std::string RefineStatsJson(const RunDescription& run, const client::ClientResult& reply) {
+  const RefineResult& r = reply.result;
+  JsonWriter json;
+  json.BeginObject();
+  json.Key("volume");
+  json.String(run.volume_path);
+  json.Key("mesh");
+  json.String(run.mesh_path);
+  json.Key("output");
+  json.String(run.output_path);
+  json.Key("backend");
+  json.String(run.backend);
+  json.Key("options");
+  WriteOptions(json, run);
+  json.Key("input");
+  json.BeginObject();
+  json.Key("vertices");
+  json.Int(run.input_vertices);
+  json.Key("tets");
+  json.Int(run.input_tets);
+  json.EndObject();
+  json.Key("norm_coeff");
+  json.Number(r.norm_coeff);
+  json.Key("iterations");
+  json.BeginArray();
+  for (const IterationStats& s : r.iterations) WriteIteration(json, s);
+  json.EndArray();
+  json.Key("stop_reason");
+  json.String(StopReasonName(r.stop_reason));
+  json.Key("next_iteration_tets");
+  json.Int(r.next_iteration_tets);
+  json.Key("next_iteration_min_quality");
+  json.Number(r.next_iteration_min_quality);
+  json.Key("quality");
+  json.BeginObject();
+  json.Key("initial");
+  WriteQuality(json, r.initial_quality);
+  json.Key("final");
+  WriteQuality(json, r.final_quality);
+  json.EndObject();
+  json.Key("lattice");
+  json.BeginObject();
+  json.Key("n");
+  json.Int(r.lattice.n);
+  json.Key("tets_sampled");
+  json.Int(r.lattice.tets_sampled);
+  json.Key("points_sampled");
+  json.Int(r.lattice.points_sampled);
+  json.Key("max_error");
+  json.Number(r.lattice.max_error);
+  json.Key("mean_error");
+  json.Number(r.lattice.mean_error);
+  json.Key("share_above_epsilon");
+  json.Number(r.lattice.share_above_epsilon);
+  json.EndObject();
+  json.Key("final_max_error");
+  json.Number(r.final_max_error);
+  json.Key("final_mean_error");
+  json.Number(r.final_mean_error);
+  json.Key("tets_reoriented");
+  json.Int(r.tets_reoriented);
+  json.Key("output_mesh");
+  json.BeginObject();
+  json.Key("vertices");
+  json.Int(static_cast<int64_t>(r.mesh.points.size()));
+  json.Key("tets");
+  json.Int(static_cast<int64_t>(r.mesh.tets.size()));
+  json.EndObject();
+  json.Key("seconds");
+  json.BeginObject();
+  json.Key("refine");
+  json.Number(r.seconds);
+  json.Key("service_input");
+  json.Number(reply.service.input_seconds);
+  json.Key("service_total");
+  json.Number(reply.service.total_seconds);
+  json.EndObject();
+  json.Key("service_max_tets");
+  json.Int(reply.service.max_tets);
+  json.EndObject();
+  return json.Take();
+}
+
+}  // namespace tetrefine::cli

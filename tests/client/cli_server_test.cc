@@ -1,0 +1,125 @@
+// `tetrefine refine --server` and `tetrefine health` against a real tetrefine_server process on a
+// loopback port.
+
+#include <string>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "client/io/mesh_io.h"
+#include "gtest/gtest.h"
+#include "tests/client/cli_test_util.h"
+#include "tests/client/io_test_util.h"
+#include "tests/core/test_geometry.h"
+
+namespace tetrefine::clitest {
+namespace {
+
+using io::iotest::ScratchDir;
+
+class CliServer : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { server_ = new ServerProcess({"--threads=2"}); }
+  static void TearDownTestSuite() {
+    delete server_;
+    server_ = nullptr;
+  }
+  void SetUp() override {
+    ASSERT_TRUE(server_->started()) << "tetrefine_server did not start:\n" << server_->log();
+    volume_ = dir_.File("bump.nii");
+    mesh_ = dir_.File("grid.vtu");
+    WriteVolume(volume_, BumpVolume({9, 9, 9}, {0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}));
+    WriteMeshFile(mesh_, testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
+  }
+
+  static ServerProcess* server_;
+  ScratchDir dir_;
+  std::string volume_;
+  std::string mesh_;
+};
+
+ServerProcess* CliServer::server_ = nullptr;
+
+TEST_F(CliServer, RemoteRefineGivesTheEmbeddedResult) {
+  const std::string remote = dir_.File("remote.vtu");
+  const std::string embedded = dir_.File("embedded.vtu");
+  const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
+                                           mesh_,    "--epsilon", "0.05"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--server", server_->address(), "--output", remote});
+  const ProcessResult run_remote = RunTetrefine(args);
+  ASSERT_EQ(run_remote.exit_code, 0) << run_remote.err;
+  EXPECT_TRUE(absl::StrContains(run_remote.err, "server " + server_->address())) << run_remote.err;
+  args = common;
+  args.insert(args.end(), {"--output", embedded});
+  const ProcessResult run_embedded = RunTetrefine(args);
+  ASSERT_EQ(run_embedded.exit_code, 0) << run_embedded.err;
+
+  absl::StatusOr<io::MeshFile> a = io::ReadMesh(remote);
+  absl::StatusOr<io::MeshFile> b = io::ReadMesh(embedded);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(a->mesh.points, b->mesh.points);
+  EXPECT_EQ(a->mesh.tets, b->mesh.tets);
+  EXPECT_EQ(a->tet_iteration, b->tet_iteration);
+}
+
+TEST_F(CliServer, ServerSideValidationErrorNamesTheMesh) {
+  // Two tets above one triangle: a face in three tets, which only the service's check finds.
+  Mesh bad;
+  bad.points = {{2, 2, 2}, {4, 2, 2}, {2, 4, 2}, {2.5, 2.5, 1}, {2.5, 2.5, 3}, {2.6, 2.4, 4}};
+  bad.tets = {{0, 1, 2, 4}, {0, 2, 1, 3}, {0, 1, 2, 5}};
+  const std::string path = dir_.File("triple.vtu");
+  WriteMeshFile(path, bad);
+  const std::string out = dir_.File("never.vtu");
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", path, "--epsilon", "0.1", "--server",
+                    server_->address(), "--output", out, "--quiet"});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  ASSERT_EQ(Lines(run.err).size(), 1u) << run.err;
+  EXPECT_TRUE(absl::StartsWith(run.err, "tetrefine: " + path + ": ")) << run.err;
+  EXPECT_FALSE(FileExists(out));
+}
+
+TEST_F(CliServer, HealthIsServing) {
+  for (const char* service : {"", "tetrefine.v1.Refiner"}) {
+    const ProcessResult run =
+        RunTetrefine({"health", "--server", server_->address(), "--service", service});
+    EXPECT_EQ(run.exit_code, 0) << service << ": " << run.err;
+    EXPECT_EQ(run.out, "SERVING\n");
+  }
+}
+
+TEST_F(CliServer, HealthOfAnUnknownServiceFails) {
+  const ProcessResult run =
+      RunTetrefine({"health", "--server", server_->address(), "--service", "no.such.Service"});
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_EQ(Lines(run.err).size(), 1u) << run.err;
+}
+
+TEST(CliHealth, ClosedPortFailsQuickly) {
+  const std::string address = "127.0.0.1:" + std::to_string(ClosedPort());
+  const ProcessResult run =
+      RunTetrefine({"health", "--server", address, "--timeout", "2"}, "", /*timeout_seconds=*/30);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_LT(run.seconds, 10.0);
+  ASSERT_EQ(Lines(run.err).size(), 1u) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, address)) << run.err;
+}
+
+TEST(CliHealth, RefineAgainstAClosedPortFailsWithoutOutput) {
+  ScratchDir dir;
+  const std::string volume = dir.File("v.nii");
+  const std::string mesh = dir.File("m.vtu");
+  WriteVolume(volume, BumpVolume({5, 5, 5}, {0, 0, 0}, {1, 1, 1}));
+  WriteMeshFile(mesh, testing::FiveTetMesh({0, 0, 0}, {4, 4, 4}, {1, 1, 1}));
+  const std::string out = dir.File("out.vtu");
+  const std::string address = "127.0.0.1:" + std::to_string(ClosedPort());
+  const ProcessResult run = RunTetrefine({"refine", "--volume", volume, "--mesh", mesh, "--epsilon",
+                                          "0.1", "--server", address, "--output", out, "--quiet"},
+                                         "", /*timeout_seconds=*/60);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "UNAVAILABLE")) << run.err;
+  EXPECT_FALSE(FileExists(out));
+}
+
+}  // namespace
+}  // namespace tetrefine::clitest
