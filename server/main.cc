@@ -17,11 +17,15 @@
 #include "absl/strings/str_cat.h"
 #include "grpcpp/grpcpp.h"
 #include "grpcpp/security/server_credentials.h"
+#include "server/metrics.h"
 #include "server/refiner_service.h"
 #include "server/server_setup.h"
 #include "spdlog/spdlog.h"
 
 ABSL_FLAG(std::string, listen, "0.0.0.0:50051", "Address to listen on, host:port (port 0: any)");
+ABSL_FLAG(std::string, metrics_listen, "0.0.0.0:9464",
+          "Prometheus /metrics HTTP endpoint, host:port (port 0: any; empty: off). If it cannot "
+          "be bound the server logs an error and serves without metrics");
 ABSL_FLAG(int, threads, 0, "Core worker threads per refinement (0: all cores)");
 ABSL_FLAG(int64_t, max_voxels, tetrefine::wire::ServiceLimits{}.max_voxels,
           "Largest volume (slab) accepted, in voxels");
@@ -107,7 +111,7 @@ int Run() {
   }
   spdlog::set_level(level);
 
-  const ServiceConfig config = ConfigFromFlags();
+  ServiceConfig config = ConfigFromFlags();
   if (config.limits.max_concurrent_refinements < 1 || config.limits.max_voxels < 1 ||
       config.limits.max_input_tets < 1 || config.limits.max_output_tets < 1 ||
       config.limits.max_message_bytes < 1 || config.refine_threads < 0) {
@@ -127,6 +131,24 @@ int Run() {
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  std::unique_ptr<MetricsEndpoint> metrics_endpoint;
+  if (const std::string metrics_listen = absl::GetFlag(FLAGS_metrics_listen);
+      !metrics_listen.empty()) {
+    auto metrics = std::make_shared<ServiceMetrics>();
+    absl::StatusOr<std::unique_ptr<MetricsEndpoint>> endpoint =
+        MetricsEndpoint::Start(metrics_listen, metrics);
+    if (endpoint.ok()) {
+      metrics_endpoint = *std::move(endpoint);
+      config.metrics = std::move(metrics);
+      spdlog::info("metrics on http://{}/metrics",
+                   BoundAddress(metrics_listen, metrics_endpoint->port()));
+    } else {
+      // Observability must not take the service down (e.g. a second server on one host with
+      // the default port): refinements are served, the missing scrape target shows.
+      spdlog::error("{}; serving without metrics", endpoint.status().ToString());
+    }
+  }
 
   InitGrpcFeatures();  // before the builder exists
   RefinerService service(config);
@@ -154,6 +176,9 @@ int Run() {
                    std::chrono::duration_cast<std::chrono::system_clock::duration>(
                        std::chrono::duration<double>(drain)));
   server->Wait();
+  // Stopping civetweb waits out its 2 s poll quantum; the process is exiting, so the kernel
+  // closes the metrics socket at once instead.
+  static_cast<void>(metrics_endpoint.release());
   spdlog::info("tetrefine_server stopped");
   return 0;
 }

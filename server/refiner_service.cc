@@ -4,6 +4,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "server/metrics.h"
 #include "server/refine_call.h"
 #include "server/wire_conversion.h"
 #include "spdlog/spdlog.h"
@@ -40,9 +41,12 @@ grpc::Status RefinerService::Refine(grpc::ServerContext* context, RefineStream* 
   const auto start = std::chrono::steady_clock::now();
   CallRecord record;
   grpc::Status status;
+  bool admitted = false;
   {
     Slot slot(active_, config_.limits.max_concurrent_refinements);
+    admitted = slot.acquired();
     if (slot.acquired()) {
+      ServiceMetrics::InFlight in_flight(config_.metrics.get());
       status = RunRefineCall(config_, context, stream, &record);
     } else {
       status = grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
@@ -53,6 +57,14 @@ grpc::Status RefinerService::Refine(grpc::ServerContext* context, RefineStream* 
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (config_.metrics != nullptr) {
+    config_.metrics->RecordCall({.code = status.error_code(),
+                                 .admitted = admitted,
+                                 .seconds = seconds,
+                                 .bytes_in = record.bytes_in,
+                                 .tets_in = record.tets_in,
+                                 .tets_out = record.tets_out});
+  }
   spdlog::info(
       "Refine peer={} bytes_in={} tets_in={} tets_out={} iterations={} duration={:.3f}s "
       "status={} {}",

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <memory>
 
 #include "grpcpp/grpcpp.h"
 #include "server/service_limits.h"
@@ -8,9 +9,12 @@
 
 namespace tetrefine::server {
 
+class ServiceMetrics;  // server/metrics.h
+
 struct ServiceConfig {
   wire::ServiceLimits limits;
-  int refine_threads = 0;  // core worker threads per refinement; 0: all cores
+  int refine_threads = 0;                   // core worker threads per refinement; 0: all cores
+  std::shared_ptr<ServiceMetrics> metrics;  // null: no metrics recorded
 };
 
 // The tetrefine.v1.Refiner service. Stateless: a call keeps nothing once it returns; the only

@@ -4,6 +4,8 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "client/sharding/sharded_refine.h"
 #include "server/embedded_server.h"
 
 namespace tetrefine::cli {
@@ -36,6 +38,27 @@ class EmbeddedBackend : public ChannelBackend {
   std::unique_ptr<server::EmbeddedServer> server_;
 };
 
+// The mesh cut into parts refined concurrently over several servers; the merged result is the
+// unsharded one (client/sharding/sharded_refine.h).
+class ShardedBackend : public RefineBackend {
+ public:
+  ShardedBackend(std::string name, std::vector<std::shared_ptr<grpc::Channel>> channels, int shards)
+      : name_(std::move(name)), channels_(std::move(channels)), shards_(shards) {}
+
+  std::string Name() const override { return name_; }
+
+  absl::StatusOr<client::ClientResult> Refine(const Volume& volume, const Mesh& mesh,
+                                              const client::RefineRequestOptions& options,
+                                              const client::RefineCallbacks& callbacks) override {
+    return sharding::RefineSharded(channels_, volume, mesh, options, shards_, callbacks);
+  }
+
+ private:
+  std::string name_;
+  std::vector<std::shared_ptr<grpc::Channel>> channels_;
+  int shards_;
+};
+
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<RefineBackend>> StartEmbeddedBackend(
@@ -52,6 +75,20 @@ std::unique_ptr<RefineBackend> MakeRemoteBackend(std::string address,
 }
 
 absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice& choice) {
+  if (choice.shards > 0) {
+    std::vector<std::shared_ptr<grpc::Channel>> channels;
+    for (absl::string_view address : absl::StrSplit(choice.server, ',', absl::SkipEmpty())) {
+      absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
+          MakeChannel(std::string(address), choice.tls);
+      if (!channel.ok()) return channel.status();
+      channels.push_back(*std::move(channel));
+    }
+    if (channels.empty()) return absl::InvalidArgumentError("--server: no address");
+    return std::make_unique<ShardedBackend>(
+        absl::StrCat(choice.shards, " shards over ", channels.size(), " server",
+                     channels.size() == 1 ? "" : "s", " (", choice.server, ")"),
+        std::move(channels), choice.shards);
+  }
   if (!choice.server.empty()) {
     absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(choice.server, choice.tls);
     if (!channel.ok()) return channel.status();

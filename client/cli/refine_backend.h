@@ -43,7 +43,8 @@ std::unique_ptr<RefineBackend> MakeRemoteBackend(std::string address,
 
 // What `tetrefine refine`'s flags say about where to run, plus the job's size.
 struct BackendChoice {
-  std::string server;  // --server; empty: the embedded service
+  std::string server;  // --server; empty: the embedded service. Comma-separated with shards.
+  int shards = 0;      // --shards; > 0: the mesh in that many parts over the --server list
   TlsFiles tls;        // --tls-*, with --server only
   int threads = 0;     // --threads, embedded only
   // The job, so that the embedded service's limits admit it.
@@ -53,10 +54,11 @@ struct BackendChoice {
   std::optional<int64_t> max_tets;
 };
 
-// The one place the refine command's backend is decided: a remote server when `server` is set,
-// else the embedded service with limits raised to fit the job (it is the user's own process).
-// Errors: an unreadable TLS file (INVALID_ARGUMENT or NOT_FOUND naming it), or the embedded
-// service failing to start.
+// The one place the refine command's backend is decided: with shards, the mesh cut into that
+// many parts sent to the comma-separated servers (client/sharding); a remote server when
+// `server` is set; else the embedded service with limits raised to fit the job (it is the user's
+// own process). Errors: an unreadable TLS file (INVALID_ARGUMENT or NOT_FOUND naming it), or the
+// embedded service failing to start.
 absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice& choice);
 
 }  // namespace tetrefine::cli

@@ -1,6 +1,7 @@
 // tetrefine refine: refines a mesh in a volume through the tetrefine service (embedded in this
 // process, or a tetrefine_server), prints progress and the paper's tables, writes the result.
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <limits>
@@ -35,6 +36,7 @@ struct RefineSettings {
   TlsFiles tls;
   client::RefineRequestOptions options;
   int threads = 0;
+  int shards = 0;  // > 0: sharded over the comma-separated --server list
   bool every_iteration = false;
   bool fit_mesh_to_volume = false;
   bool quiet = false;
@@ -83,6 +85,25 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   s->server = args.Get("server").value_or("");
   if (args.Has("server") && s->server.empty()) {
     return absl::InvalidArgumentError("--server: empty address");
+  }
+  // Several servers mean sharding: one part per server unless --shards says how many.
+  const bool server_list = s->server.find(',') != std::string::npos;
+  if (auto text = args.Get("shards")) {
+    absl::StatusOr<int64_t> n = ParseInteger("shards", *text, 1, 4096);
+    if (!n.ok()) return n.status();
+    s->shards = static_cast<int>(*n);
+    if (s->server.empty()) {
+      return absl::InvalidArgumentError(
+          "--shards: needs --server with one or more addresses (host:port,host:port or "
+          "dns:///name:port)");
+    }
+  } else if (server_list) {
+    s->shards = static_cast<int>(std::count(s->server.begin(), s->server.end(), ',')) + 1;
+  }
+  if (s->shards > 0 && args.Has("every-iteration")) {
+    return absl::InvalidArgumentError(
+        "--every-iteration: not available with a sharded refinement (--shards or several "
+        "--server addresses): parts are merged once they are done");
   }
   absl::StatusOr<TlsFiles> tls = TlsFilesFromArgs(args);
   if (!tls.ok()) return tls.status();
@@ -185,6 +206,7 @@ int RunRefinement(const RefineSettings& s) {
 
   absl::StatusOr<std::unique_ptr<RefineBackend>> backend =
       ChooseBackend({.server = s.server,
+                     .shards = s.shards,
                      .tls = s.tls,
                      .threads = s.threads,
                      .voxels = volume->volume.voxel_count(),
@@ -306,8 +328,13 @@ const CommandSpec& RefineSpec() {
                 {"every-iteration", "",
                  "also write each iteration's mesh as <output stem>.iterNN.<ext>"},
                 {"stats-json", "FILE", "write the statistics as JSON"},
-                {"server", "HOST:PORT",
-                 "use this tetrefine_server instead of the embedded service"},
+                {"server", "HOST:PORT[,...]",
+                 "use this tetrefine_server instead of the embedded service; several "
+                 "addresses shard the mesh over them"},
+                {"shards", "K",
+                 "cut the mesh into K parts refined concurrently on the --server list (each "
+                 "part sent with only the volume slab it needs); the merged mesh is the "
+                 "unsharded result"},
                 {"threads", "N", "worker threads of the embedded service (default 0: all cores)"},
                 {"norm-coeff", "X", "normCoeff of the error (default: the volume's max - min)"},
                 {"clamp", "", "sample vertices outside the volume at the nearest point of its box"},

@@ -1,6 +1,8 @@
 // `tetrefine refine --server` and `tetrefine health` against a real tetrefine_server process on a
 // loopback port.
 
+#include <algorithm>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -60,6 +62,49 @@ TEST_F(CliServer, RemoteRefineGivesTheEmbeddedResult) {
   EXPECT_EQ(a->mesh.points, b->mesh.points);
   EXPECT_EQ(a->mesh.tets, b->mesh.tets);
   EXPECT_EQ(a->tet_iteration, b->tet_iteration);
+}
+
+TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
+  ServerProcess second({"--threads=1"});
+  ASSERT_TRUE(second.started()) << second.log();
+  const std::string embedded = dir_.File("embedded.vtu");
+  const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
+                                           mesh_,    "--epsilon", "0.05"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--output", embedded});
+  ASSERT_EQ(RunTetrefine(args).exit_code, 0);
+  absl::StatusOr<io::MeshFile> want = io::ReadMesh(embedded);
+  ASSERT_TRUE(want.ok());
+  auto sorted_tets = [](const Mesh& m) {
+    std::vector<std::array<Vec3, 4>> out;
+    for (const Tet& t : m.tets) {
+      std::array<Vec3, 4> q = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
+      std::sort(q.begin(), q.end());
+      out.push_back(q);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  for (const char* shards : {"2", "3"}) {
+    const std::string sharded = dir_.File(std::string("sharded") + shards + ".vtu");
+    args = common;
+    args.insert(args.end(), {"--server", server_->address() + "," + second.address(), "--shards",
+                             shards, "--output", sharded});
+    const ProcessResult run = RunTetrefine(args);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_TRUE(absl::StrContains(run.err, std::string(shards) + " shards over 2 servers"))
+        << run.err;
+    absl::StatusOr<io::MeshFile> got = io::ReadMesh(sharded);
+    ASSERT_TRUE(got.ok());
+    EXPECT_EQ(sorted_tets(got->mesh), sorted_tets(want->mesh)) << shards << " shards";
+  }
+  // Sharding merges finished parts, so per-iteration meshes cannot be streamed.
+  args = common;
+  args.insert(args.end(), {"--server", server_->address() + "," + second.address(),
+                           "--every-iteration", "--output", dir_.File("x.vtu")});
+  const ProcessResult refused = RunTetrefine(args);
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_TRUE(absl::StartsWith(refused.err, "tetrefine: --every-iteration: ")) << refused.err;
 }
 
 TEST_F(CliServer, ServerSideValidationErrorNamesTheMesh) {

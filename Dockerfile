@@ -1,0 +1,40 @@
+# tetrefine: the gRPC refinement server and the `tetrefine` CLI on Debian 12.
+#
+#   docker build -t tetrefine:0.1.0 .
+#   docker run --rm -p 50051:50051 -p 9464:9464 tetrefine:0.1.0
+#   docker run --rm --entrypoint tetrefine tetrefine:0.1.0 health --server host:50051
+#
+# Server flags go after the image name (they follow the entrypoint's), e.g. --threads=2.
+
+# --- build: the same dependency script as CI and the README, a Release build without tests ---
+FROM debian:bookworm AS build
+WORKDIR /src
+COPY scripts/install-deps.sh scripts/install-deps.sh
+RUN bash scripts/install-deps.sh && rm -rf /var/lib/apt/lists/*
+COPY . .
+RUN cmake -S . -B /build -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DTETREFINE_BUILD_TESTS=OFF -DTETREFINE_BUILD_BENCH=OFF \
+ && cmake --build /build --target tetrefine_server tetrefine \
+ && mkdir -p /out \
+ && cp /build/server/tetrefine_server /build/client/tetrefine /out/ \
+ && strip /out/tetrefine_server /out/tetrefine
+
+# --- runtime: the two binaries and the shared libraries they load, nothing else ---
+# The package list is checked against `ldd` of the built binaries by
+# tests/deploy/check_runtime_packages.py (ctest DockerRuntimePackages).
+FROM debian:bookworm
+RUN apt-get update \
+ && apt-get install -y --no-install-recommends \
+      libgrpc++1.51 libgrpc29 libprotobuf32 libabsl20220623 libc-ares2 libre2-9 libssl3 \
+      libtbb12 libspdlog1.10 libfmt9 zlib1g \
+      libprometheus-cpp-core1.0 libprometheus-cpp-pull1.0 libcivetweb1 \
+      libstdc++6 libgcc-s1 ca-certificates \
+ && rm -rf /var/lib/apt/lists/* \
+ && useradd --system --uid 10001 --user-group --no-create-home --shell /usr/sbin/nologin tetrefine
+COPY --from=build /out/tetrefine_server /out/tetrefine /usr/local/bin/
+USER 10001:10001
+# gRPC (tetrefine.v1.Refiner, grpc.health.v1, reflection) and Prometheus /metrics.
+EXPOSE 50051 9464
+HEALTHCHECK --interval=15s --timeout=5s --start-period=10s --retries=3 \
+  CMD ["tetrefine","health","--server","127.0.0.1:50051"]
+ENTRYPOINT ["tetrefine_server", "--listen=0.0.0.0:50051", "--metrics_listen=0.0.0.0:9464"]

@@ -1,0 +1,115 @@
+#include "client/sharding/part_merge.h"
+
+#include <array>
+#include <bit>
+#include <limits>
+
+#include "absl/container/flat_hash_map.h"
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+
+namespace tetrefine::sharding {
+namespace {
+
+constexpr uint32_t kUnset = std::numeric_limits<uint32_t>::max();
+
+using PointKey = std::array<uint64_t, 3>;
+
+PointKey KeyOf(const Vec3& p) {
+  return {std::bit_cast<uint64_t>(p[0]), std::bit_cast<uint64_t>(p[1]),
+          std::bit_cast<uint64_t>(p[2])};
+}
+
+bool SameBits(double a, double b) {
+  return std::bit_cast<uint64_t>(a) == std::bit_cast<uint64_t>(b);
+}
+
+bool InAnotherBox(const Vec3& p, const std::vector<MeshPart>& parts, size_t self) {
+  for (size_t q = 0; q < parts.size(); ++q) {
+    if (q != self && InBox(p, parts[q].box_lo, parts[q].box_hi)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+absl::StatusOr<MergedMesh> MergeParts(const Mesh& input, const Volume& volume,
+                                      OutsidePolicy outside, const std::vector<MeshPart>& parts,
+                                      const std::vector<const RefineResult*>& results) {
+  if (parts.size() != results.size()) {
+    return absl::InternalError("MergeParts: one result per part expected");
+  }
+  MergedMesh out;
+  Mesh& merged = out.mesh;
+  const size_t num_input = input.points.size();
+  merged.points = input.points;
+  merged.values.assign(num_input, 0.0);
+  std::vector<uint8_t> assigned(num_input, 0);
+  size_t total_tets = 0;
+  for (const RefineResult* r : results) total_tets += r->mesh.tets.size();
+  merged.tets.reserve(total_tets);
+  out.tet_iteration.reserve(total_tets);
+  out.tet_quality.reserve(total_tets);
+
+  absl::flat_hash_map<PointKey, uint32_t> shared;
+  std::vector<uint32_t> to_merged;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    const MeshPart& part = parts[p];
+    const Mesh& refined = results[p]->mesh;
+    const size_t num_own = part.mesh.points.size();
+    if (refined.points.size() < num_own || refined.values.size() != refined.points.size()) {
+      return absl::InternalError(absl::StrCat("part ", p, ": the refined mesh has fewer vertices (",
+                                              refined.points.size(), ") than the part sent (",
+                                              num_own, ") or no value per vertex"));
+    }
+    to_merged.assign(refined.points.size(), kUnset);
+    for (size_t j = 0; j < num_own; ++j) {
+      if (KeyOf(refined.points[j]) != KeyOf(part.mesh.points[j])) {
+        return absl::InternalError(absl::StrCat("part ", p, ": refined vertex ", j,
+                                                " is not input vertex ", j,
+                                                "; merging relies on input vertices coming first"));
+      }
+      const uint32_t v = part.input_vertex[j];
+      if (assigned[v] != 0 && !SameBits(merged.values[v], refined.values[j])) {
+        return absl::InternalError(absl::StrCat("parts disagree on the value at input vertex ", v));
+      }
+      merged.values[v] = refined.values[j];
+      assigned[v] = 1;
+      to_merged[j] = v;
+    }
+    for (size_t j = num_own; j < refined.points.size(); ++j) {
+      const Vec3& point = refined.points[j];
+      const uint32_t next = static_cast<uint32_t>(merged.points.size());
+      if (InAnotherBox(point, parts, p)) {
+        const auto [it, inserted] = shared.try_emplace(KeyOf(point), next);
+        if (!inserted) {
+          if (!SameBits(merged.values[it->second], refined.values[j])) {
+            return absl::InternalError(absl::StrCat("parts disagree on the value at vertex (",
+                                                    point[0], ", ", point[1], ", ", point[2], ")"));
+          }
+          to_merged[j] = it->second;
+          continue;
+        }
+      }
+      merged.points.push_back(point);
+      merged.values.push_back(refined.values[j]);
+      to_merged[j] = next;
+    }
+    for (const Tet& t : refined.tets) {
+      merged.tets.push_back({to_merged[t[0]], to_merged[t[1]], to_merged[t[2]], to_merged[t[3]]});
+    }
+    out.tet_iteration.insert(out.tet_iteration.end(), results[p]->tet_iteration.begin(),
+                             results[p]->tet_iteration.end());
+    out.tet_quality.insert(out.tet_quality.end(), results[p]->tet_quality.begin(),
+                           results[p]->tet_quality.end());
+  }
+  for (size_t v = 0; v < num_input; ++v) {
+    if (assigned[v] != 0) continue;
+    Vec3 u = volume.ContinuousIndex(input.points[v]);
+    if (outside == OutsidePolicy::kClamp) u = volume.ClampToGrid(u);
+    merged.values[v] = volume.SampleIndex(u);
+  }
+  return out;
+}
+
+}  // namespace tetrefine::sharding

@@ -1,0 +1,336 @@
+#include "client/sharding/sharded_refine.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/sharding/mesh_partition.h"
+#include "client/sharding/part_merge.h"
+#include "client/sharding/result_combine.h"
+#include "client/sharding/volume_slab.h"
+#include "grpcpp/create_channel.h"
+
+namespace tetrefine::sharding {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// A replica that is gone (UNAVAILABLE), at its concurrency limit (RESOURCE_EXHAUSTED) or that
+// gave up on the call (ABORTED) says nothing about the part: another replica may succeed.
+bool Retryable(absl::StatusCode code) {
+  return code == absl::StatusCode::kUnavailable || code == absl::StatusCode::kResourceExhausted ||
+         code == absl::StatusCode::kAborted;
+}
+
+absl::Status Prefixed(int part, const absl::Status& status) {
+  return absl::Status(status.code(), absl::StrCat("part ", part, ": ", status.message()));
+}
+
+// What splitting itself relies on; the servers check everything else.
+absl::Status CheckInput(const std::vector<std::shared_ptr<grpc::Channel>>& targets,
+                        const Volume& volume, const Mesh& mesh,
+                        const client::RefineRequestOptions& options, const ShardOptions& shard) {
+  if (targets.empty()) return absl::InvalidArgumentError("no server to send the parts to");
+  for (size_t i = 0; i < targets.size(); ++i) {
+    if (targets[i] == nullptr) {
+      return absl::InvalidArgumentError(absl::StrCat("targets[", i, "] is null"));
+    }
+  }
+  if (shard.shards < 1) {
+    return absl::InvalidArgumentError(absl::StrCat("shards = ", shard.shards, ": must be >= 1"));
+  }
+  if (shard.max_attempts < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("max_attempts = ", shard.max_attempts, ": must be >= 0 (0: default)"));
+  }
+  if (mesh.tets.empty()) return absl::InvalidArgumentError("mesh.tets is empty");
+  const size_t nv = mesh.points.size();
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) {
+      if (mesh.tets[t][k] >= nv) {
+        return absl::InvalidArgumentError(absl::StrCat("mesh.tets[", t, "][", k,
+                                                       "] = ", mesh.tets[t][k],
+                                                       " is out of range (", nv, " vertices)"));
+      }
+    }
+  }
+  const bool clamp = options.outside == OutsidePolicy::kClamp;
+  for (size_t i = 0; i < nv; ++i) {
+    const Vec3& p = mesh.points[i];
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      return absl::InvalidArgumentError(absl::StrCat("mesh.points[", i, "] is not finite"));
+    }
+    Vec3 u = volume.ContinuousIndex(p);
+    if (clamp) u = volume.ClampToGrid(u);
+    if (!volume.Contains(u)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("mesh.points[%d] = (%g, %g, %g) lies outside the volume's sampled box", i,
+                          p[0], p[1], p[2]));
+    }
+  }
+  return absl::OkStatus();
+}
+
+// The core's default normalisation, computed on the whole volume rather than on a part's slab.
+double WholeRange(const Volume& volume) {
+  const auto range = volume.ValueRange();
+  return range[1] > range[0] ? range[1] - range[0] : 1.0;
+}
+
+double MeshVolume(const Mesh& mesh) {
+  double six_v = 0.0;
+  for (const Tet& t : mesh.tets) {
+    six_v += std::abs(
+        SignedVolume6(mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]], mesh.points[t[3]]));
+  }
+  return six_v / 6.0;
+}
+
+// Sends parts to the targets, one thread per part, retrying on the next target.
+class PartRunner {
+ public:
+  PartRunner(const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+             const std::vector<MeshPart>& parts, bool clamp, const ShardOptions& shard,
+             const ShardCallbacks& callbacks)
+      : targets_(targets),
+        volume_(volume),
+        parts_(parts),
+        clamp_(clamp),
+        shard_(shard),
+        callbacks_(callbacks),
+        max_attempts_(shard.max_attempts > 0 ? shard.max_attempts
+                                             : std::max(3, 2 * static_cast<int>(targets.size()))) {}
+
+  // Refines parts `which` with `options` into results[p] and reports[p]. The first failure
+  // stops the others and is returned.
+  absl::Status Run(const std::vector<int>& which, const client::RefineRequestOptions& options,
+                   std::vector<std::optional<client::ClientResult>>& results,
+                   std::vector<ShardReport>& reports) {
+    {
+      std::vector<std::jthread> threads;
+      threads.reserve(which.size());
+      for (int p : which) {
+        threads.emplace_back([this, p, &options, &results, &reports] {
+          RunPart(p, options, results[p], reports[p]);
+        });
+      }
+    }
+    if (user_cancelled_.load()) return absl::CancelledError("cancelled by should_cancel");
+    std::lock_guard<std::mutex> lock(mu_);
+    return error_;
+  }
+
+ private:
+  // True once the run must stop: a part failed, or the caller cancelled.
+  bool Stopped() {
+    if (abort_.load()) return true;
+    if (callbacks_.should_cancel && callbacks_.should_cancel()) {
+      user_cancelled_.store(true);
+      abort_.store(true);
+    }
+    return abort_.load();
+  }
+
+  void Fail(const absl::Status& status) {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (error_.ok()) error_ = status;
+    abort_.store(true);
+  }
+
+  // Sleeps `duration`, waking early when the run stops.
+  void Backoff(std::chrono::milliseconds duration) {
+    const Clock::time_point until = Clock::now() + duration;
+    while (Clock::now() < until && !Stopped()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+
+  void RunPart(int p, const client::RefineRequestOptions& options,
+               std::optional<client::ClientResult>& result, ShardReport& report) {
+    const MeshPart& part = parts_[p];
+    const SlabBox box = SlabCovering(volume_, part.mesh.points, clamp_);
+    absl::StatusOr<Volume> slab = CutSlab(volume_, box);
+    if (!slab.ok()) return Fail(Prefixed(p, slab.status()));
+    report.part = p;
+    report.input_tets = static_cast<int64_t>(part.mesh.tets.size());
+    report.input_vertices = static_cast<int64_t>(part.mesh.points.size());
+    report.slab_lo = box.lo;
+    report.slab_hi = box.hi;
+    report.volume_bytes = static_cast<int64_t>(slab->data().size());
+
+    const int n = static_cast<int>(targets_.size());
+    for (int attempt = 0; attempt < max_attempts_; ++attempt) {
+      if (Stopped()) return;
+      const int target = (p + attempt) % n;
+      client::RefineCallbacks calls;
+      if (callbacks_.on_part_iteration) {
+        calls.on_iteration = [this, p, target](const IterationStats& stats) {
+          std::lock_guard<std::mutex> lock(callback_mu_);
+          callbacks_.on_part_iteration(p, target, stats);
+        };
+      }
+      calls.should_cancel = [this] { return Stopped(); };
+      ++report.attempts;
+      absl::StatusOr<client::ClientResult> reply =
+          client::RefineViaService(targets_[target], *slab, part.mesh, options, calls, shard_.call);
+      if (reply.ok()) {
+        report.target = target;
+        result = *std::move(reply);
+        return;
+      }
+      if (abort_.load()) return;  // cancelled because the run stops: not this part's error
+      if (!Retryable(reply.status().code()) || attempt + 1 == max_attempts_) {
+        return Fail(Prefixed(p, reply.status()));
+      }
+      const int next = (p + attempt + 1) % n;
+      if (callbacks_.on_retry) {
+        std::lock_guard<std::mutex> lock(callback_mu_);
+        callbacks_.on_retry(p, target, reply.status(), next);
+      }
+      Backoff(std::min(shard_.retry_backoff * (attempt + 1), std::chrono::milliseconds(2000)));
+    }
+  }
+
+  const std::vector<std::shared_ptr<grpc::Channel>>& targets_;
+  const Volume& volume_;
+  const std::vector<MeshPart>& parts_;
+  const bool clamp_;
+  const ShardOptions& shard_;
+  const ShardCallbacks& callbacks_;
+  const int max_attempts_;
+
+  std::atomic<bool> abort_{false};
+  std::atomic<bool> user_cancelled_{false};
+  std::mutex mu_;
+  absl::Status error_;
+  std::mutex callback_mu_;
+};
+
+}  // namespace
+
+absl::StatusOr<ShardedResult> ShardedRefine(
+    const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+    const Mesh& mesh, const client::RefineRequestOptions& options,
+    const ShardOptions& shard_options, const ShardCallbacks& callbacks) {
+  const Clock::time_point start = Clock::now();
+  if (absl::Status s = CheckInput(targets, volume, mesh, options, shard_options); !s.ok()) {
+    return s;
+  }
+  client::RefineRequestOptions sent = options;
+  sent.norm_coeff = options.norm_coeff.value_or(WholeRange(volume));
+  sent.stream_every_iteration = false;
+  sent.skip_final_mesh = false;  // the parts' meshes are the result
+
+  const std::vector<MeshPart> parts = ExtractParts(mesh, PartitionTets(mesh, shard_options.shards));
+  const double split_seconds = SecondsSince(start);
+  const int num_parts = static_cast<int>(parts.size());
+  const bool clamp = options.outside == OutsidePolicy::kClamp;
+  PartRunner runner(targets, volume, parts, clamp, shard_options, callbacks);
+  std::vector<std::optional<client::ClientResult>> replies(parts.size());
+  std::vector<ShardReport> reports(parts.size());
+  std::vector<int> all(parts.size());
+  for (int p = 0; p < num_parts; ++p) all[p] = p;
+  if (absl::Status s = runner.Run(all, sent, replies, reports); !s.ok()) return s;
+
+  // The budget the whole run has: the caller's, or the smallest server default a part met.
+  int64_t budget = 0;
+  for (const auto& reply : replies) {
+    budget = budget == 0 ? reply->service.max_tets : std::min(budget, reply->service.max_tets);
+  }
+  if (options.max_tets.has_value()) budget = *options.max_tets;
+  std::vector<const RefineResult*> results;
+  for (const auto& reply : replies) results.push_back(&reply->result);
+  const WholeStop stop = CombineStops(results, options.max_iterations, budget);
+
+  std::vector<int> again;
+  for (int p = 0; p < num_parts; ++p) {
+    if (static_cast<int>(results[p]->iterations.size()) > stop.iterations) again.push_back(p);
+  }
+  if (!again.empty()) {
+    client::RefineRequestOptions shorter = sent;
+    shorter.max_iterations = stop.iterations;
+    if (absl::Status s = runner.Run(again, shorter, replies, reports); !s.ok()) return s;
+    for (int p : again) reports[p].rounds = 2;
+    for (int p : again) results[p] = &replies[p]->result;
+  }
+
+  const Clock::time_point merge_start = Clock::now();
+  absl::StatusOr<MergedMesh> merged = MergeParts(mesh, volume, options.outside, parts, results);
+  if (!merged.ok()) return merged.status();
+
+  ShardedResult out;
+  RefineResult& result = out.reply.result;
+  result.iterations = CombineIterations(results, stop.iterations);
+  result.stop_reason = stop.reason;
+  result.next_iteration_tets = stop.next_iteration_tets;
+  result.next_iteration_min_quality = stop.next_iteration_min_quality;
+  result.norm_coeff = *sent.norm_coeff;
+  std::vector<double> volumes;
+  for (const MeshPart& part : parts) volumes.push_back(MeshVolume(part.mesh));
+  CombineSummary(results, volumes, &result);
+  result.mesh = std::move(merged->mesh);
+  result.tet_iteration = std::move(merged->tet_iteration);
+  result.tet_quality = std::move(merged->tet_quality);
+  out.reply.service.max_tets = budget;
+  for (int p = 0; p < num_parts; ++p) {
+    const client::ClientResult& reply = *replies[p];
+    out.reply.service.input_seconds =
+        std::max(out.reply.service.input_seconds, reply.service.input_seconds);
+    ShardReport& report = reports[p];
+    report.iterations = static_cast<int>(reply.result.iterations.size());
+    report.stop_reason = reply.result.stop_reason;
+    report.output_tets = reply.result.final_quality.count;
+    report.server_seconds = reply.service.total_seconds;
+  }
+  out.shards = std::move(reports);
+  out.split_seconds = split_seconds;
+  out.merge_seconds = SecondsSince(merge_start);
+  result.seconds = SecondsSince(start);
+  out.reply.service.total_seconds = result.seconds;
+  return out;
+}
+
+std::vector<std::shared_ptr<grpc::Channel>> ChannelsFor(
+    const std::vector<std::string>& addresses,
+    const std::shared_ptr<grpc::ChannelCredentials>& credentials) {
+  std::vector<std::shared_ptr<grpc::Channel>> channels;
+  channels.reserve(addresses.size());
+  for (const std::string& address : addresses) {
+    channels.push_back(grpc::CreateChannel(address, credentials));
+  }
+  return channels;
+}
+
+absl::StatusOr<client::ClientResult> RefineSharded(
+    const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+    const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
+    const client::RefineCallbacks& callbacks) {
+  if (callbacks.on_mesh) {
+    return absl::UnimplementedError("sharded refinement does not stream intermediate meshes");
+  }
+  ShardOptions shard;
+  shard.shards = shards;
+  ShardCallbacks sharded;
+  sharded.should_cancel = callbacks.should_cancel;
+  absl::StatusOr<ShardedResult> result =
+      ShardedRefine(targets, volume, mesh, options, shard, sharded);
+  if (!result.ok()) return result.status();
+  if (callbacks.on_iteration) {
+    for (const IterationStats& stats : result->reply.result.iterations) {
+      callbacks.on_iteration(stats);
+    }
+  }
+  return std::move(result->reply);
+}
+
+}  // namespace tetrefine::sharding

@@ -1,0 +1,113 @@
+#pragma once
+
+// Sharded refinement: one mesh refined as K parts on several tetrefine servers at once.
+//
+// Every decision of the method is local to an edge or a face, so a mesh can be cut into parts
+// that are refined independently and put back together into exactly the mesh the unsharded
+// refinement gives (same vertex positions and values to the bit, same tets). Each part travels
+// with only the volume slab covering it, with norm_coeff fixed to the whole volume's range.
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "client/refine_client.h"
+#include "core/mesh.h"
+#include "core/refine.h"
+#include "core/volume.h"
+#include "grpcpp/channel.h"
+#include "grpcpp/security/credentials.h"
+
+namespace tetrefine::sharding {
+
+struct ShardOptions {
+  int shards = 1;  // parts the mesh is cut into (at most one per tet)
+  // Tries per part, each on the next target: a part whose call fails with UNAVAILABLE,
+  // RESOURCE_EXHAUSTED or ABORTED (a replica gone or busy) moves on. 0: max(3, 2 * targets).
+  int max_attempts = 0;
+  std::chrono::milliseconds retry_backoff{100};  // before try n + 1: n times this, at most 2 s
+  // Per call: chunk size and wait_for_ready; the deadline bounds the whole sharded run.
+  client::CallOptions call;
+};
+
+struct ShardCallbacks {
+  // A part finished an iteration on targets[target]. Calls are serialized (never two at once)
+  // but come from the parts' threads. A part that is retried reports its iterations again.
+  std::function<void(int part, int target, const IterationStats& stats)> on_part_iteration;
+  // A part's call on targets[target] failed with a retryable `status`; it goes to next_target.
+  std::function<void(int part, int target, const absl::Status& status, int next_target)> on_retry;
+  // Polled from several threads at once (it must be thread-safe); true cancels every call and
+  // the run returns CANCELLED.
+  std::function<bool()> should_cancel;
+};
+
+// What happened to one part.
+struct ShardReport {
+  int part = 0;
+  int64_t input_tets = 0;
+  int64_t input_vertices = 0;
+  Index3 slab_lo{0, 0, 0};  // the volume samples sent: [slab_lo, slab_hi)
+  Index3 slab_hi{0, 0, 0};
+  int64_t volume_bytes = 0;  // voxel bytes of that slab
+  int target = 0;            // where its final result came from
+  int attempts = 0;          // calls made, over both rounds
+  int rounds = 1;            // 2 when it had to be refined again to stop with the whole
+  int iterations = 0;
+  StopReason stop_reason = StopReason::kConverged;
+  int64_t output_tets = 0;
+  double server_seconds = 0.0;  // the final call, as the server timed it
+};
+
+struct ShardedResult {
+  // As one unsharded call would return it: the merged mesh with per-tet iteration and quality;
+  // per-iteration statistics combined (see result_combine.h for how, and where they differ
+  // from an unsharded run's); the stop reason the unsharded run has; norm_coeff as sent.
+  // service.max_tets is the budget applied, input_seconds the slowest part's input, and
+  // total_seconds the wall time of the whole sharded run.
+  client::ClientResult reply;
+  std::vector<ShardReport> shards;
+  double split_seconds = 0.0;  // cutting the mesh into parts (here, before any call)
+  double merge_seconds = 0.0;  // merging the parts' meshes and statistics
+};
+
+// Refines `mesh` in `volume` (a whole volume, or a slab holding the mesh) as `options.shards`
+// parts sent concurrently to `targets`, part k first to targets[k % targets.size()].
+//
+// The mesh is cut by recursive coordinate bisection of tet centroids (deterministic); each part
+// has its own vertex numbering and is sent with the slab covering its bounding box plus one
+// voxel. norm_coeff is options.norm_coeff if set, else the range of `volume` (a slab's own range
+// would change the decisions). Parts that refine further than the whole run would stop (a tet
+// budget summed over the parts, or another part's quality floor) are refined a second time with
+// fewer iterations, so the result is the unsharded one also then.
+//
+// Errors: INVALID_ARGUMENT for bad input (checked here for what splitting needs, by the servers
+// for the rest, prefixed with "part k: " and naming the part's own indices); a part's
+// non-retryable error, or its last retryable one, cancels the other parts and is returned,
+// prefixed; CANCELLED after should_cancel. Input vertices used by no tet are kept (with their
+// sampled values); face-adjacency across part boundaries is not validated.
+// options.stream_every_iteration and skip_final_mesh are ignored: the parts' final meshes are
+// the result.
+absl::StatusOr<ShardedResult> ShardedRefine(
+    const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+    const Mesh& mesh, const client::RefineRequestOptions& options,
+    const ShardOptions& shard_options = {}, const ShardCallbacks& callbacks = {});
+
+// The same call shape as client::RefineViaService, for code built around it (the CLI's
+// RefineBackend): `shards` parts over `targets`, default ShardOptions. callbacks.should_cancel
+// cancels; callbacks.on_iteration receives the combined statistics of each iteration once every
+// part is done (the parts' own iterations are not forwarded); on_mesh is UNIMPLEMENTED.
+absl::StatusOr<client::ClientResult> RefineSharded(
+    const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+    const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
+    const client::RefineCallbacks& callbacks = {});
+
+// One channel per address ("host:port", or any gRPC target such as "dns:///name:port").
+std::vector<std::shared_ptr<grpc::Channel>> ChannelsFor(
+    const std::vector<std::string>& addresses,
+    const std::shared_ptr<grpc::ChannelCredentials>& credentials);
+
+}  // namespace tetrefine::sharding

@@ -1,0 +1,110 @@
+// The server's Prometheus endpoint: scraped over HTTP on loopback, its counters follow the calls.
+
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "client/refine_client.h"
+#include "grpcpp/create_channel.h"
+#include "grpcpp/security/credentials.h"
+#include "gtest/gtest.h"
+#include "tests/deploy/server_process.h"
+#include "tests/server/service_test_support.h"
+
+namespace tetrefine::testing {
+namespace {
+
+// Samples of a text exposition by series ("name" or "name{labels}"); comments skipped.
+std::map<std::string, double> ParseExposition(const std::string& text) {
+  std::map<std::string, double> samples;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    const size_t space = line.rfind(' ');
+    if (space == std::string::npos) continue;
+    samples[line.substr(0, space)] = std::stod(line.substr(space + 1));
+  }
+  return samples;
+}
+
+std::map<std::string, double> Scrape(const ServerProcess& server) {
+  absl::StatusOr<std::string> body = HttpGet(server.metrics_port(), "/metrics");
+  EXPECT_TRUE(body.ok()) << body.status();
+  return body.ok() ? ParseExposition(*body) : std::map<std::string, double>{};
+}
+
+double Get(const std::map<std::string, double>& samples, const std::string& series) {
+  const auto it = samples.find(series);
+  EXPECT_NE(it, samples.end()) << "no series " << series;
+  return it == samples.end() ? -1.0 : it->second;
+}
+
+std::unique_ptr<ServerProcess> StartServer(const std::vector<std::string>& flags) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+      ServerProcess::Start(TETREFINE_SERVER_BINARY, flags);
+  EXPECT_TRUE(server.ok()) << server.status();
+  return server.ok() ? *std::move(server) : nullptr;
+}
+
+TEST(MetricsTest, CountersFollowRefineCalls) {
+  std::unique_ptr<ServerProcess> server = StartServer({"--metrics_listen=127.0.0.1:0"});
+  ASSERT_NE(server, nullptr);
+  ASSERT_NE(server->metrics_port(), 0) << server->Log();
+
+  const std::map<std::string, double> before = Scrape(*server);
+  EXPECT_EQ(Get(before, R"(tetrefine_refine_calls_total{code="OK"})"), 0.0);
+  EXPECT_EQ(Get(before, "tetrefine_tets_in_total"), 0.0);
+  EXPECT_EQ(Get(before, "tetrefine_refinements_in_flight"), 0.0);
+
+  const Volume volume = TestVolume({12, 12, 12});
+  const Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {10.0, 10.0, 10.0}, {3, 3, 3});
+  client::RefineRequestOptions options;
+  options.epsilon = 0.02;
+  options.max_iterations = 3;
+  auto channel = grpc::CreateChannel(server->target(), grpc::InsecureChannelCredentials());
+  absl::StatusOr<client::ClientResult> ok =
+      client::RefineViaService(channel, volume, mesh, options);
+  ASSERT_TRUE(ok.ok()) << ok.status();
+  options.epsilon = -1.0;  // refused by the server: INVALID_ARGUMENT
+  absl::StatusOr<client::ClientResult> refused =
+      client::RefineViaService(channel, volume, mesh, options);
+  ASSERT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument) << refused.status();
+
+  const std::map<std::string, double> after = Scrape(*server);
+  EXPECT_EQ(Get(after, R"(tetrefine_refine_calls_total{code="OK"})"), 1.0);
+  EXPECT_EQ(Get(after, R"(tetrefine_refine_calls_total{code="INVALID_ARGUMENT"})"), 1.0);
+  // The accepted call's tets; the refused one fails on its options, before its mesh is read.
+  EXPECT_EQ(Get(after, "tetrefine_tets_in_total"), static_cast<double>(mesh.tets.size()));
+  EXPECT_EQ(Get(after, "tetrefine_tets_out_total"),
+            static_cast<double>(ok->result.mesh.tets.size()));
+  EXPECT_GT(Get(after, "tetrefine_received_bytes_total"),
+            static_cast<double>(volume.data().size()));
+  EXPECT_EQ(Get(after, "tetrefine_refine_duration_seconds_count"), 2.0);
+  EXPECT_GT(Get(after, "tetrefine_refine_duration_seconds_sum"), 0.0);
+  EXPECT_EQ(Get(after, R"(tetrefine_refine_duration_seconds_bucket{le="+Inf"})"), 2.0);
+  EXPECT_EQ(Get(after, "tetrefine_refinements_in_flight"), 0.0);
+}
+
+TEST(MetricsTest, EmptyAddressDisablesTheEndpoint) {
+  std::unique_ptr<ServerProcess> server = StartServer({"--metrics_listen="});
+  ASSERT_NE(server, nullptr);
+  EXPECT_EQ(server->metrics_port(), 0) << server->Log();
+}
+
+TEST(MetricsTest, BusyMetricsPortLeavesTheServiceUp) {
+  std::unique_ptr<ServerProcess> first = StartServer({"--metrics_listen=127.0.0.1:0"});
+  ASSERT_NE(first, nullptr);
+  ASSERT_NE(first->metrics_port(), 0);
+  std::unique_ptr<ServerProcess> second =
+      StartServer({"--metrics_listen=127.0.0.1:" + std::to_string(first->metrics_port())});
+  ASSERT_NE(second, nullptr);
+  EXPECT_EQ(second->metrics_port(), 0);
+  EXPECT_NE(second->Log().find("serving without metrics"), std::string::npos) << second->Log();
+  auto channel = grpc::CreateChannel(second->target(), grpc::InsecureChannelCredentials());
+  EXPECT_TRUE(client::GetServerInfo(channel).ok());
+}
+
+}  // namespace
+}  // namespace tetrefine::testing

@@ -1,0 +1,17 @@
+#pragma once
+
+// Comparing a sharded refinement with the unsharded one, independent of numbering.
+
+#include "core/mesh.h"
+#include "core/refine.h"
+
+namespace tetrefine::testing {
+
+// Expects the same refinement to the bit: the same vertices (position and value) and the same
+// tets (corner positions in order, iteration, quality) after sorting both; input vertices at
+// their input indices; no duplicated vertex; and the statistics that sharding keeps exact (tet
+// counts and configurations per iteration, maxima, minima, stop reason, norm_coeff).
+void ExpectSameRefinement(const Mesh& input, const RefineResult& unsharded,
+                          const RefineResult& sharded);
+
+}  // namespace tetrefine::testing

@@ -1,0 +1,295 @@
+// Sharded refinement over real tetrefine_server processes equals the unsharded refinement, also
+// when a replica dies in the middle of the run.
+
+#include "client/sharding/sharded_refine.h"
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "client/io/mesh_io.h"
+#include "client/refine_client.h"
+#include "grpcpp/security/credentials.h"
+#include "gtest/gtest.h"
+#include "tests/deploy/server_process.h"
+#include "tests/server/service_test_support.h"
+#include "tests/sharding/refinement_compare.h"
+
+namespace tetrefine::testing {
+namespace {
+
+// Three replicas on loopback ports, killed (SIGTERM, then SIGKILL) when the test ends.
+class ShardedRefineTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    for (int i = 0; i < 3; ++i) {
+      absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+          ServerProcess::Start(TETREFINE_SERVER_BINARY, {"--metrics_listen=", "--threads=1"});
+      ASSERT_TRUE(server.ok()) << server.status();
+      addresses_.push_back((*server)->target());
+      servers_.push_back(*std::move(server));
+    }
+    channels_ = sharding::ChannelsFor(addresses_, grpc::InsecureChannelCredentials());
+  }
+
+  // The reference: one call with the whole volume and mesh, on a replica.
+  client::ClientResult Unsharded(const Volume& volume, const Mesh& mesh,
+                                 const client::RefineRequestOptions& options, int replica = 0) {
+    absl::StatusOr<client::ClientResult> r =
+        client::RefineViaService(channels_[replica], volume, mesh, options);
+    EXPECT_TRUE(r.ok()) << r.status();
+    return r.ok() ? *std::move(r) : client::ClientResult{};
+  }
+
+  sharding::ShardedResult Sharded(const Volume& volume, const Mesh& mesh,
+                                  const client::RefineRequestOptions& options, int shards,
+                                  const sharding::ShardCallbacks& callbacks = {}) {
+    sharding::ShardOptions shard;
+    shard.shards = shards;
+    shard.retry_backoff = std::chrono::milliseconds(20);
+    absl::StatusOr<sharding::ShardedResult> r =
+        sharding::ShardedRefine(channels_, volume, mesh, options, shard, callbacks);
+    EXPECT_TRUE(r.ok()) << r.status();
+    if (!r.ok()) return {};
+    const RefineResult& result = r->reply.result;
+    std::printf("%d shards: %zu tets out after %zu iterations (%s)\n", shards,
+                result.mesh.tets.size(), result.iterations.size(),
+                std::string(StopReasonName(result.stop_reason)).c_str());
+    for (const sharding::ShardReport& s : r->shards) {
+      std::printf(
+          "  part %d: %lld tets in, %lld out, %d iterations (%s), target %d, %d attempts, "
+          "%d rounds, %lld voxel bytes of %zu\n",
+          s.part, static_cast<long long>(s.input_tets), static_cast<long long>(s.output_tets),
+          s.iterations, std::string(StopReasonName(s.stop_reason)).c_str(), s.target, s.attempts,
+          s.rounds, static_cast<long long>(s.volume_bytes), volume.data().size());
+    }
+    return *std::move(r);
+  }
+
+  void ExpectShardedEqualsUnsharded(const Volume& volume, const Mesh& mesh,
+                                    const client::RefineRequestOptions& options,
+                                    const std::vector<int>& shard_counts) {
+    const client::ClientResult whole = Unsharded(volume, mesh, options);
+    ASSERT_GT(whole.result.iterations.size(), 1u) << "the case must refine more than once";
+    for (int k : shard_counts) {
+      SCOPED_TRACE(::testing::Message() << "shards = " << k);
+      const sharding::ShardedResult sharded = Sharded(volume, mesh, options, k);
+      ASSERT_EQ(sharded.shards.size(), static_cast<size_t>(k));
+      ExpectSameRefinement(mesh, whole.result, sharded.reply.result);
+      if (k > 1) {
+        for (const sharding::ShardReport& s : sharded.shards) {
+          EXPECT_LT(s.volume_bytes, static_cast<int64_t>(volume.data().size()))
+              << "part " << s.part << " was sent the whole volume";
+        }
+      }
+    }
+  }
+
+  std::vector<std::unique_ptr<ServerProcess>> servers_;
+  std::vector<std::string> addresses_;
+  std::vector<std::shared_ptr<grpc::Channel>> channels_;
+};
+
+sharding::ShardOptions Shards(int k) {
+  sharding::ShardOptions shard;
+  shard.shards = k;
+  return shard;
+}
+
+client::RefineRequestOptions Options(double epsilon, int max_iterations) {
+  client::RefineRequestOptions o;
+  o.epsilon = epsilon;
+  o.max_iterations = max_iterations;
+  o.lattice_max_tets = 100'000'000;  // every tet: the lattice maxima are then exact too
+  o.lattice_n = 4;
+  return o;
+}
+
+// A structured mesh of int16 voxels (the slabs are cut from 2-byte samples).
+struct StructuredCase {
+  Volume volume = TestVolume({26, 22, 20}, VoxelType::kInt16);
+  Mesh mesh = FiveTetMesh({0.5, 0.5, 0.5}, {24.5, 20.5, 18.5}, {6, 5, 4});
+};
+
+// SfePy's unstructured cube scaled into an analytic float64 volume: vertices off the grid.
+struct UnitCubeCase {
+  Volume volume = AnalyticVolumeOf();
+  Mesh mesh = PlacedCube();
+
+  static Volume AnalyticVolumeOf() {
+    const GridGeometry grid{
+        .dims = {34, 30, 32}, .origin = {-2.0, -1.0, 0.5}, .spacing = {1.0, 1.1, 0.9}};
+    std::vector<double> values;
+    for (int64_t k = 0; k < grid.dims[2]; ++k) {
+      for (int64_t j = 0; j < grid.dims[1]; ++j) {
+        for (int64_t i = 0; i < grid.dims[0]; ++i) {
+          const double x = grid.origin[0] + grid.spacing[0] * static_cast<double>(i);
+          const double y = grid.origin[1] + grid.spacing[1] * static_cast<double>(j);
+          const double z = grid.origin[2] + grid.spacing[2] * static_cast<double>(k);
+          const double r2 = (x - 14) * (x - 14) + (y - 15) * (y - 15) + (z - 13) * (z - 13);
+          values.push_back(100.0 * std::exp(-r2 / 30.0) + 8.0 * std::sin(0.4 * x + 0.2 * z));
+        }
+      }
+    }
+    return *Volume::FromDoubles(grid, values);
+  }
+
+  static Mesh PlacedCube() {
+    absl::StatusOr<io::MeshFile> file =
+        io::ReadMesh(std::string(TETREFINE_SHARED_DATA_DIR) + "/unit_cube_1782tets.mesh");
+    EXPECT_TRUE(file.ok()) << file.status();
+    if (!file.ok()) return {};
+    Mesh mesh = std::move(file->mesh);
+    mesh.values.clear();
+    for (Vec3& p : mesh.points) {
+      p = {14.0 + 27.0 * p[0], 15.0 + 26.0 * p[1], 13.0 + 25.0 * p[2]};
+    }
+    return mesh;
+  }
+};
+
+TEST_F(ShardedRefineTest, StructuredMeshEqualsUnsharded) {
+  const StructuredCase c;
+  ExpectShardedEqualsUnsharded(c.volume, c.mesh, Options(0.004, 5), {1, 2, 3, 4});
+}
+
+TEST_F(ShardedRefineTest, UnitCubeInAnalyticVolumeEqualsUnsharded) {
+  const UnitCubeCase c;
+  ASSERT_EQ(c.mesh.tets.size(), 1782u);
+  client::RefineRequestOptions options = Options(0.01, 6);
+  options.orientation = OrientationPolicy::kNormalize;
+  ExpectShardedEqualsUnsharded(c.volume, c.mesh, options, {1, 2, 3, 4});
+}
+
+// The whole run stops for its tet budget part-way: parts that went further are refined again.
+TEST_F(ShardedRefineTest, TetBudgetStopsWhereTheWholeStops) {
+  const StructuredCase c;
+  client::RefineRequestOptions options = Options(0.004, 5);
+  const client::ClientResult free_run = Unsharded(c.volume, c.mesh, options);
+  ASSERT_GE(free_run.result.iterations.size(), 3u);
+  // Room for iteration 2 but not for iteration 3.
+  options.max_tets = free_run.result.iterations[1].final_tets + 1;
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+  ASSERT_EQ(whole.result.stop_reason, StopReason::kTetBudget);
+  for (int k : {2, 4}) {
+    SCOPED_TRACE(::testing::Message() << "shards = " << k);
+    const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
+    ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+  }
+}
+
+// A quality floor met by one part stops every part before that iteration.
+TEST_F(ShardedRefineTest, QualityFloorStopsWhereTheWholeStops) {
+  const UnitCubeCase c;
+  client::RefineRequestOptions options = Options(0.01, 6);
+  options.orientation = OrientationPolicy::kNormalize;
+  options.min_quality = 0.08;
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+  ASSERT_EQ(whole.result.stop_reason, StopReason::kQualityFloor)
+      << "pick a min_quality the whole run meets after an iteration or more";
+  ASSERT_GE(whole.result.iterations.size(), 1u);
+  for (int k : {2, 3, 4}) {
+    SCOPED_TRACE(::testing::Message() << "shards = " << k);
+    const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
+    ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+  }
+}
+
+// Replica 0 is killed while it refines a part (after that part's first iteration); the part
+// moves to the next replica and the result is unchanged.
+TEST_F(ShardedRefineTest, ReplicaKilledMidRunStillGivesTheSameResult) {
+  const StructuredCase c;
+  const client::RefineRequestOptions options = Options(0.004, 5);
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options, /*replica=*/1);
+  std::atomic<bool> killed{false};
+  std::atomic<int> retries{0};
+  sharding::ShardCallbacks callbacks;
+  callbacks.on_part_iteration = [&](int, int target, const IterationStats& stats) {
+    if (target == 0 && stats.iteration == 1 && !killed.exchange(true)) servers_[0]->Kill();
+  };
+  callbacks.on_retry = [&](int, int target, const absl::Status& status, int next) {
+    EXPECT_EQ(target, 0) << status;
+    EXPECT_NE(next, 0);
+    ++retries;
+  };
+  const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, 3, callbacks);
+  ASSERT_TRUE(killed.load()) << "no part reported an iteration from replica 0";
+  EXPECT_GE(retries.load(), 1);
+  EXPECT_GE(sharded.shards[0].attempts, 2);
+  EXPECT_NE(sharded.shards[0].target, 0);
+  ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+}
+
+// A replica that is already gone: its parts go to the others at once.
+TEST_F(ShardedRefineTest, DeadReplicaBeforeTheRun) {
+  const UnitCubeCase c;
+  client::RefineRequestOptions options = Options(0.01, 6);
+  options.orientation = OrientationPolicy::kNormalize;
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+  servers_[2]->Kill();
+  const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, 4);
+  ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+  EXPECT_GE(sharded.shards[2].attempts, 2);
+  for (const sharding::ShardReport& s : sharded.shards) EXPECT_NE(s.target, 2);
+}
+
+// The RefineViaService-shaped entry point, with every part on one target (as with a single
+// dns:/// target that balances per call).
+TEST_F(ShardedRefineTest, RefineShardedOverOneTarget) {
+  const UnitCubeCase c;
+  client::RefineRequestOptions options = Options(0.01, 6);
+  options.orientation = OrientationPolicy::kNormalize;
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+  int iterations_seen = 0;
+  client::RefineCallbacks callbacks;
+  callbacks.on_iteration = [&](const IterationStats& stats) {
+    EXPECT_EQ(stats.iteration, ++iterations_seen);
+  };
+  absl::StatusOr<client::ClientResult> r =
+      sharding::RefineSharded({channels_[1]}, c.volume, c.mesh, options, 3, callbacks);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(iterations_seen, static_cast<int>(whole.result.iterations.size()));
+  ExpectSameRefinement(c.mesh, whole.result, r->result);
+  callbacks.on_mesh = [](int, const Mesh&) {};
+  EXPECT_EQ(sharding::RefineSharded({channels_[1]}, c.volume, c.mesh, options, 3, callbacks)
+                .status()
+                .code(),
+            absl::StatusCode::kUnimplemented);
+}
+
+TEST_F(ShardedRefineTest, ServerErrorNamesThePart) {
+  const StructuredCase c;
+  client::RefineRequestOptions options = Options(0.004, 5);
+  options.epsilon = -1.0;
+  absl::StatusOr<sharding::ShardedResult> r =
+      sharding::ShardedRefine(channels_, c.volume, c.mesh, options, Shards(2));
+  ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << r.status();
+  EXPECT_NE(r.status().message().find("part "), absl::string_view::npos) << r.status();
+  EXPECT_NE(r.status().message().find("epsilon"), absl::string_view::npos) << r.status();
+}
+
+TEST_F(ShardedRefineTest, VertexOutsideTheVolumeIsRefusedBeforeSending) {
+  StructuredCase c;
+  c.mesh.points[7] = {100.0, 1.0, 1.0};
+  absl::StatusOr<sharding::ShardedResult> r =
+      sharding::ShardedRefine(channels_, c.volume, c.mesh, Options(0.004, 5), Shards(2));
+  ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << r.status();
+  EXPECT_NE(r.status().message().find("mesh.points[7]"), absl::string_view::npos) << r.status();
+}
+
+TEST_F(ShardedRefineTest, ShouldCancelStopsEveryPart) {
+  const StructuredCase c;
+  std::atomic<bool> cancel{false};
+  sharding::ShardCallbacks callbacks;
+  callbacks.on_part_iteration = [&](int, int, const IterationStats&) { cancel.store(true); };
+  callbacks.should_cancel = [&] { return cancel.load(); };
+  absl::StatusOr<sharding::ShardedResult> r =
+      sharding::ShardedRefine(channels_, c.volume, c.mesh, Options(0.004, 5), Shards(3), callbacks);
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kCancelled) << r.status();
+}
+
+}  // namespace
+}  // namespace tetrefine::testing
