@@ -56,7 +56,8 @@ TetLattice SampleTetLattice(const Volume& volume, const Mesh& mesh, int64_t t, i
 }
 
 LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_t max_tets,
-                           uint64_t seed, double norm_coeff, double epsilon, bool clamp) {
+                           uint64_t seed, double norm_coeff, double epsilon, bool clamp,
+                           const std::function<bool()>& should_stop) {
   LatticeStats stats;
   stats.n = n;
   const int64_t num_tets = static_cast<int64_t>(mesh.tets.size());
@@ -77,9 +78,12 @@ LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_
     double volume = 0.0, weighted_mean = 0.0, weighted_above = 0.0;
   };
   std::vector<Partial> partial(blocks);
+  const int64_t points_per_tet = int64_t{n + 1} * (n + 2) * (n + 3) / 6;
+  const int64_t poll_every = std::max<int64_t>(1, 16384 / points_per_tet);
   ForEachBlock(count, [&](int64_t block, int64_t begin, int64_t end) {
     Partial acc;
     for (int64_t i = begin; i < end; ++i) {
+      if (should_stop && (i - begin) % poll_every == 0 && should_stop()) break;
       const int64_t t = sample ? chosen[i] : i;
       const TetLattice r = SampleTetLattice(volume, mesh, t, n, norm_coeff, epsilon, clamp);
       acc.sums.max_error = std::max(acc.sums.max_error, r.max_error);

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 
 #include "core/mesh.h"
 #include "core/refine.h"
@@ -26,7 +27,11 @@ TetLattice SampleTetLattice(const Volume& volume, const Mesh& mesh, int64_t t, i
 
 // The lattice statistics over all tets, or over max_tets tets drawn with `seed` when the mesh
 // has more. Deterministic for a given seed whatever the thread count.
+// `should_stop`, when set, is polled from worker threads every few thousand samples: at order 64
+// over millions of tets the lattice alone runs for minutes, and a cancelled refinement must not.
+// Once it returns true the remaining tets are skipped and the statistics are incomplete.
 LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_t max_tets,
-                           uint64_t seed, double norm_coeff, double epsilon, bool clamp);
+                           uint64_t seed, double norm_coeff, double epsilon, bool clamp,
+                           const std::function<bool()>& should_stop = {});
 
 }  // namespace tetrefine

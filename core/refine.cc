@@ -446,7 +446,10 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   result.tet_quality = std::move(state.tet_quality);
   if (options.lattice_n > 0 && result.stop_reason != StopReason::kCancelled) {
     result.lattice = SampleLattice(volume, result.mesh, options.lattice_n, options.lattice_max_tets,
-                                   options.lattice_seed, norm, options.epsilon, clamp);
+                                   options.lattice_seed, norm, options.epsilon, clamp,
+                                   [&cancel] { return cancel.Check(); });
+    // An incomplete lattice is not a result: say the refinement was cancelled.
+    if (cancel.IsSet()) result.stop_reason = StopReason::kCancelled;
   }
   result.seconds = SecondsSince(start);
   return result;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <new>
 #include <string>
 #include <utility>
 
@@ -104,18 +105,27 @@ absl::Status RequestReader::Unexpected(const v1::RefineRequest& request) const {
 }
 
 absl::Status RequestReader::IncompleteError() const {
+  // gRPC reports a message that does not parse as a RefineRequest exactly like the end of the
+  // stream, so the error names both causes.
+  const std::string or_garbage =
+      absl::StrCat("or request message ", message_index_, " did not parse as a RefineRequest)");
   switch (stage_) {
     case Stage::kOptions:
-      return Invalid("options: missing (the stream ended before any options)");
+      return Invalid(
+          absl::StrCat("options: missing (the stream ended before any options, ", or_garbage));
     case Stage::kVolumeHeader:
-      return Invalid("volume_header: missing (the stream ended after options)");
+      return Invalid(
+          absl::StrCat("volume_header: missing (the stream ended after options, ", or_garbage));
     case Stage::kVolumeData:
       return Invalid(absl::StrCat("volume_chunk: stream ended after ", volume_data_.size(),
-                                  " of volume_header.total_bytes = ", total_bytes_, " bytes"));
+                                  " of volume_header.total_bytes = ", total_bytes_, " bytes (",
+                                  or_garbage));
     case Stage::kMeshHeader:
-      return Invalid("mesh_header: missing (the stream ended after the volume)");
+      return Invalid(
+          absl::StrCat("mesh_header: missing (the stream ended after the volume, ", or_garbage));
     case Stage::kMeshData:
-      return Invalid("end_of_input: missing (the stream ended inside the mesh)");
+      return Invalid(
+          absl::StrCat("end_of_input: missing (the stream ended inside the mesh, ", or_garbage));
     case Stage::kDone:
       break;
   }
@@ -183,7 +193,15 @@ absl::Status RequestReader::AddVolumeHeader(const v1::VolumeHeader& header) {
                                 header.total_bytes()));
   }
   total_bytes_ = expected;
-  volume_data_.reserve(total_bytes_);
+  // Reserved up front so that a large volume is not copied as it grows. A declared size within
+  // the limits that this process still cannot hold (a memory-limited container) is refused here,
+  // not thrown out of the handler as an UNKNOWN error.
+  try {
+    volume_data_.reserve(total_bytes_);
+  } catch (const std::bad_alloc&) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "volume_header: this server cannot allocate the ", total_bytes_, " bytes declared"));
+  }
   stage_ = Stage::kVolumeData;
   return absl::OkStatus();
 }
@@ -247,9 +265,16 @@ absl::Status RequestReader::AddMeshHeader(const v1::MeshHeader& header) {
                                                      max_vertices, " input vertices"));
   }
   has_values_ = header.has_values();
-  mesh_.points.reserve(static_cast<size_t>(vertex_count_));
-  mesh_.tets.reserve(static_cast<size_t>(tet_count_));
-  if (has_values_) mesh_.values.reserve(static_cast<size_t>(vertex_count_));
+  try {  // as for the volume
+    mesh_.points.reserve(static_cast<size_t>(vertex_count_));
+    mesh_.tets.reserve(static_cast<size_t>(tet_count_));
+    if (has_values_) mesh_.values.reserve(static_cast<size_t>(vertex_count_));
+  } catch (const std::bad_alloc&) {
+    mesh_ = Mesh{};
+    return absl::ResourceExhaustedError(
+        absl::StrCat("mesh_header: this server cannot allocate ", vertex_count_, " vertices and ",
+                     tet_count_, " tets"));
+  }
   stage_ = Stage::kMeshData;
   return absl::OkStatus();
 }

@@ -31,9 +31,10 @@ NiftiHeader ParseNifti1(const FieldReader& f) {
   for (int i = 0; i < 8; ++i) h.dim[i] = f.At<int16_t>(40 + 2 * i);
   h.datatype = f.At<int16_t>(70);
   for (int i = 0; i < 8; ++i) h.pixdim[i] = f.At<float>(76 + 4 * i);
-  // vox_offset is a float in NIfTI-1; integral in every real file.
+  // vox_offset is a float in NIfTI-1; integral in every real file. Beyond int64 (or NaN) the
+  // conversion would be undefined: -1 makes the reader refuse it.
   const float vox_offset = f.At<float>(108);
-  h.vox_offset = std::isfinite(vox_offset) ? static_cast<int64_t>(vox_offset) : -1;
+  h.vox_offset = vox_offset >= 0.0f && vox_offset < 0x1p62f ? static_cast<int64_t>(vox_offset) : -1;
   h.scl_slope = f.At<float>(112);
   h.scl_inter = f.At<float>(116);
   h.xyzt_units = f.At<uint8_t>(123);

@@ -316,8 +316,13 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
   VtkCells vtk;
   vtk.offsets.reserve(n + 1);
   vtk.offsets.push_back(0);
-  for (double o : *offsets) vtk.offsets.push_back(static_cast<int64_t>(o));
-  vtk.types.assign(types->begin(), types->end());
+  // Converting a double beyond int64 (or NaN) is undefined; -1 is refused as an offset and
+  // ignored as a cell type by CellsToTets.
+  auto whole = [](double d) {
+    return d >= 0 && d < 0x1p62 && d == std::floor(d) ? static_cast<int64_t>(d) : int64_t{-1};
+  };
+  for (double o : *offsets) vtk.offsets.push_back(whole(o));
+  for (double t : *types) vtk.types.push_back(whole(t));
   vtk.connectivity.reserve(connectivity->size());
   for (double c : *connectivity) {
     // A fractional or huge index is out of range either way; keep it negative to say so.

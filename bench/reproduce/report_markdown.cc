@@ -1,0 +1,363 @@
+#include "bench/reproduce/report_markdown.h"
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "bench/reproduce/paper_tables.h"
+#include "core/configuration.h"
+#include "core/lattice.h"
+
+namespace tetrefine::reproduce {
+namespace {
+
+std::string Err(double e) { return absl::StrFormat("%.4f", e); }
+std::string Pct(double share) { return absl::StrFormat("%.1f%%", 100.0 * share); }
+std::string Pct(int64_t part, int64_t whole) {
+  return whole > 0 ? Pct(static_cast<double>(part) / static_cast<double>(whole)) : "-";
+}
+std::string MiB(int64_t bytes) {
+  return bytes < 0 ? "n/a" : absl::StrFormat("%.1f", static_cast<double>(bytes) / (1 << 20));
+}
+
+std::string Match(const BaselineMatch& m, int64_t ours, const CaseRecord& c) {
+  if (!m.reached) {
+    const int64_t last = c.uniform.empty() ? 0 : c.uniform.back().tets;
+    return absl::StrFormat("> %d (not reached)", last);
+  }
+  return absl::StrFormat(
+      "%d (L%d, %.2fx)", m.tets, m.level,
+      static_cast<double>(m.tets) / static_cast<double>(std::max<int64_t>(1, ours)));
+}
+
+// The last run of each epsilon (the one to convergence).
+std::vector<const RunRecord*> ConvergedRuns(const CaseRecord& c) {
+  std::vector<const RunRecord*> out;
+  for (const RunRecord& r : c.runs) {
+    if (!out.empty() && out.back()->epsilon == r.epsilon) {
+      out.back() = &r;
+    } else {
+      out.push_back(&r);
+    }
+  }
+  return out;
+}
+
+void Method(const ReportData& d, std::string& s) {
+  absl::StrAppend(
+      &s, "## How these numbers were made\n\n",
+      "- **Refinement**: core `Refine` with default options except epsilon (",
+      absl::StrJoin(d.epsilons, " and "), "), `max_iterations` (4, then ", d.max_iterations,
+      " for \"to convergence\"), `max_tets` (", d.max_tets,
+      ": runs that would exceed it stop with `tet_budget`) and `lattice_n = 0`; each result is "
+      "then scored by core "
+      "`SampleLattice` (n = 8: the 165 barycentric points of the paper's section 5.1 per tet; "
+      "every "
+      "tet of meshes up to 3,000,000 tets, a seeded sample beyond). The normalisation is the "
+      "volume's value range (Refine's default).\n",
+      "- **Tables 3-7** per case below come from `RefineResult::iterations`: tets by "
+      "configuration (Tables 3/4), Schönhardt prisms given a Steiner point (SP), INT/FNT/NTwE and "
+      "the maximum and mean edge-midpoint error at the start of each iteration (Tables 5/6), and "
+      "mean-ratio quality before and after (Table 7).\n",
+      "- **Uniform baseline**: regular 1:8 refinement of every tet (all six edges split, the "
+      "octahedron cut by its shortest diagonal: core's subdivision table entry for pattern 63; "
+      "`bench/reproduce/uniform_refine.h`), new vertices valued from the volume as in the paper, "
+      "repeated until a level's lattice max (and, separately, mean) error is at most the "
+      "tetrefine result's, or until the next level would exceed the cap of ",
+      d.uniform_cap_tets,
+      " tets. \"Uniform tets at equal error\" is the first level that gets there; the factor is "
+      "its tet count over tetrefine's.\n",
+      "- **Real volumes** (`/work/shared/data`, read with `io::ReadVolume`): meshes are 5-tet "
+      "blocks masked like the paper's liver: a block is kept when all 8 corner samples exceed "
+      "Otsu's threshold of the volume (256 bins), blocks of the smallest size in {2, 3, 4, 5, 6, "
+      "8} voxels giving at most 10,000 tets, so that the initial mesh is coarse like the paper's "
+      "(1,000-11,000 tets). The unstructured cube mesh (`unit_cube_1782tets.mesh`) is scaled per "
+      "axis onto each volume's box less 5% on every side.\n",
+      "- **Phantoms** (generated, `bench/reproduce/phantoms.h`): the heart SPECT data of the "
+      "paper is not available; a left-ventricle perfusion phantom (thick ellipsoidal shell open "
+      "at the base, tilted, smooth regional pattern, cold inferior defect, a liver-like blob, "
+      "PSF-like blur across the wall, no noise) is point-sampled on the paper's two heart grids "
+      "(Table 2). Its mesh is one shell of 8 mm world cells (5 tets each) whose centres lie in "
+      "the wall, used on both grids as the paper used one surface pair. The Marschner-Lobb signal "
+      "is sampled on 41^3.\n",
+      "- **Time and memory**: wall time of the `Refine` call alone (all ", d.hardware_threads,
+      " hardware threads). Peak memory is the resident high-water mark the call adds (VmHWM "
+      "reset through /proc/self/clear_refs just before it, after returning free heap with "
+      "malloc_trim), measured inside this long-running tool: heap the allocator kept from "
+      "earlier cases can hide part of it, so read it as a lower bound (bench/peak_memory measures "
+      "in a fresh process).\n\n");
+}
+
+void Summary(const ReportData& d, std::string& s) {
+  absl::StrAppend(
+      &s, "## Summary: tetrefine against uniform refinement at equal error\n\n",
+      "Runs to convergence (at most ", d.max_iterations,
+      " iterations). Lattice errors are over "
+      "the n = 8 lattice of every tet of the result.\n\n",
+      "| case | ε | iterations (stop) | tets in → out | lattice max | lattice mean | uniform tets "
+      "at equal max | uniform tets at equal mean | time (s) | peak (MiB) |\n",
+      "|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const CaseRecord& c : d.cases) {
+    for (const RunRecord* r : ConvergedRuns(c)) {
+      absl::StrAppendFormat(
+          &s, "| [%s](#%s) | %g | %d (%s) | %d → %d | %s | %s | %s | %s | %.3f | %s |\n", c.name,
+          c.name, r->epsilon, r->iterations.size(), r->stop_reason, r->initial_tets, r->final_tets,
+          Err(r->lattice.max_error), Err(r->lattice.mean_error),
+          Match(r->uniform_at_max, r->final_tets, c), Match(r->uniform_at_mean, r->final_tets, c),
+          r->seconds, MiB(r->peak_added_bytes));
+    }
+  }
+  s += "\n";
+}
+
+// One line on how uniform refinement compares at equal error over all runs to convergence.
+std::string UniformLine(const ReportData& d, bool by_max) {
+  int more = 0, fewer = 0, missed = 0;
+  std::vector<double> factors;
+  for (const CaseRecord& c : d.cases) {
+    for (const RunRecord* r : ConvergedRuns(c)) {
+      const BaselineMatch& m = by_max ? r->uniform_at_max : r->uniform_at_mean;
+      if (r->final_tets == 0) continue;
+      if (!m.reached) {
+        ++missed;
+        continue;
+      }
+      (m.tets > r->final_tets ? more : fewer) += 1;
+      factors.push_back(static_cast<double>(m.tets) / static_cast<double>(r->final_tets));
+    }
+  }
+  std::sort(factors.begin(), factors.end());
+  const double median = factors.empty() ? 0.0 : factors[factors.size() / 2];
+  return absl::StrFormat(
+      "- At equal lattice %s error, uniform 1:8 refinement needed more tets than tetrefine in %d "
+      "runs and fewer (or as many) in %d; in %d it did not get there within the cap. Median "
+      "factor (uniform / tetrefine tets) where it did: %.2f.\n",
+      by_max ? "max" : "mean", more, fewer, missed, median);
+}
+
+void Findings(const ReportData& d, std::string& s) {
+  std::map<std::string, int> stops;
+  int total = 0;
+  for (const CaseRecord& c : d.cases) {
+    for (const RunRecord* r : ConvergedRuns(c)) {
+      ++stops[r->stop_reason];
+      ++total;
+    }
+  }
+  std::vector<std::string> parts;
+  for (const auto& [reason, n] : stops) parts.push_back(absl::StrCat(n, " ", reason));
+  absl::StrAppend(&s, "## Findings (computed from the tables below)\n\n",
+                  "- Runs to convergence: ", total,
+                  " (cases x epsilons); they stopped: ", absl::StrJoin(parts, ", "), ".\n",
+                  UniformLine(d, true), UniformLine(d, false));
+  std::map<std::pair<std::string, double>, std::array<int64_t, 3>> pooled;  // counted, mid, near
+  for (const StudyRecord& r : d.study) {
+    for (const LocationCounts& c : r.study.counts) {
+      auto& p = pooled[{r.kind, c.threshold}];
+      p[0] += c.counted;
+      p[1] += c.by_location[static_cast<int>(MaxLocation::kEdgeMidpoint)];
+      p[2] += c.near_midpoint;
+    }
+  }
+  for (const auto& [key, p] : pooled) {
+    absl::StrAppend(
+        &s, "- Section 5.1, ", key.first, " meshes, threshold ", absl::StrFormat("%g", key.second),
+        ": the largest lattice error lies at an edge "
+        "midpoint in ",
+        Pct(p[1], p[0]), " of ", p[0], " tets, at or near one in ", Pct(p[2], p[0]),
+        key.first == "voxel-aligned" ? " (paper: 93% at one).\n"
+                                     : (key.second < 0.01 ? " (paper: 73% at or near one).\n"
+                                                          : " (paper: 85% at or near one).\n"));
+  }
+  s += "\n";
+}
+
+constexpr const char* kLocationHeaders =
+    "vertex | edge midpoint | other edge point | face | interior";
+
+void Study(const ReportData& d, std::string& s) {
+  absl::StrAppend(
+      &s, "## Section 5.1: where the largest discrepancy lies\n\n",
+      "For each tet (all tets, or a seeded random sample of ", d.study_max_tets,
+      " without replacement on larger meshes), the point of largest error on the n = 8 lattice "
+      "(165 points) as core `SampleTetLattice` reports it (`MaxLocation`; ties go to the first "
+      "point in its scan order). A tet is counted at a threshold when that largest error exceeds "
+      "it: tets that agree everywhere have no meaningful maximum. \"Near\" adds the lattice points "
+      "one step from an edge midpoint (barycentric L1 distance 2/8), the paper's \"at the midpoint "
+      "of some edge or in a point near to this one\". Voxel-aligned meshes are the volumes' "
+      "5-tets-per-voxel meshes (masked like the blocks); coarse meshes are the cases' initial "
+      "meshes. The paper reports 93% at an edge midpoint for voxel-aligned meshes, and for coarse "
+      "meshes 73% (threshold 0.001) and 85% (threshold 0.05) at or near one.\n\n",
+      "| mesh | kind | tets (sampled) | threshold | counted | ", kLocationHeaders,
+      " | at or near a midpoint |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+  // Pooled per kind and threshold.
+  std::map<std::pair<std::string, double>, LocationCounts> pooled;
+  for (const StudyRecord& r : d.study) {
+    for (const LocationCounts& c : r.study.counts) {
+      absl::StrAppendFormat(&s, "| %s | %s | %d (%d) | %g | %d |", r.mesh, r.kind, r.study.tets,
+                            r.study.tets_sampled, c.threshold, c.counted);
+      for (int64_t n : c.by_location) absl::StrAppend(&s, " ", Pct(n, c.counted), " |");
+      absl::StrAppend(&s, " ", Pct(c.near_midpoint, c.counted), " |\n");
+      LocationCounts& p = pooled[{r.kind, c.threshold}];
+      p.threshold = c.threshold;
+      p.counted += c.counted;
+      p.near_midpoint += c.near_midpoint;
+      for (int l = 0; l < kNumMaxLocations; ++l) p.by_location[l] += c.by_location[l];
+    }
+  }
+  for (const auto& [key, c] : pooled) {
+    absl::StrAppendFormat(&s, "| **all %s meshes** | %s | | %g | %d |", key.first, key.first,
+                          c.threshold, c.counted);
+    for (int64_t n : c.by_location) absl::StrAppend(&s, " **", Pct(n, c.counted), "** |");
+    absl::StrAppend(&s, " **", Pct(c.near_midpoint, c.counted), "** |\n");
+  }
+  int64_t mismatches = 0;
+  for (const StudyRecord& r : d.study) mismatches += r.study.class_mismatches;
+  absl::StrAppend(
+      &s, "\nThe tool's own scan for the argmax point agreed with core's location class on ",
+      mismatches == 0 ? "every tet" : absl::StrCat("all but ", mismatches, " tets"), ".\n\n");
+}
+
+void PaperComparison(const ReportData& d, std::string& s) {
+  std::map<std::pair<std::string, double>, const RunRecord*> ours;
+  for (const CaseRecord& c : d.cases) {
+    if (c.mesh_kind != "shell") continue;
+    const std::string heart = c.name.substr(0, c.name.find('_'));
+    for (const RunRecord& r : c.runs) {
+      if (r.max_iterations >= 4) ours[{heart, r.epsilon}] = &r;  // the longest run listed last
+    }
+  }
+  if (ours.empty()) return;
+  absl::StrAppend(
+      &s, "## The heart phantoms beside the paper's Tables 5-7\n\n",
+      "The paper's heart1/heart2 are real SPECT studies meshed between reconstructed surfaces; "
+      "ours are a phantom on the same grids with a staircase shell mesh, so only the shape of the "
+      "numbers compares: how fast FNT levels off and the errors fall.\n\n",
+      "| data | ε | iter | paper INT → FNT | paper NTwE | paper max / mean | ours INT → FNT | ours "
+      "NTwE | ours max / mean |\n|---|---|---|---|---|---|---|---|---|\n");
+  for (const PaperCase& p : kPaperCases) {
+    const auto it = ours.find({p.name, p.epsilon});
+    if (it == ours.end()) continue;
+    const RunRecord& r = *it->second;
+    for (int i = 0; i < 4; ++i) {
+      const PaperIteration& q = p.iterations[i];
+      std::string mine = "- | - | -";
+      if (i < static_cast<int>(r.iterations.size())) {
+        const IterationStats& m = r.iterations[i];
+        mine = absl::StrFormat("%d → %d | %d | %s / %s", m.initial_tets, m.final_tets,
+                               m.tets_with_error, Err(m.max_error), Err(m.mean_error));
+      }
+      absl::StrAppendFormat(&s, "| %s | %g | %d | %d → %d | %d | %s / %s | %s |\n", p.name,
+                            p.epsilon, i + 1, q.initial_tets, q.final_tets, q.tets_with_error,
+                            Err(q.max_error), Err(q.mean_error), mine);
+    }
+    absl::StrAppendFormat(&s, "| %s | %g | quality | %.4f → %.4f | | | %.4f → %.4f | | |\n", p.name,
+                          p.epsilon, p.initial_quality, p.final_quality, r.initial_quality.mean,
+                          r.final_quality.mean);
+  }
+  s += "\n";
+}
+
+void ConfigurationTable(const RunRecord& r, std::string& s) {
+  if (r.iterations.empty()) return;
+  s += "| configuration |";
+  for (const IterationStats& it : r.iterations) absl::StrAppend(&s, " it. ", it.iteration, " |");
+  s += "\n|---|";
+  for (size_t i = 0; i < r.iterations.size(); ++i) s += "---|";
+  s += "\n";
+  for (int c = 0; c < kNumConfigurations; ++c) {
+    absl::StrAppend(&s, "| ", std::string(ConfigurationName(static_cast<Configuration>(c))), " |");
+    for (const IterationStats& it : r.iterations)
+      absl::StrAppend(&s, " ", it.configurations[c], " |");
+    s += "\n";
+  }
+  s += "| SP |";
+  for (const IterationStats& it : r.iterations)
+    absl::StrAppend(&s, " ", it.schonhardt_prisms, " |");
+  s += "\n\n";
+}
+
+void IterationTable(const RunRecord& r, std::string& s) {
+  s += "| iter | INT | FNT | NTwE | edges split | max error | mean error | quality min / mean | s "
+       "|\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const IterationStats& it : r.iterations) {
+    absl::StrAppendFormat(&s, "| %d | %d | %d | %d | %d of %d | %s | %s | %.4f / %.4f | %.4f |\n",
+                          it.iteration, it.initial_tets, it.final_tets, it.tets_with_error,
+                          it.split_edges, it.edges, Err(it.max_error), Err(it.mean_error),
+                          it.quality.min, it.quality.mean, it.seconds);
+  }
+  absl::StrAppendFormat(&s, "| end | %d | | | | %s | %s | | |\n\n", r.final_tets,
+                        Err(r.final_max_error), Err(r.final_mean_error));
+}
+
+void CaseSection(const CaseRecord& c, std::string& s) {
+  absl::StrAppendFormat(&s, "### %s\n\n%s Input: %d vertices, %d tets. normCoeff %.6g.\n\n", c.name,
+                        c.description, c.input_vertices, c.input_tets, c.norm_coeff);
+  absl::StrAppendFormat(&s, "![%s](plots/%s.svg)\n\n", c.name, c.name);
+  s += "| run | stop | tets | midpoint max / mean | lattice max / mean | lattice points > ε | "
+       "quality mean (min): before → after | uniform tets at equal lattice max / mean | time (s) "
+       "| peak (MiB) |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const RunRecord& r : c.runs) {
+    absl::StrAppendFormat(
+        &s,
+        "| ε %g, ≤ %d it. | %s after %d | %d → %d | %s / %s | %s / %s | %s | %.4f (%.4f) → "
+        "%.4f (%.4f) | %s / %s | %.3f | %s |\n",
+        r.epsilon, r.max_iterations, r.stop_reason, r.iterations.size(), r.initial_tets,
+        r.final_tets, Err(r.final_max_error), Err(r.final_mean_error), Err(r.lattice.max_error),
+        Err(r.lattice.mean_error), Pct(r.lattice.share_above_epsilon), r.initial_quality.mean,
+        r.initial_quality.min, r.final_quality.mean, r.final_quality.min,
+        Match(r.uniform_at_max, r.final_tets, c), Match(r.uniform_at_mean, r.final_tets, c),
+        r.seconds, MiB(r.peak_added_bytes));
+  }
+  s += "\n";
+  for (const RunRecord* r : ConvergedRuns(c)) {
+    absl::StrAppendFormat(&s,
+                          "**ε = %g** (to convergence; the 4-iteration run is its first four "
+                          "rows): tets by configuration (Tables 3/4)\n\n",
+                          r->epsilon);
+    ConfigurationTable(*r, s);
+    s += "Discrepancy by iteration (Tables 5/6; errors at the start of each iteration, quality "
+         "after it)\n\n";
+    IterationTable(*r, s);
+  }
+  s += "Uniform 1:8 levels\n\n| level | tets | lattice max | lattice mean | quality min / mean | s "
+       "|\n|---|---|---|---|---|---|\n";
+  for (const BaselineLevel& l : c.uniform) {
+    absl::StrAppendFormat(&s, "| %d | %d | %s | %s | %.4f / %.4f | %.3f |\n", l.level, l.tets,
+                          Err(l.lattice_max), Err(l.lattice_mean), l.quality.min, l.quality.mean,
+                          l.seconds);
+  }
+  s += "\n";
+}
+
+}  // namespace
+
+std::string ReportMarkdown(const ReportData& d) {
+  std::string s = "# tetrefine: the paper's experiments, reproduced\n\n";
+  absl::StrAppend(
+      &s, "Generated by `tetrefine_reproduce` (bench/reproduce) at ", d.generated_at, " in ",
+      absl::StrFormat("%.1f", d.total_seconds), " s on ", d.hardware_threads, " hardware threads",
+      d.quick ? " (**--quick**: tiny cases only)" : "",
+      ". Every number below is also in [results.json](results.json). To regenerate:\n\n",
+      "    cmake --build build --target tetrefine_reproduce\n",
+      "    build/bench/reproduce/tetrefine_reproduce --out_dir=docs/results\n\n");
+  if (!d.notes.empty()) {
+    s += "Notes from the run:\n\n";
+    for (const std::string& n : d.notes) absl::StrAppend(&s, "- ", n, "\n");
+    s += "\n";
+  }
+  Findings(d, s);
+  Method(d, s);
+  Summary(d, s);
+  Study(d, s);
+  PaperComparison(d, s);
+  s += "## Cases\n\n";
+  for (const CaseRecord& c : d.cases) CaseSection(c, s);
+  return s;
+}
+
+}  // namespace tetrefine::reproduce

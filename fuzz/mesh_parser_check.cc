@@ -1,0 +1,52 @@
+#include "fuzz/mesh_parser_check.h"
+
+#include <cstring>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "fuzz/fuzz_support.h"
+
+namespace tetrefine::fuzz {
+namespace {
+
+template <typename T>
+bool SameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+}  // namespace
+
+void CheckMeshParser(const MeshFormatUnderTest& format, const uint8_t* data, size_t size) {
+  const absl::string_view text(reinterpret_cast<const char*>(data), size);
+  absl::StatusOr<io::MeshFile> file = format.parse(text, format.path);
+  if (!file.ok()) {
+    TETREFINE_FUZZ_CHECK(!file.status().message().empty(), "an error without a message");
+    return;
+  }
+  if (!io::ValidateMeshFile(*file, format.path).ok()) return;
+
+  const std::string written = format.format(*file);
+  absl::StatusOr<io::MeshFile> again = format.parse(written, format.path);
+  TETREFINE_FUZZ_CHECK(
+      again.ok(), absl::StrCat("re-reading what was written fails: ", again.status().ToString(),
+                               "\n--- written:\n", written.substr(0, 4000)));
+  const Mesh& a = file->mesh;
+  const Mesh& b = again->mesh;
+  TETREFINE_FUZZ_CHECK(SameBits(a.points, b.points), "points changed in a round trip");
+  TETREFINE_FUZZ_CHECK(SameBits(a.tets, b.tets), "tets changed in a round trip");
+  if (format.keeps_values) {
+    TETREFINE_FUZZ_CHECK(SameBits(a.values, b.values), "values changed in a round trip");
+  }
+  if (format.keeps_quality) {
+    TETREFINE_FUZZ_CHECK(SameBits(file->tet_quality, again->tet_quality),
+                         "tet_quality changed in a round trip");
+  }
+  // Medit always reads a tet reference; a file without iterations is written with zeros.
+  if (!file->tet_iteration.empty()) {
+    TETREFINE_FUZZ_CHECK(SameBits(file->tet_iteration, again->tet_iteration),
+                         "tet_iteration changed in a round trip");
+  }
+}
+
+}  // namespace tetrefine::fuzz

@@ -1,0 +1,27 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "client/io/mesh_file.h"
+
+namespace tetrefine::fuzz {
+
+struct MeshFormatUnderTest {
+  absl::StatusOr<io::MeshFile> (*parse)(absl::string_view text, absl::string_view path);
+  std::string (*format)(const io::MeshFile& file);
+  const char* path;  // the name error messages carry, e.g. "fuzz.vtu"
+  // What the format stores (Medit keeps neither values nor quality).
+  bool keeps_values = true;
+  bool keeps_quality = true;
+};
+
+// Parses `data` as the format. Any input may fail, but none may crash; an input that parses and
+// passes ValidateMeshFile must survive format-then-parse unchanged (bit for bit: numbers are
+// written in shortest round-trip form).
+void CheckMeshParser(const MeshFormatUnderTest& format, const uint8_t* data, size_t size);
+
+}  // namespace tetrefine::fuzz

@@ -1,0 +1,178 @@
+// Limits on what a caller controls that tests/server does not cover, against a real
+// tetrefine_server process: the response chunk size a caller asks for is clamped both ways, an
+// absurd iteration count is harmless (work stays bounded by the tet budget and convergence), and
+// declared sizes within the limits that a memory-limited server cannot hold are refused by name.
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "client/refine_client.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "server/wire_conversion.h"
+#include "server/wire_request_writer.h"
+#include "tests/hardening/server_process.h"
+#include "tests/hardening/workloads.h"
+#include "tests/server/service_test_support.h"
+#include "tetrefine/v1/tetrefine.grpc.pb.h"
+
+namespace tetrefine::hardening {
+namespace {
+
+using ::tetrefine::testing::FiveTetMesh;
+using ::tetrefine::testing::SendRaw;
+using ::tetrefine::testing::TestVolume;
+
+struct Responses {
+  grpc::Status status;
+  size_t count = 0;
+  size_t largest_bytes = 0;
+  size_t largest_chunk_elements = 0;
+};
+
+// Sends `w` and records the size of every response message.
+Responses Call(const std::shared_ptr<grpc::Channel>& channel, const Workload& w) {
+  v1::Refiner::Stub stub(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  auto stream = stub.Refine(&context);
+  wire::WriteRequest(w.options, w.volume, w.mesh, size_t{1} << 20,
+                     [&](const v1::RefineRequest& r) { return stream->Write(r); });
+  stream->WritesDone();
+  Responses out;
+  for (v1::RefineResponse response; stream->Read(&response);) {
+    ++out.count;
+    out.largest_bytes = std::max(out.largest_bytes, response.ByteSizeLong());
+    size_t elements = 0;
+    if (response.has_vertex_chunk()) elements = response.vertex_chunk().coordinates_size() / 3;
+    if (response.has_tet_chunk()) elements = response.tet_chunk().indices_size() / 4;
+    if (response.has_value_chunk()) elements = response.value_chunk().values_size();
+    out.largest_chunk_elements = std::max(out.largest_chunk_elements, elements);
+  }
+  out.status = stream->Finish();
+  return out;
+}
+
+class HardeningLimitsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string error;
+    server_ = ServerProcess::Start({"--drain_seconds=2"}, 0, &error);
+    ASSERT_NE(server_, nullptr) << error;
+  }
+  void TearDown() override {
+    if (server_ != nullptr) {
+      EXPECT_EQ(server_->Stop(), 0);
+    }
+  }
+  std::unique_ptr<ServerProcess> server_;
+};
+
+// A result mesh of several MiB: 40k input tets refined once.
+Workload BigResult(uint32_t response_chunk_bytes) {
+  Workload w{.name = "big-result",
+             .volume = TestVolume({24, 24, 24}),
+             .mesh = FiveTetMesh({1.0, 1.0, 1.0}, {22.0, 22.0, 22.0}, {20, 20, 20}),
+             .options = {}};
+  w.options.epsilon = 1e-6;
+  w.options.max_iterations = 1;
+  w.options.lattice_n = 0;
+  w.options.response_chunk_bytes = response_chunk_bytes;
+  return w;
+}
+
+TEST_F(HardeningLimitsTest, HugeResponseChunkHintIsClampedToThreeMiB) {
+  const Responses r = Call(server_->NewChannel(), BigResult(std::numeric_limits<uint32_t>::max()));
+  ASSERT_TRUE(r.status.ok()) << r.status.error_message();
+  // The tets alone (16 B each, ~300k) need several chunks at the 3 MiB bound.
+  EXPECT_GT(r.count, 4u);
+  EXPECT_LE(r.largest_bytes, wire::kMaxChunkBytes + 64);
+  EXPECT_GT(r.largest_bytes, wire::kMaxChunkBytes / 2);
+}
+
+TEST_F(HardeningLimitsTest, TinyResponseChunkHintIsRaisedTo256Bytes) {
+  const Responses r = Call(server_->NewChannel(), BigResult(1));
+  ASSERT_TRUE(r.status.ok()) << r.status.error_message();
+  EXPECT_LE(r.largest_bytes, wire::kMinResponseChunkBytes + 64);
+  EXPECT_GT(r.largest_chunk_elements, 1u) << "a 1-byte hint was taken literally";
+}
+
+TEST_F(HardeningLimitsTest, AbsurdIterationCountStaysBoundedByTheTetBudget) {
+  Workload w = SmallWorkloads()[0];
+  w.options.epsilon = 1e-9;
+  w.options.max_iterations = std::numeric_limits<int32_t>::max();
+  w.options.max_tets = 20'000;
+  w.options.min_edge_length = 0.0;
+  const Responses r = Call(server_->NewChannel(), w);
+  ASSERT_TRUE(r.status.ok()) << r.status.error_message();
+  const RefineResult expected = CoreResult(w);
+  EXPECT_NE(expected.stop_reason, StopReason::kMaxIterations);
+  EXPECT_LE(static_cast<int64_t>(expected.mesh.tets.size()), 20'000);
+}
+
+// The request stream of `w` cut after its first message of `kind`, which `edit` changes first.
+template <typename Edit>
+std::vector<v1::RefineRequest> CutAfter(const Workload& w, v1::RefineRequest::KindCase kind,
+                                        Edit edit) {
+  std::vector<v1::RefineRequest> requests;
+  wire::WriteRequest(w.options, w.volume, w.mesh, 1000, [&](const v1::RefineRequest& r) {
+    requests.push_back(r);
+    return true;
+  });
+  for (size_t i = 0; i < requests.size(); ++i) {
+    if (requests[i].kind_case() == kind) {
+      edit(requests[i]);
+      requests.resize(i + 1);
+      break;
+    }
+  }
+  return requests;
+}
+
+TEST(HardeningMemoryLimitTest, DeclaredSizesThisProcessCannotHoldAreRefusedByName) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer maps terabytes of shadow memory: no address-space limit fits";
+#else
+  // 1.5 GiB of address space, and limits that allow a 2 GiB volume and 4.8 GB of vertices.
+  std::string error;
+  std::unique_ptr<ServerProcess> server =
+      ServerProcess::Start({"--drain_seconds=2", "--max_input_tets=60000000", "--threads=1"}, 0,
+                           &error, int64_t{1536} << 20);
+  ASSERT_NE(server, nullptr) << error;
+  const Workload& w = SmallWorkloads()[0];
+
+  const grpc::Status volume =
+      SendRaw(server->NewChannel(), CutAfter(w, v1::RefineRequest::kVolumeHeader, [](auto& r) {
+                v1::VolumeHeader* h = r.mutable_volume_header();
+                h->mutable_dims()->set_x(1024);
+                h->mutable_dims()->set_y(1024);
+                h->mutable_dims()->set_z(256);
+                h->clear_slab_hi();
+                h->set_voxel_type(v1::VOXEL_TYPE_FLOAT64);
+                h->set_total_bytes(uint64_t{8} << 28);
+              }));
+  EXPECT_EQ(volume.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << volume.error_message();
+  EXPECT_THAT(volume.error_message(),
+              ::testing::HasSubstr("volume_header: this server cannot allocate the 2147483648"));
+
+  const grpc::Status mesh =
+      SendRaw(server->NewChannel(), CutAfter(w, v1::RefineRequest::kMeshHeader, [](auto& r) {
+                r.mutable_mesh_header()->set_vertex_count(200'000'000);
+              }));
+  EXPECT_EQ(mesh.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << mesh.error_message();
+  EXPECT_THAT(mesh.error_message(),
+              ::testing::HasSubstr("mesh_header: this server cannot allocate 200000000 vertices"));
+
+  absl::StatusOr<client::ClientResult> good =
+      client::RefineViaService(server->NewChannel(), w.volume, w.mesh, w.options);
+  ASSERT_TRUE(good.ok()) << good.status();
+  EXPECT_EQ(ResultDifference(CoreResult(w), good->result), "");
+  EXPECT_EQ(server->Stop(), 0) << server->process().Output();
+#endif
+}
+
+}  // namespace
+}  // namespace tetrefine::hardening

@@ -1,0 +1,38 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "client/refine_client.h"
+#include "core/mesh.h"
+#include "core/refine.h"
+#include "core/volume.h"
+#include "server/service_limits.h"
+
+namespace tetrefine::hardening {
+
+// One refinement a client asks for, and what core Refine gives for it in this process.
+struct Workload {
+  std::string name;
+  Volume volume;
+  Mesh mesh;
+  client::RefineRequestOptions options;
+};
+
+// Small refinements of a few milliseconds each, unlike one another: whole volumes and a slab,
+// several voxel types, both orientation policies, per-vertex values.
+const std::vector<Workload>& SmallWorkloads();
+
+// 135k tets with a tolerance no edge meets: two iterations (about 4.4M tets, seconds) stopped
+// by a 20M-tet budget, then a lattice check of every output tet that runs for about a minute:
+// work that only cancellation ends early. The final mesh is not sent.
+const Workload& HeavyWorkload();
+
+// Core Refine of `w` with the options the server would use under `limits`.
+RefineResult CoreResult(const Workload& w, const wire::ServiceLimits& limits = {});
+
+// Empty when `actual` matches `expected` bit for bit in mesh, per-tet arrays, iterations and
+// stop reason; otherwise what differs.
+std::string ResultDifference(const RefineResult& expected, const RefineResult& actual);
+
+}  // namespace tetrefine::hardening
