@@ -3,12 +3,14 @@
 #include <pthread.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
@@ -172,9 +174,21 @@ int Run() {
                drain);
   // Load balancers probing health stop sending work before the listener goes away.
   server->GetHealthCheckService()->SetServingStatus(false);
-  server->Shutdown(std::chrono::system_clock::now() +
-                   std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                       std::chrono::duration<double>(drain)));
+  const auto deadline = std::chrono::system_clock::now() +
+                        std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                            std::chrono::duration<double>(drain));
+  // gRPC's Shutdown closes each connection as soon as its last call ends, which can cut off the
+  // end of a response its client is still reading (the client sees UNAVAILABLE "Broken pipe"
+  // for a call the server completed). So new calls are refused first, in-flight ones finish
+  // with every connection open, their clients get a moment to read the rest, and only then
+  // does gRPC shut down (cancelling whatever still runs at the deadline).
+  service.StopAdmitting();
+  while (service.active_refinements() > 0 && std::chrono::system_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_until(
+      std::min(deadline, std::chrono::system_clock::now() + std::chrono::milliseconds(500)));
+  server->Shutdown(deadline);
   server->Wait();
   // Stopping civetweb waits out its 2 s poll quantum; the process is exiting, so the kernel
   // closes the metrics socket at once instead.

@@ -44,10 +44,15 @@ grpc::Status RefinerService::Refine(grpc::ServerContext* context, RefineStream* 
   bool admitted = false;
   {
     Slot slot(active_, config_.limits.max_concurrent_refinements);
-    admitted = slot.acquired();
-    if (slot.acquired()) {
+    // Checked after taking the slot: a shutdown that sees no active call after StopAdmitting
+    // knows that no call will start.
+    admitted = slot.acquired() && admitting_.load();
+    if (admitted) {
       ServiceMetrics::InFlight in_flight(config_.metrics.get());
       status = RunRefineCall(config_, context, stream, &record);
+    } else if (!admitting_.load()) {
+      status = grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                            "this server is shutting down; retry on another");
     } else {
       status = grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
                             absl::StrCat("this server already runs its limit of ",

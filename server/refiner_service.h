@@ -33,11 +33,16 @@ class RefinerService final : public v1::Refiner::Service {
   // Refine calls admitted and not yet returned.
   int active_refinements() const { return active_.load(); }
 
+  // From now on every new Refine call is refused with UNAVAILABLE; calls already admitted run on.
+  // The first step of a graceful shutdown, taken while the listener still accepts connections.
+  void StopAdmitting() { admitting_.store(false); }
+
   const ServiceConfig& config() const { return config_; }
 
  private:
   ServiceConfig config_;
   std::atomic<int> active_{0};
+  std::atomic<bool> admitting_{true};
 };
 
 }  // namespace tetrefine::server

@@ -228,7 +228,9 @@ void PaperComparison(const ReportData& d, std::string& s) {
     if (c.mesh_kind != "shell") continue;
     const std::string heart = c.name.substr(0, c.name.find('_'));
     for (const RunRecord& r : c.runs) {
-      if (r.max_iterations >= 4) ours[{heart, r.epsilon}] = &r;  // the longest run listed last
+      // The paper reports four iterations: prefer the 4-iteration run (its quality is after 4).
+      auto [it, inserted] = ours.try_emplace({heart, r.epsilon}, &r);
+      if (!inserted && r.max_iterations == 4) it->second = &r;
     }
   }
   if (ours.empty()) return;
@@ -236,7 +238,8 @@ void PaperComparison(const ReportData& d, std::string& s) {
       &s, "## The heart phantoms beside the paper's Tables 5-7\n\n",
       "The paper's heart1/heart2 are real SPECT studies meshed between reconstructed surfaces; "
       "ours are a phantom on the same grids with a staircase shell mesh, so only the shape of the "
-      "numbers compares: how fast FNT levels off and the errors fall.\n\n",
+      "numbers compares: how fast FNT levels off and the errors fall. Ours: the runs of at most "
+      "4 iterations.\n\n",
       "| data | ε | iter | paper INT → FNT | paper NTwE | paper max / mean | ours INT → FNT | ours "
       "NTwE | ours max / mean |\n|---|---|---|---|---|---|---|---|---|\n");
   for (const PaperCase& p : kPaperCases) {
