@@ -1,9 +1,10 @@
 #include "core/edge_table.h"
 
 #include <algorithm>
-#include <atomic>
+#include <bit>
 #include <memory>
 
+#include "core/counting_sort.h"
 #include "core/parallel.h"
 #include "core/sorted_tet.h"
 #include "core/tet_topology.h"
@@ -15,48 +16,68 @@ uint32_t EdgeTable::FirstOf(uint32_t e) const {
   return static_cast<uint32_t>(it - first.begin() - 1);
 }
 
+namespace {
+
+// Sorts [b, e) and drops repeats; returns the new end. A bucket lists each edge once per tet
+// around it (five to six times inside a mesh), and the old vertices of a refined mesh collect
+// buckets of a hundred entries and more: there a small hash set drops the repeats first, so the
+// sort only sees the dozen or so distinct edges.
+uint32_t* SortUnique(uint32_t* b, uint32_t* e, std::vector<uint32_t>& seen) {
+  constexpr uint32_t kEmpty = ~uint32_t{0};  // vertex ids are below 2^31
+  if (e - b <= 32) {
+    SortSmall(b, e);
+    return std::unique(b, e);
+  }
+  const size_t slots = std::bit_ceil(static_cast<size_t>(2 * (e - b)));
+  seen.assign(slots, kEmpty);
+  const int shift = 32 - std::countr_zero(slots);
+  uint32_t* out = b;
+  for (const uint32_t* p = b; p < e; ++p) {
+    const uint32_t w = *p;
+    // Fibonacci hashing; linear probing in a table at most half full.
+    size_t h = static_cast<uint32_t>(w * 0x9E3779B1u) >> shift;
+    while (seen[h] != kEmpty && seen[h] != w) h = (h + 1) & (slots - 1);
+    if (seen[h] == w) continue;
+    seen[h] = w;
+    *out++ = w;
+  }
+  SortSmall(b, out);
+  return out;
+}
+
+}  // namespace
+
 EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
   const int64_t num_tets = static_cast<int64_t>(tets.size());
-  // Bucket every tet edge by its smaller endpoint (counting sort), then sort and deduplicate
-  // each small bucket. Atomic fills make the order inside a bucket racy; the sort removes that.
-  std::unique_ptr<std::atomic<uint32_t>[]> count(new std::atomic<uint32_t>[num_points + 1]);
-  for (int64_t v = 0; v <= num_points; ++v) count[v].store(0, std::memory_order_relaxed);
-  // With the tet's vertices sorted, its smallest vertex starts 3 edges, the next 2, the next 1.
-  ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {
-    for (int64_t t = begin; t < end; ++t) {
-      const SortedTet s = SortTet(tets[t]);
-      count[s.v[0]].fetch_add(3, std::memory_order_relaxed);
-      count[s.v[1]].fetch_add(2, std::memory_order_relaxed);
-      count[s.v[2]].fetch_add(1, std::memory_order_relaxed);
-    }
-  });
-  std::vector<uint64_t> start(num_points + 1);
-  uint64_t total = 0;
-  for (int64_t v = 0; v < num_points; ++v) {
-    start[v] = total;
-    total += count[v].load(std::memory_order_relaxed);
-    count[v].store(0, std::memory_order_relaxed);
-  }
-  start[num_points] = total;
-  std::vector<uint32_t> raw(total);
-  ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {
-    for (int64_t t = begin; t < end; ++t) {
-      const SortedTet s = SortTet(tets[t]);
-      for (int i = 0; i < 3; ++i) {
-        const uint32_t lo = s.v[i];
-        const uint32_t n = static_cast<uint32_t>(3 - i);
-        uint32_t* out = raw.data() + start[lo] + count[lo].fetch_add(n, std::memory_order_relaxed);
-        for (int j = i + 1; j < 4; ++j) *out++ = s.v[j];
-      }
-    }
-  });
+  // Bucket every tet edge by its smaller endpoint (a counting sort), then sort and deduplicate
+  // each small bucket. With the tet's vertices sorted, its smallest vertex starts 3 edges, the
+  // next 2, the next 1.
+  // Not value-initialised: every entry is written by the fill pass.
+  std::unique_ptr<uint32_t[]> raw;
+  const BucketLayout layout = CountingSort(
+      num_tets, num_points,
+      [&](int64_t t, auto add) {
+        const SortedTet s = SortTet(tets[t]);
+        add(s.v[0], 3);
+        add(s.v[1], 2);
+        add(s.v[2], 1);
+      },
+      [&](uint64_t total) { raw.reset(new uint32_t[total]); },
+      [&](int64_t t, auto slot) {
+        const SortedTet s = SortTet(tets[t]);
+        for (int i = 0; i < 3; ++i) {
+          uint32_t* out = raw.get() + slot(s.v[i], static_cast<uint32_t>(3 - i));
+          for (int j = i + 1; j < 4; ++j) *out++ = s.v[j];
+        }
+      });
+  const std::vector<uint64_t>& start = layout.start;
   std::vector<uint32_t> unique_count(num_points, 0);
   ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
+    std::vector<uint32_t> seen;
     for (int64_t v = begin; v < end; ++v) {
-      auto* b = raw.data() + start[v];
-      auto* e = raw.data() + start[v + 1];
-      SortSmall(b, e);
-      unique_count[v] = static_cast<uint32_t>(std::unique(b, e) - b);
+      uint32_t* b = raw.get() + start[v];
+      uint32_t* e = raw.get() + start[v + 1];
+      unique_count[v] = static_cast<uint32_t>(SortUnique(b, e, seen) - b);
     }
   });
   EdgeTable table;
@@ -70,10 +91,9 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
   table.second.resize(edges);
   ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t v = begin; v < end; ++v) {
-      std::copy_n(raw.data() + start[v], unique_count[v], table.second.data() + table.first[v]);
+      std::copy_n(raw.get() + start[v], unique_count[v], table.second.data() + table.first[v]);
     }
   });
-  raw = {};
   return table;
 }
 

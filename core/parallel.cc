@@ -2,7 +2,10 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 
 namespace tetrefine {
@@ -16,6 +19,23 @@ void ForEachBlock(int64_t n, const std::function<void(int64_t, int64_t, int64_t)
       body(b, begin, end);
     }
   });
+}
+
+int ChunkCount(int64_t n) {
+  const int64_t workers = tbb::this_task_arena::max_concurrency();
+  const int64_t wanted = workers > 1 ? std::min<int64_t>(2 * workers, kMaxChunks) : 1;
+  return static_cast<int>(std::max<int64_t>(1, std::min(wanted, n / kBlockSize)));
+}
+
+void ForEachChunk(int64_t n, int chunks, const std::function<void(int, int64_t, int64_t)>& body) {
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, chunks, 1),
+      [&](const auto& r) {
+        for (int c = r.begin(); c != r.end(); ++c) {
+          body(c, n * c / chunks, n * (c + 1) / chunks);
+        }
+      },
+      tbb::simple_partitioner());
 }
 
 int64_t FirstIndexWhere(int64_t n, const std::function<bool(int64_t)>& bad) {

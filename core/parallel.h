@@ -17,6 +17,15 @@ inline int64_t BlockCount(int64_t n) { return (n + kBlockSize - 1) / kBlockSize;
 // Calls body(block, begin, end) for every block of [0, n), in parallel on the current TBB arena.
 void ForEachBlock(int64_t n, const std::function<void(int64_t, int64_t, int64_t)>& body);
 
+// Contiguous chunks of [0, n) for passes that keep private state per chunk (see CountingSort):
+// one per worker of the current arena, two per worker when there are several (for balance), at
+// most kMaxChunks, and never smaller than a block.
+inline constexpr int kMaxChunks = 16;
+int ChunkCount(int64_t n);
+
+// Calls body(chunk, begin, end) for the `chunks` equal contiguous pieces of [0, n), in parallel.
+void ForEachChunk(int64_t n, int chunks, const std::function<void(int, int64_t, int64_t)>& body);
+
 // The smallest i in [0, n) for which bad(i) holds, or n. Parallel; the answer does not depend
 // on timing.
 int64_t FirstIndexWhere(int64_t n, const std::function<bool(int64_t)>& bad);

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "absl/strings/str_cat.h"
 #include "core/edge_table.h"
@@ -138,8 +139,20 @@ struct EdgeErrors {
   double mean_error = 0.0;
 };
 
+// The previous iteration's edges and their midpoint values. Subdivision keeps the old vertices'
+// ids and values, and joins two old vertices only along an old edge it did not split (a child's
+// corners are its parent's corners, edge midpoints and Steiner point), so every edge of the
+// refined mesh between two old vertices is in this table with the same midpoint value. The next
+// evaluation reads those instead of sampling the volume again: the same bits, and most of a
+// late iteration's edges are such edges.
+struct KnownMidpoints {
+  EdgeTable edges;  // without tet_edges
+  std::vector<double> mid_value;
+};
+
 EdgeErrors EvaluateEdges(const Volume& volume, const Mesh& m, const EdgeTable& edges, double norm,
-                         double epsilon, double min_edge_length, bool clamp, CancelFlag& cancel) {
+                         double epsilon, double min_edge_length, bool clamp,
+                         const KnownMidpoints* known, CancelFlag& cancel) {
   const double min_length2 = min_edge_length * min_edge_length;
   EdgeErrors out;
   const int64_t nv = static_cast<int64_t>(m.points.size());
@@ -153,9 +166,19 @@ EdgeErrors EvaluateEdges(const Volume& volume, const Mesh& m, const EdgeTable& e
     double s = 0.0, mx = 0.0;
     int64_t n_split = 0, n_kept = 0;
     for (int64_t v = begin; v < end; ++v) {
+      // v's known edges, walked forward alongside its sorted new ones.
+      const uint32_t* kp = nullptr;
+      const uint32_t* ke = nullptr;
+      if (known != nullptr && v + 1 < static_cast<int64_t>(known->edges.first.size())) {
+        kp = known->edges.second.data() + known->edges.first[v];
+        ke = known->edges.second.data() + known->edges.first[v + 1];
+      }
       for (uint32_t e = edges.first[v]; e < edges.first[v + 1]; ++e) {
         const uint32_t w = edges.second[e];
-        const double real = SampleInside(volume, Midpoint(m.points[v], m.points[w]), clamp);
+        while (kp < ke && *kp < w) ++kp;
+        const double real = kp < ke && *kp == w
+                                ? known->mid_value[kp - known->edges.second.data()]
+                                : SampleInside(volume, Midpoint(m.points[v], m.points[w]), clamp);
         const double error = std::abs(real - 0.5 * (m.values[v] + m.values[w])) / norm;
         out.mid_value[e] = real;
         bool split = error > epsilon;
@@ -365,16 +388,22 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       std::min({grid.spacing[0], grid.spacing[1], grid.spacing[2]}) / 64.0);
 
   state.mesh.points = input.points;
-  state.mesh.values.resize(input.points.size());
-  for (size_t i = 0; i < input.points.size(); ++i) {
-    Vec3 u = volume.ContinuousIndex(input.points[i]);
-    if (clamp) u = volume.ClampToGrid(u);
-    if (!volume.Contains(u)) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("mesh.points[", i, "] lies outside the volume slab it was sent with"));
-    }
-    state.mesh.values[i] = volume.SampleIndex(u);
+  const int64_t nv0 = static_cast<int64_t>(input.points.size());
+  auto grid_index = [&](int64_t i) {
+    const Vec3 u = volume.ContinuousIndex(input.points[i]);
+    return clamp ? volume.ClampToGrid(u) : u;
+  };
+  // Clamping keeps a point in the grid, not in a slab that ends inside it.
+  if (const int64_t outside =
+          FirstIndexWhere(nv0, [&](int64_t i) { return !volume.Contains(grid_index(i)); });
+      outside < nv0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("mesh.points[", outside, "] lies outside the volume slab it was sent with"));
   }
+  state.mesh.values.resize(nv0);
+  ForEachBlock(nv0, [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t i = begin; i < end; ++i) state.mesh.values[i] = volume.SampleIndex(grid_index(i));
+  });
   const int64_t nt0 = static_cast<int64_t>(state.mesh.tets.size());
   if (nt0 > options.max_tets) {
     return absl::InvalidArgumentError(absl::StrCat(
@@ -392,6 +421,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   CancelFlag cancel(options.should_cancel);
   result.stop_reason = StopReason::kMaxIterations;
   bool finished = false;
+  std::optional<KnownMidpoints> known;
   for (int iteration = 1; !finished; ++iteration) {
     const auto iteration_start = Clock::now();
     if (cancel.Check()) {
@@ -400,8 +430,9 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     }
     EdgeTable edges =
         BuildEdgeTable(state.mesh.tets, static_cast<int64_t>(state.mesh.points.size()));
-    const EdgeErrors errors = EvaluateEdges(volume, state.mesh, edges, norm, options.epsilon,
-                                            min_edge_length, clamp, cancel);
+    EdgeErrors errors = EvaluateEdges(volume, state.mesh, edges, norm, options.epsilon,
+                                      min_edge_length, clamp, known ? &*known : nullptr, cancel);
+    known.reset();
     if (cancel.IsSet()) {
       result.stop_reason = StopReason::kCancelled;
       break;
@@ -434,6 +465,8 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
                                                                 : StopReason::kQualityFloor;
       break;
     }
+    edges.tet_edges = {};
+    known = KnownMidpoints{std::move(edges), std::move(errors.mid_value)};
     stats.final_tets = static_cast<int64_t>(state.mesh.tets.size());
     stats.quality = SummarizeQuality(state.tet_quality);
     stats.seconds = SecondsSince(iteration_start);

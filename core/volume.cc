@@ -130,11 +130,6 @@ double Volume::At(int64_t i, int64_t j, int64_t k) const {
   return LoadAs(type_, data_.data(), index);
 }
 
-Vec3 Volume::ContinuousIndex(const Vec3& p) const {
-  return {(p[0] - grid_.origin[0]) / grid_.spacing[0], (p[1] - grid_.origin[1]) / grid_.spacing[1],
-          (p[2] - grid_.origin[2]) / grid_.spacing[2]};
-}
-
 bool Volume::Contains(const Vec3& u) const {
   for (int a = 0; a < 3; ++a) {
     double lo = static_cast<double>(lo_[a]);

@@ -49,7 +49,11 @@ class Volume {
   double At(int64_t i, int64_t j, int64_t k) const;
 
   // Continuous grid index of a world point: (p - origin) / spacing per axis.
-  Vec3 ContinuousIndex(const Vec3& p) const;
+  Vec3 ContinuousIndex(const Vec3& p) const {
+    return {(p[0] - grid_.origin[0]) / grid_.spacing[0],
+            (p[1] - grid_.origin[1]) / grid_.spacing[1],
+            (p[2] - grid_.origin[2]) / grid_.spacing[2]};
+  }
 
   // A point this far (in voxels) outside the grid's own box still counts as inside it: meshes
   // built to span a volume land there by rounding (origin + 11 * 5.74 gives index 11 + 2e-15).

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <set>
+#include <utility>
 
 #include "tests/core/mesh_checks.h"
 #include "tests/core/test_geometry.h"
@@ -117,6 +119,75 @@ TEST(Refine, StructuredMeshStaysConformalAndConverges) {
       // The lattice inside the tets agrees far better than the coarse mesh did.
       EXPECT_EQ(r.lattice.points_sampled, 165 * r.lattice.tets_sampled);
       EXPECT_LT(r.lattice.max_error, r.iterations[0].max_error);
+    }
+  }
+}
+
+// Edge errors evaluated from scratch (eq. 3) over a mesh's unique edges.
+struct FreshErrors {
+  double max = 0.0, mean = 0.0;
+  int64_t split = 0;
+};
+FreshErrors EvaluateFromScratch(const Volume& v, const Mesh& m, double norm, double epsilon,
+                                double min_length) {
+  std::set<std::pair<uint32_t, uint32_t>> edges;
+  for (const Tet& t : m.tets) {
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j) edges.insert(std::minmax(t[i], t[j]));
+    }
+  }
+  FreshErrors f;
+  for (const auto& [a, b] : edges) {
+    const Vec3 &p = m.points[a], &q = m.points[b];
+    const Vec3 mid = {0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2])};
+    const double error = std::abs(v.Sample(mid) - 0.5 * (m.values[a] + m.values[b])) / norm;
+    const double l2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                      (p[2] - q[2]) * (p[2] - q[2]);
+    f.max = std::max(f.max, error);
+    f.mean += error;
+    f.split += error > epsilon && l2 >= min_length * min_length;
+  }
+  f.mean /= static_cast<double>(edges.size());
+  return f;
+}
+
+// Each iteration reuses the midpoint values of the edges it did not split; its statistics and
+// the final errors must be exactly what a fresh evaluation of the mesh gives.
+TEST(Refine, EdgeErrorsOfEveryIterationMatchAFreshEvaluation) {
+  for (uint64_t seed : testing::Seeds(3)) {
+    SCOPED_TRACE(::testing::Message() << "seed " << seed);
+    std::printf("FreshEvaluation seed %llu\n", static_cast<unsigned long long>(seed));
+    std::mt19937_64 rng(seed);
+    const GridGeometry g = HeartGrid();
+    const Vec3 hi = GridMax(g);
+    std::uniform_real_distribution<double> u(0.3, 0.7);
+    const BlobField field{
+        {g.origin[0] + u(rng) * (hi[0] - g.origin[0]), g.origin[1] + u(rng) * (hi[1] - g.origin[1]),
+         g.origin[2] + u(rng) * (hi[2] - g.origin[2])},
+        6.0 + 6.0 * u(rng)};
+    const Volume volume = testing::AnalyticVolume(g, field);
+    RefineOptions o;
+    o.epsilon = 0.02;
+    o.max_iterations = 4;
+    o.lattice_n = 0;
+    o.min_edge_length = 0.5;
+    std::vector<Mesh> meshes;
+    o.on_iteration = [&](const IterationStats&, const Mesh& m) { meshes.push_back(m); };
+    auto r = Refine(volume, testing::FiveTetMesh(g.origin, hi, {6, 6, 3}), o);
+    ASSERT_TRUE(r.ok()) << r.status();
+    ASSERT_EQ(meshes.size(), r->iterations.size());
+    ASSERT_GE(meshes.size(), 2u);
+    for (size_t i = 0; i < meshes.size(); ++i) {
+      const FreshErrors f =
+          EvaluateFromScratch(volume, meshes[i], r->norm_coeff, o.epsilon, *o.min_edge_length);
+      const bool last = i + 1 == meshes.size();
+      const double max = last ? r->final_max_error : r->iterations[i + 1].max_error;
+      const double mean = last ? r->final_mean_error : r->iterations[i + 1].mean_error;
+      EXPECT_EQ(max, f.max) << "after iteration " << i + 1;
+      EXPECT_NEAR(mean, f.mean, 1e-12 * f.mean) << "after iteration " << i + 1;
+      if (!last) {
+        EXPECT_EQ(r->iterations[i + 1].split_edges, f.split) << "iteration " << i + 2;
+      }
     }
   }
 }

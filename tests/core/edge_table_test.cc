@@ -1,0 +1,148 @@
+// The edge table and the counting sort under it: the unique edges of refined meshes (whose old
+// vertices collect long buckets) against a std::set, and the same table for every thread count.
+#include "core/edge_table.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <random>
+#include <set>
+#include <utility>
+
+#include "core/counting_sort.h"
+#include "core/refine.h"
+#include "core/tet_topology.h"
+#include "tests/core/test_geometry.h"
+
+namespace tetrefine {
+namespace {
+
+std::set<std::pair<uint32_t, uint32_t>> ReferenceEdges(const std::vector<Tet>& tets) {
+  std::set<std::pair<uint32_t, uint32_t>> edges;
+  for (const Tet& t : tets) {
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j) edges.insert(std::minmax(t[i], t[j]));
+    }
+  }
+  return edges;
+}
+
+// A 5-tet box mesh refined by `iterations` rounds of Refine on a rough field: some edges split,
+// some not, and the old vertices end with dozens of edges.
+Mesh RefinedMesh(uint64_t seed, int iterations) {
+  GridGeometry g;
+  g.dims = {20, 20, 20};
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double fx = 0.3 + u(rng), fy = 0.3 + u(rng), fz = 0.3 + u(rng);
+  Volume v = testing::AnalyticVolume(g, [&](const Vec3& p) {
+    return std::sin(fx * p[0]) * std::cos(fy * p[1]) + std::sin(fz * p[2]);
+  });
+  RefineOptions o;
+  o.epsilon = 0.01;
+  o.max_iterations = iterations;
+  o.lattice_n = 0;
+  auto r = Refine(v, testing::FiveTetMesh({0, 0, 0}, {19, 19, 19}, {4, 4, 4}), o);
+  EXPECT_TRUE(r.ok()) << r.status();
+  return r->mesh;
+}
+
+TEST(EdgeTableTest, ListsEachEdgeOnceInOrderOnRefinedMeshes) {
+  for (uint64_t seed : testing::Seeds(4)) {
+    std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+    const Mesh m = RefinedMesh(seed, 3);
+    const auto reference = ReferenceEdges(m.tets);
+    const EdgeTable table = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size()));
+    ASSERT_EQ(table.size(), static_cast<int64_t>(reference.size()));
+    auto it = reference.begin();
+    for (uint32_t v = 0; v + 1 < table.first.size(); ++v) {
+      for (uint32_t e = table.first[v]; e < table.first[v + 1]; ++e, ++it) {
+        ASSERT_EQ(std::make_pair(v, table.second[e]), *it) << "edge " << e;
+        ASSERT_EQ(table.FirstOf(e), v);
+      }
+    }
+    // Before deduplication a bucket holds each edge once per tet around it; past 32 entries a
+    // hash set drops the repeats, and these meshes must reach that path.
+    std::vector<int> raw(m.points.size(), 0);
+    for (const Tet& t : m.tets) {
+      for (int i = 0; i < 4; ++i) {
+        for (int j = i + 1; j < 4; ++j) ++raw[std::min(t[i], t[j])];
+      }
+    }
+    EXPECT_GT(*std::max_element(raw.begin(), raw.end()), 32);
+  }
+}
+
+TEST(EdgeTableTest, TetEdgesNameTheTetsOwnEdges) {
+  const Mesh m = RefinedMesh(testing::Seeds(1)[0], 2);
+  EdgeTable table = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size()));
+  AddTetEdges(m.tets, &table);
+  for (size_t t = 0; t < m.tets.size(); ++t) {
+    for (int k = 0; k < 6; ++k) {
+      const uint32_t e = table.tet_edges[t][k];
+      const auto ends = std::minmax(m.tets[t][kTetEdges[k][0]], m.tets[t][kTetEdges[k][1]]);
+      ASSERT_EQ(table.FirstOf(e), ends.first) << "tet " << t << " edge " << k;
+      ASSERT_EQ(table.second[e], ends.second) << "tet " << t << " edge " << k;
+    }
+  }
+}
+
+TEST(EdgeTableTest, SameTableForEveryThreadCount) {
+  const Mesh m = RefinedMesh(testing::Seeds(1)[0], 3);
+  EdgeTable one;
+  tbb::task_arena(1).execute(
+      [&] { one = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size())); });
+  for (int threads : {2, 3, 4}) {
+    EdgeTable many;
+    tbb::task_arena(threads).execute(
+        [&] { many = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size())); });
+    EXPECT_EQ(many.first, one.first) << threads << " threads";
+    EXPECT_EQ(many.second, one.second) << threads << " threads";
+  }
+}
+
+// Every bucket lists its entries in item order, whatever the number of chunks.
+TEST(CountingSortTest, BucketsKeepItemOrderForEveryThreadCount) {
+  for (uint64_t seed : testing::Seeds(3)) {
+    std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+    std::mt19937_64 rng(seed);
+    const int64_t items = 50'000 + static_cast<int64_t>(rng() % 20'000);
+    const int64_t buckets = 1 + static_cast<int64_t>(rng() % 3'000);
+    std::vector<std::array<int64_t, 2>> emits(items);  // each item: two buckets
+    for (auto& e : emits)
+      e = {static_cast<int64_t>(rng() % buckets), static_cast<int64_t>(rng() % buckets)};
+    // Reference: entry (item, k) appended to its bucket in item order.
+    std::vector<std::vector<int64_t>> expected(buckets);
+    for (int64_t i = 0; i < items; ++i) {
+      for (int k = 0; k < 2; ++k) expected[emits[i][k]].push_back(2 * i + k);
+    }
+    for (int threads : {1, 2, 4, 7}) {
+      std::vector<int64_t> out;
+      BucketLayout layout;
+      tbb::task_arena(threads).execute([&] {
+        layout = CountingSort(
+            items, buckets,
+            [&](int64_t i, auto add) {
+              add(emits[i][0], 1);
+              add(emits[i][1], 1);
+            },
+            [&](uint64_t total) { out.assign(total, -1); },
+            [&](int64_t i, auto slot) {
+              out[slot(emits[i][0], 1)] = 2 * i;
+              out[slot(emits[i][1], 1)] = 2 * i + 1;
+            });
+      });
+      ASSERT_EQ(layout.size(), static_cast<uint64_t>(2 * items));
+      for (int64_t b = 0; b < buckets; ++b) {
+        const std::vector<int64_t> got(out.begin() + layout.start[b],
+                                       out.begin() + layout.start[b + 1]);
+        ASSERT_EQ(got, expected[b]) << "bucket " << b << ", " << threads << " threads";
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tetrefine
