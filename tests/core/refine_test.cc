@@ -42,6 +42,17 @@ Vec3 GridMax(const GridGeometry& g) {
           g.origin[2] + (g.dims[2] - 1) * g.spacing[2]};
 }
 
+// A blob centred in the middle 40% of the grid, of width in [min_width, min_width + 6).
+BlobField RandomBlob(uint64_t seed, const GridGeometry& g, double min_width) {
+  std::mt19937_64 rng(seed);
+  const Vec3 hi = GridMax(g);
+  std::uniform_real_distribution<double> u(0.3, 0.7);
+  return BlobField{
+      {g.origin[0] + u(rng) * (hi[0] - g.origin[0]), g.origin[1] + u(rng) * (hi[1] - g.origin[1]),
+       g.origin[2] + u(rng) * (hi[2] - g.origin[2])},
+      min_width + 6.0 * u(rng)};
+}
+
 Mesh CubeMeshInside(const GridGeometry& g, double margin) {
   Mesh m = testing::ReadMeditForTest(std::string(TETREFINE_SHARED_DATA_DIR) +
                                      "/unit_cube_1782tets.mesh");
@@ -81,15 +92,9 @@ TEST(Refine, StructuredMeshStaysConformalAndConverges) {
   for (uint64_t seed : testing::Seeds(4)) {
     SCOPED_TRACE(::testing::Message() << "seed " << seed);
     std::printf("StructuredMesh seed %llu\n", static_cast<unsigned long long>(seed));
-    std::mt19937_64 rng(seed);
     const GridGeometry g = HeartGrid();
     const Vec3 hi = GridMax(g);
-    std::uniform_real_distribution<double> u(0.3, 0.7);
-    const BlobField field{
-        {g.origin[0] + u(rng) * (hi[0] - g.origin[0]), g.origin[1] + u(rng) * (hi[1] - g.origin[1]),
-         g.origin[2] + u(rng) * (hi[2] - g.origin[2])},
-        14.0 + 6.0 * u(rng)};
-    const Volume volume = testing::AnalyticVolume(g, field);
+    const Volume volume = testing::AnalyticVolume(g, RandomBlob(seed, g, 14.0));
     const Mesh mesh = testing::FiveTetMesh(g.origin, hi, {6, 6, 3});
     for (double epsilon : {0.1, 0.05}) {
       RefineResult r;
@@ -157,15 +162,9 @@ TEST(Refine, EdgeErrorsOfEveryIterationMatchAFreshEvaluation) {
   for (uint64_t seed : testing::Seeds(3)) {
     SCOPED_TRACE(::testing::Message() << "seed " << seed);
     std::printf("FreshEvaluation seed %llu\n", static_cast<unsigned long long>(seed));
-    std::mt19937_64 rng(seed);
     const GridGeometry g = HeartGrid();
     const Vec3 hi = GridMax(g);
-    std::uniform_real_distribution<double> u(0.3, 0.7);
-    const BlobField field{
-        {g.origin[0] + u(rng) * (hi[0] - g.origin[0]), g.origin[1] + u(rng) * (hi[1] - g.origin[1]),
-         g.origin[2] + u(rng) * (hi[2] - g.origin[2])},
-        6.0 + 6.0 * u(rng)};
-    const Volume volume = testing::AnalyticVolume(g, field);
+    const Volume volume = testing::AnalyticVolume(g, RandomBlob(seed, g, 6.0));
     RefineOptions o;
     o.epsilon = 0.02;
     o.max_iterations = 4;
