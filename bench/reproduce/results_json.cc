@@ -1,10 +1,12 @@
 #include "bench/reproduce/results_json.h"
 
-#include "bench/reproduce/json_writer.h"
+#include "client/io/json_writer.h"
 #include "core/configuration.h"
 #include "core/lattice.h"
 
 namespace tetrefine::reproduce {
+
+using io::JsonWriter;
 namespace {
 
 void WriteQuality(JsonWriter& w, std::string_view key, const QualityStats& q) {
@@ -178,7 +180,7 @@ std::string ResultsJson(const ReportData& d) {
   w.EndArray();
   w.EndObject();
   w.EndObject();
-  return w.str();
+  return w.Take();
 }
 
 }  // namespace tetrefine::reproduce

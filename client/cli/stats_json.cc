@@ -1,9 +1,11 @@
 #include "client/cli/stats_json.h"
 
-#include "client/cli/json_writer.h"
+#include "client/io/json_writer.h"
 #include "core/configuration.h"
 
 namespace tetrefine::cli {
+
+using io::JsonWriter;
 namespace {
 
 void WriteQuality(JsonWriter& json, const QualityStats& q) {

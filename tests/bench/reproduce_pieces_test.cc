@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "bench/reproduce/case_meshes.h"
-#include "bench/reproduce/json_writer.h"
 #include "bench/reproduce/uniform_refine.h"
 #include "bench/support/field_volume.h"
 #include "bench/support/five_tet_lattice.h"
@@ -95,24 +94,6 @@ TEST(MaskedBlockMeshTest, KeepsBlocksWhoseCornersAllExceedTheThreshold) {
   EXPECT_EQ(m.tets.size(), 5u * 2 * 4 * 2);  // 2 of 4 blocks in x, 4 in y, 2 in z
   for (const Vec3& p : m.points) EXPECT_LE(p[0], 4.0);
   EXPECT_TRUE(CheckFaces(m.points, m.tets).ok());
-}
-
-TEST(JsonWriterTest, QuotesAndNests) {
-  EXPECT_EQ(JsonQuote("a\"b\\c\n\x01"), "\"a\\\"b\\\\c\\n\\u0001\"");
-  JsonWriter w;
-  w.BeginObject();
-  w.Field("x", 1.5);
-  w.Key("list");
-  w.BeginArray();
-  w.Int(1);
-  w.Number(std::nan(""));
-  w.EndArray();
-  w.Key("empty");
-  w.BeginObject();
-  w.EndObject();
-  w.EndObject();
-  EXPECT_EQ(w.str(),
-            "{\n  \"x\": 1.5,\n  \"list\": [\n    1,\n    null\n  ],\n  \"empty\": {}\n}\n");
 }
 
 }  // namespace

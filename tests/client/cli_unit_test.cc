@@ -11,16 +11,18 @@
 #include "client/cli/arg_parser.h"
 #include "client/cli/file_kind.h"
 #include "client/cli/grid_mesher.h"
-#include "client/cli/json_writer.h"
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_report.h"
 #include "client/cli/text_table.h"
+#include "client/io/json_writer.h"
 #include "core/mesh_validation.h"
 #include "gtest/gtest.h"
 #include "tests/client/cli_test_util.h"
 #include "tests/core/test_geometry.h"
 
 namespace tetrefine::cli {
+
+using io::JsonWriter;
 namespace {
 
 CommandSpec TestSpec() {
@@ -110,10 +112,14 @@ TEST(CliJsonWriter, NestsEscapesAndWritesNullForNonFinite) {
   json.EndArray();
   json.Key("none");
   json.Null();
+  json.Field("x", 1.5);
+  json.Field("n", int64_t{7});
+  json.Field("s", "t");
   json.EndObject();
   EXPECT_EQ(json.Take(),
             "{\n  \"a\\\"b\": \"line\\nnext\\u0001\",\n  \"list\": [\n    -3,\n    0.1,\n"
-            "    null,\n    true,\n    {},\n    []\n  ],\n  \"none\": null\n}\n");
+            "    null,\n    true,\n    {},\n    []\n  ],\n  \"none\": null,\n  \"x\": 1.5,\n"
+            "  \"n\": 7,\n  \"s\": \"t\"\n}\n");
 }
 
 TEST(CliFileKind, ExtensionsAndStems) {

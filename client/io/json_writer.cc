@@ -1,4 +1,4 @@
-#include "client/cli/json_writer.h"
+#include "client/io/json_writer.h"
 
 #include <charconv>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 
-namespace tetrefine::cli {
+namespace tetrefine::io {
 
 std::string JsonQuote(std::string_view text) {
   std::string out = "\"";
@@ -121,4 +121,4 @@ std::string JsonWriter::Take() {
   return std::move(out_);
 }
 
-}  // namespace tetrefine::cli
+}  // namespace tetrefine::io

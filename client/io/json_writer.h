@@ -5,12 +5,12 @@
 #include <string_view>
 #include <vector>
 
-namespace tetrefine::cli {
+namespace tetrefine::io {
 
-// A minimal pretty-printing JSON writer: enough for the statistics file, with commas, nesting and
-// string escaping handled so the output always parses. Doubles are written in their shortest
-// round-trip form (they read back to the same bits); NaN and infinities, which JSON cannot express,
-// are written as null.
+// A minimal pretty-printing JSON writer (the CLI's statistics file, the reproduction's results),
+// with commas, nesting and string escaping handled so the output always parses. Doubles are written
+// in their shortest round-trip form (they read back to the same bits); NaN and infinities, which
+// JSON cannot express, are written as null.
 class JsonWriter {
  public:
   void BeginObject();
@@ -26,10 +26,24 @@ class JsonWriter {
   void Bool(bool value);
   void Null();
 
+  // Shorthands for a key and its value.
+  template <typename T>
+  void Field(std::string_view key, const T& value) {
+    Key(key);
+    Value(value);
+  }
+
   // The document, with a final newline. Only once every object and array is closed.
   std::string Take();
 
  private:
+  void Value(std::string_view v) { String(v); }
+  void Value(const char* v) { String(v); }
+  void Value(const std::string& v) { String(v); }
+  void Value(double v) { Number(v); }
+  void Value(int64_t v) { Int(v); }
+  void Value(int v) { Int(v); }
+  void Value(bool v) { Bool(v); }
   void BeforeValue();
   void Newline();
   void Close(char bracket);
@@ -43,4 +57,4 @@ class JsonWriter {
 // `text` as a quoted JSON string.
 std::string JsonQuote(std::string_view text);
 
-}  // namespace tetrefine::cli
+}  // namespace tetrefine::io
