@@ -77,6 +77,26 @@ bool OnFace(int local, int x, int y, int z) {
   return OnFace(e[0], x, y, z) && OnFace(e[1], x, y, z);
 }
 
+// Adds each face of child tet t (local point ids, sorted) that lies on a face of the parent to
+// that parent face's set: the triangulation the children induce on the parent's faces.
+void AddChildFacesOnParentFaces(const std::array<uint8_t, 4>& t,
+                                std::array<std::set<Tri>, 4>& on_face) {
+  for (int skip = 0; skip < 4; ++skip) {
+    Tri f;
+    int k = 0;
+    for (int j = 0; j < 4; ++j) {
+      if (j != skip) f[k++] = t[j];
+    }
+    std::sort(f.begin(), f.end());
+    for (int face = 0; face < 4; ++face) {
+      const auto [x, y, z] = kTetFaces[face];
+      if (OnFace(f[0], x, y, z) && OnFace(f[1], x, y, z) && OnFace(f[2], x, y, z)) {
+        on_face[face].insert(f);
+      }
+    }
+  }
+}
+
 TEST(SubdivisionRandom, All64PatternsOnRandomTets) {
   std::set<uint32_t> keys_seen;
   int steiner_3b = 0, plain_3b = 0, steiner_4b = 0, plain_4b = 0;
@@ -109,20 +129,7 @@ TEST(SubdivisionRandom, All64PatternsOnRandomTets) {
           const double v = SignedVolume6(p[t[0]], p[t[1]], p[t[2]], p[t[3]]);
           ASSERT_GT(v, 0.0) << "pattern " << pattern << " child " << i;
           sum += v;
-          for (int skip = 0; skip < 4; ++skip) {
-            Tri f;
-            int k = 0;
-            for (int j = 0; j < 4; ++j) {
-              if (j != skip) f[k++] = t[j];
-            }
-            std::sort(f.begin(), f.end());
-            for (int face = 0; face < 4; ++face) {
-              const auto [x, y, z] = kTetFaces[face];
-              if (OnFace(f[0], x, y, z) && OnFace(f[1], x, y, z) && OnFace(f[2], x, y, z)) {
-                on_face[face].insert(f);
-              }
-            }
-          }
+          AddChildFacesOnParentFaces(t, on_face);
           for (int j = 0; j < 4; ++j) used.insert(t[j]);
         }
         EXPECT_NEAR(sum, parent, 1e-12 * std::abs(parent)) << "pattern " << pattern;
@@ -203,20 +210,7 @@ TEST(SubdivisionRandom, EveryKeyTilesAnyShape) {
           const double v = SignedVolume6(p[t[0]], p[t[1]], p[t[2]], p[t[3]]);
           ASSERT_GT(v, 0.0) << "key " << key << " child " << i;
           sum += v;
-          for (int skip = 0; skip < 4; ++skip) {
-            Tri f;
-            int k = 0;
-            for (int j = 0; j < 4; ++j) {
-              if (j != skip) f[k++] = t[j];
-            }
-            std::sort(f.begin(), f.end());
-            for (int face = 0; face < 4; ++face) {
-              const auto [x, y, z] = kTetFaces[face];
-              if (OnFace(f[0], x, y, z) && OnFace(f[1], x, y, z) && OnFace(f[2], x, y, z)) {
-                on_face[face].insert(f);
-              }
-            }
-          }
+          AddChildFacesOnParentFaces(t, on_face);
         }
         EXPECT_NEAR(sum, parent, 1e-12 * std::abs(parent)) << "key " << key;
         for (int face = 0; face < 4; ++face) {
