@@ -1,15 +1,17 @@
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
+#include "core/fill_later.h"
 #include "core/parallel.h"
 
 namespace tetrefine {
 
 // Where a counting sort put each bucket: bucket b holds entries [start[b], start[b + 1]).
 struct BucketLayout {
-  std::vector<uint64_t> start;  // num_buckets + 1 offsets into the filled array
+  FillLater<uint64_t> start;  // num_buckets + 1 offsets into the filled array
   uint64_t size() const { return start.back(); }
 };
 
@@ -30,16 +32,17 @@ BucketLayout CountingSort(int64_t n, int64_t num_buckets, Count count, Allocate 
   // Per chunk and bucket: first the chunk's count, then where its next entry goes, relative to
   // the bucket's start (a bucket holds fewer than 2^32 entries: a vertex is in fewer than 2^30
   // tets, since the core accepts at most 5e8).
-  std::vector<uint32_t> cursor(static_cast<size_t>(chunks) * num_buckets, 0);
+  FillLater<uint32_t> cursor(static_cast<size_t>(chunks) * num_buckets);
   ForEachChunk(n, chunks, [&](int c, int64_t begin, int64_t end) {
     uint32_t* counts = cursor.data() + static_cast<size_t>(c) * num_buckets;
+    std::fill_n(counts, num_buckets, 0u);
     for (int64_t i = begin; i < end; ++i) {
       count(i, [counts](int64_t bucket, uint32_t k) { counts[bucket] += k; });
     }
   });
   BucketLayout layout;
   layout.start.resize(num_buckets + 1);
-  std::vector<uint32_t> totals(num_buckets);
+  FillLater<uint32_t> totals(num_buckets);
   ForEachBlock(num_buckets, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t b = begin; b < end; ++b) {
       uint32_t running = 0;

@@ -70,8 +70,8 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
           for (int j = i + 1; j < 4; ++j) *out++ = s.v[j];
         }
       });
-  const std::vector<uint64_t>& start = layout.start;
-  std::vector<uint32_t> unique_count(num_points, 0);
+  const auto& start = layout.start;
+  FillLater<uint32_t> unique_count(num_points);
   ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
     std::vector<uint32_t> seen;
     for (int64_t v = begin; v < end; ++v) {

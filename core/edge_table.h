@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/fill_later.h"
 #include "core/mesh.h"
 
 namespace tetrefine {
@@ -11,11 +12,9 @@ namespace tetrefine {
 // The unique edges of a tet mesh, each listed once, ordered by (smaller endpoint, larger
 // endpoint): an order that depends only on the mesh, never on threads.
 struct EdgeTable {
-  std::vector<uint32_t>
-      first;  // V + 1: edges whose smaller endpoint is v are [first[v], first[v+1])
-  std::vector<uint32_t> second;  // E: the larger endpoint of each edge
-  std::vector<std::array<uint32_t, 6>>
-      tet_edges;  // T x 6: edge ids in kTetEdges order (AddTetEdges)
+  FillLater<uint32_t> first;  // V + 1: edges whose smaller endpoint is v are [first[v], first[v+1])
+  FillLater<uint32_t> second;                    // E: the larger endpoint of each edge
+  FillLater<std::array<uint32_t, 6>> tet_edges;  // T x 6: edge ids in kTetEdges order (AddTetEdges)
 
   int64_t size() const { return static_cast<int64_t>(second.size()); }
   // Smaller endpoint of edge e (binary search over `first`).

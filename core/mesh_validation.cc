@@ -165,7 +165,7 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
         out[2] = PackFaceUse(s.v[2], s.v[3], even);                  // without v1
         uses[slot(s.v[1], 1)] = PackFaceUse(s.v[2], s.v[3], !even);  // without v0
       });
-  const std::vector<uint64_t>& start = layout.start;
+  const auto& start = layout.start;
   // The first bad vertex bucket, so the message does not depend on thread timing.
   std::atomic<int64_t> first_bad{num_points};
   ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
@@ -232,23 +232,29 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
     return InspectTet(mesh, mesh.tets[t], num_points, reject_inverted) != TetIssue::kNone;
   });
   if (bad_tet < num_tets) return DescribeTet(mesh, bad_tet, num_points);
-  *tets = mesh.tets;
-  const int64_t blocks = BlockCount(num_tets);
-  std::vector<int64_t> flipped(blocks, 0);
-  if (!reject_inverted) {
-    ForEachBlock(num_tets, [&](int64_t b, int64_t begin, int64_t end) {
-      for (int64_t t = begin; t < end; ++t) {
-        Tet& tet = (*tets)[t];
-        if (SignedVolume6(mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]],
-                          mesh.points[tet[3]]) < 0.0) {
-          std::swap(tet[2], tet[3]);
-          ++flipped[b];
-        }
-      }
-    });
-  }
+  tets->clear();
   *reoriented = 0;
-  for (int64_t f : flipped) *reoriented += f;
+  if (!reject_inverted) {
+    auto inverted = [&](const Tet& t) {
+      return SignedVolume6(mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]],
+                           mesh.points[t[3]]) < 0.0;
+    };
+    const int64_t blocks = BlockCount(num_tets);
+    std::vector<int64_t> flipped(blocks, 0);
+    ForEachBlock(num_tets, [&](int64_t b, int64_t begin, int64_t end) {
+      for (int64_t t = begin; t < end; ++t) flipped[b] += inverted(mesh.tets[t]);
+    });
+    for (int64_t f : flipped) *reoriented += f;
+    // Copied only when something is flipped: a mesh can be large.
+    if (*reoriented > 0) {
+      *tets = mesh.tets;
+      ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {
+        for (int64_t t = begin; t < end; ++t) {
+          if (inverted((*tets)[t])) std::swap((*tets)[t][2], (*tets)[t][3]);
+        }
+      });
+    }
+  }
   if (outside == OutsidePolicy::kReject) {
     const int64_t out = FirstIndexWhere(num_points, [&](int64_t i) {
       return !volume.Contains(volume.ContinuousIndex(mesh.points[i]));
@@ -266,7 +272,7 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
                        " lies outside the volume's sampled box ", box));
     }
   }
-  return CheckFaces(mesh.points, *tets);
+  return CheckFaces(mesh.points, tets->empty() ? mesh.tets : *tets);
 }
 
 }  // namespace tetrefine

@@ -15,8 +15,9 @@ namespace tetrefine {
 // (|6V| <= 1e-12 L^3, L its longest edge); orientation (OrientationPolicy); every vertex inside
 // the volume's sampled box unless OutsidePolicy::kClamp; no face in more than two tets and no
 // two tets overlapping across a shared face.
-// Under OrientationPolicy::kNormalize, *tets receives the tets with inverted ones swapped and
-// *reoriented their count; otherwise *tets is a copy.
+// *reoriented receives the number of inverted tets flipped. Under OrientationPolicy::kNormalize
+// with at least one flipped, *tets receives the tets with inverted ones swapped; otherwise it is
+// left empty, and the input's tets are the validated ones.
 absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy outside,
                           OrientationPolicy orientation, std::vector<Tet>* tets,
                           int64_t* reoriented);

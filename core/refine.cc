@@ -10,6 +10,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/edge_table.h"
+#include "core/fill_later.h"
 #include "core/lattice.h"
 #include "core/mesh_validation.h"
 #include "core/parallel.h"
@@ -25,11 +26,21 @@ double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// The refinement state carried from one iteration to the next.
+// The refinement state carried from one iteration to the next. Until the first subdivision the
+// points and tets are the caller's, not a copy (a copy of a large mesh is a serial step that
+// showed in the 2-thread profile); `points` and `tets` say where they are.
 struct State {
-  Mesh mesh;
+  Mesh mesh;  // values always; points and tets once a subdivision has made them
+  const std::vector<Vec3>* points = nullptr;
+  const std::vector<Tet>* tets = nullptr;
   std::vector<int32_t> tet_iteration;
   std::vector<float> tet_quality;
+
+  // Points `points` and `tets` at the state's own mesh (after it was made or moved).
+  void UseOwnMesh() {
+    points = &mesh.points;
+    tets = &mesh.tets;
+  }
 };
 
 absl::Status CheckOptions(const RefineOptions& o) {
@@ -96,9 +107,8 @@ QualityStats SummarizeQuality(const std::vector<float>& q) {
   return out;
 }
 
-float TetQuality(const Mesh& m, const Tet& t) {
-  return static_cast<float>(
-      MeanRatio(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]));
+float TetQuality(const std::vector<Vec3>& p, const Tet& t) {
+  return static_cast<float>(MeanRatio(p[t[0]], p[t[1]], p[t[2]], p[t[3]]));
 }
 
 // Trilinear value at a point inside the mesh's hull (a midpoint or a Steiner point).
@@ -131,8 +141,8 @@ class CancelFlag {
 // Edge-midpoint errors of every unique edge (eq. 3), with the midpoint values kept for the new
 // vertices.
 struct EdgeErrors {
-  std::vector<double> mid_value;
-  std::vector<uint8_t> split;
+  FillLater<double> mid_value;
+  FillLater<uint8_t> split;
   int64_t split_count = 0;
   int64_t short_kept = 0;
   double max_error = 0.0;
@@ -147,15 +157,17 @@ struct EdgeErrors {
 // late iteration's edges are such edges.
 struct KnownMidpoints {
   EdgeTable edges;  // without tet_edges
-  std::vector<double> mid_value;
+  FillLater<double> mid_value;
 };
 
-EdgeErrors EvaluateEdges(const Volume& volume, const Mesh& m, const EdgeTable& edges, double norm,
+EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& edges, double norm,
                          double epsilon, double min_edge_length, bool clamp,
                          const KnownMidpoints* known, CancelFlag& cancel) {
   const double min_length2 = min_edge_length * min_edge_length;
   EdgeErrors out;
-  const int64_t nv = static_cast<int64_t>(m.points.size());
+  const std::vector<Vec3>& points = *m.points;
+  const std::vector<double>& values = m.mesh.values;
+  const int64_t nv = static_cast<int64_t>(points.size());
   out.mid_value.resize(edges.size());
   out.split.resize(edges.size());
   const int64_t blocks = BlockCount(nv);
@@ -178,13 +190,13 @@ EdgeErrors EvaluateEdges(const Volume& volume, const Mesh& m, const EdgeTable& e
         while (kp < ke && *kp < w) ++kp;
         const double real = kp < ke && *kp == w
                                 ? known->mid_value[kp - known->edges.second.data()]
-                                : SampleInside(volume, Midpoint(m.points[v], m.points[w]), clamp);
-        const double error = std::abs(real - 0.5 * (m.values[v] + m.values[w])) / norm;
+                                : SampleInside(volume, Midpoint(points[v], points[w]), clamp);
+        const double error = std::abs(real - 0.5 * (values[v] + values[w])) / norm;
         out.mid_value[e] = real;
         bool split = error > epsilon;
         if (split && min_length2 > 0.0) {
-          const Vec3& a = m.points[v];
-          const Vec3& c = m.points[w];
+          const Vec3& a = points[v];
+          const Vec3& c = points[w];
           const double dx = a[0] - c[0], dy = a[1] - c[1], dz = a[2] - c[2];
           if (dx * dx + dy * dy + dz * dz < min_length2) {
             split = false;
@@ -220,7 +232,11 @@ enum class StepOutcome { kApplied, kCancelled, kTetBudget, kQualityFloor };
 StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& errors,
                       int iteration, const RefineOptions& options, CancelFlag& cancel, State& state,
                       IterationStats& stats, int64_t* next_tets, double* next_quality) {
-  const Mesh& m = state.mesh;
+  const struct {
+    const std::vector<Vec3>& points;
+    const std::vector<Tet>& tets;
+    const std::vector<double>& values;
+  } m{*state.points, *state.tets, state.mesh.values};
   const bool clamp = options.outside == OutsidePolicy::kClamp;
   const int64_t nt = static_cast<int64_t>(m.tets.size());
   const int64_t nv = static_cast<int64_t>(m.points.size());
@@ -228,7 +244,7 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
   const auto& patterns = PatternTable();
 
   // Pass 1: each tet's subdivision key and child counts, per block.
-  std::vector<uint16_t> keys(nt);
+  FillLater<uint16_t> keys(nt);
   const int64_t tet_blocks = BlockCount(nt);
   std::vector<int64_t> child_offset(tet_blocks), steiner_offset(tet_blocks);
   std::vector<ConfigurationCounts> config_counts(tet_blocks);
@@ -285,7 +301,7 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
     mid_offset[b] = n;
   });
   const int64_t total_mid = ExclusivePrefixSum(mid_offset);
-  std::vector<uint32_t> mid_id(edges.size());
+  FillLater<uint32_t> mid_id(edges.size());
   State next;
   next.mesh.points.resize(nv + total_mid + total_steiner);
   next.mesh.values.resize(nv + total_mid + total_steiner);
@@ -362,6 +378,7 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
     return StepOutcome::kQualityFloor;
   }
   state = std::move(next);
+  state.UseOwnMesh();
   return StepOutcome::kApplied;
 }
 
@@ -375,6 +392,9 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       !s.ok()) {
     return s;
   }
+  // Only reoriented tets were copied; the points never are until a subdivision makes new ones.
+  state.points = &input.points;
+  state.tets = state.mesh.tets.empty() ? &input.tets : &state.mesh.tets;
   if (options.norm_coeff.has_value()) {
     result.norm_coeff = *options.norm_coeff;
   } else {
@@ -387,7 +407,6 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   const double min_edge_length = options.min_edge_length.value_or(
       std::min({grid.spacing[0], grid.spacing[1], grid.spacing[2]}) / 64.0);
 
-  state.mesh.points = input.points;
   const int64_t nv0 = static_cast<int64_t>(input.points.size());
   auto grid_index = [&](int64_t i) {
     const Vec3 u = volume.ContinuousIndex(input.points[i]);
@@ -404,7 +423,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   ForEachBlock(nv0, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t i = begin; i < end; ++i) state.mesh.values[i] = volume.SampleIndex(grid_index(i));
   });
-  const int64_t nt0 = static_cast<int64_t>(state.mesh.tets.size());
+  const int64_t nt0 = static_cast<int64_t>(state.tets->size());
   if (nt0 > options.max_tets) {
     return absl::InvalidArgumentError(absl::StrCat(
         "mesh.tets has ", nt0, " tets, more than options.max_tets = ", options.max_tets));
@@ -413,7 +432,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   state.tet_quality.resize(nt0);
   ForEachBlock(nt0, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t t = begin; t < end; ++t) {
-      state.tet_quality[t] = TetQuality(state.mesh, state.mesh.tets[t]);
+      state.tet_quality[t] = TetQuality(*state.points, (*state.tets)[t]);
     }
   });
   result.initial_quality = SummarizeQuality(state.tet_quality);
@@ -428,10 +447,9 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       result.stop_reason = StopReason::kCancelled;
       break;
     }
-    EdgeTable edges =
-        BuildEdgeTable(state.mesh.tets, static_cast<int64_t>(state.mesh.points.size()));
-    EdgeErrors errors = EvaluateEdges(volume, state.mesh, edges, norm, options.epsilon,
-                                      min_edge_length, clamp, known ? &*known : nullptr, cancel);
+    EdgeTable edges = BuildEdgeTable(*state.tets, static_cast<int64_t>(state.points->size()));
+    EdgeErrors errors = EvaluateEdges(volume, state, edges, norm, options.epsilon, min_edge_length,
+                                      clamp, known ? &*known : nullptr, cancel);
     known.reset();
     if (cancel.IsSet()) {
       result.stop_reason = StopReason::kCancelled;
@@ -447,10 +465,10 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       result.stop_reason = StopReason::kMaxIterations;
       break;
     }
-    AddTetEdges(state.mesh.tets, &edges);
+    AddTetEdges(*state.tets, &edges);
     IterationStats stats;
     stats.iteration = iteration;
-    stats.initial_tets = static_cast<int64_t>(state.mesh.tets.size());
+    stats.initial_tets = static_cast<int64_t>(state.tets->size());
     stats.edges = edges.size();
     stats.split_edges = errors.split_count;
     stats.short_edges_kept = errors.short_kept;
@@ -474,6 +492,9 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     if (options.on_iteration) options.on_iteration(stats, state.mesh);
   }
   result.final_quality = SummarizeQuality(state.tet_quality);
+  // Without a subdivision the result is the (validated, maybe reoriented) input.
+  if (state.points != &state.mesh.points) state.mesh.points = input.points;
+  if (state.tets != &state.mesh.tets) state.mesh.tets = input.tets;
   result.mesh = std::move(state.mesh);
   result.tet_iteration = std::move(state.tet_iteration);
   result.tet_quality = std::move(state.tet_quality);

@@ -8,6 +8,7 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "core/parallel.h"
 
 namespace tetrefine {
 namespace {
@@ -185,16 +186,47 @@ double Volume::SampleIndex(const Vec3& u) const {
   return 0.0;
 }
 
+namespace {
+
+template <typename T>
+std::array<double, 2> RangeOf(const std::byte* data, int64_t n) {
+  const int64_t blocks = BlockCount(n);
+  std::vector<std::array<double, 2>> partial(blocks);
+  ForEachBlock(n, [&](int64_t b, int64_t begin, int64_t end) {
+    double lo = Load<T>(data, begin), hi = lo;
+    for (int64_t i = begin + 1; i < end; ++i) {
+      const double v = Load<T>(data, i);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+    partial[b] = {lo, hi};
+  });
+  std::array<double, 2> range = partial[0];
+  for (const auto& [lo, hi] : partial) range = {std::min(range[0], lo), std::max(range[1], hi)};
+  return range;
+}
+
+}  // namespace
+
 std::array<double, 2> Volume::ValueRange() const {
-  double lo = std::numeric_limits<double>::infinity();
-  double hi = -lo;
+  // In parallel and typed: it runs on every request that does not pass norm_coeff.
   const int64_t n = voxel_count();
-  for (int64_t i = 0; i < n; ++i) {
-    const double v = LoadAs(type_, data_.data(), i);
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
+  const std::byte* d = data_.data();
+  switch (type_) {
+    case VoxelType::kUint8:
+      return RangeOf<uint8_t>(d, n);
+    case VoxelType::kInt16:
+      return RangeOf<int16_t>(d, n);
+    case VoxelType::kUint16:
+      return RangeOf<uint16_t>(d, n);
+    case VoxelType::kInt32:
+      return RangeOf<int32_t>(d, n);
+    case VoxelType::kFloat32:
+      return RangeOf<float>(d, n);
+    case VoxelType::kFloat64:
+      return RangeOf<double>(d, n);
   }
-  return {lo, hi};
+  return {0.0, 0.0};
 }
 
 }  // namespace tetrefine

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "core/refine.h"
+#include "tests/core/mesh_checks.h"
 #include "tests/core/test_geometry.h"
 
 namespace tetrefine {
@@ -101,6 +102,62 @@ TEST(Validation, PoliciesNormalizeAndClamp) {
   auto r = Refine(UnitVolume(), m, o);
   ASSERT_TRUE(r.ok()) << r.status();
   EXPECT_EQ(r->tets_reoriented, 1);
+}
+
+// Refine works on the caller's points and tets until its first subdivision (no copy); with no
+// subdivision the result must still be the whole validated input, reoriented where asked.
+TEST(Validation, WithoutASubdivisionTheResultIsTheValidatedInput) {
+  const Mesh m = TwoTets();
+  RefineOptions o;
+  o.max_iterations = 0;
+  auto r = Refine(UnitVolume(), m, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->mesh.points, m.points);
+  EXPECT_EQ(r->mesh.tets, m.tets);
+  ASSERT_EQ(r->mesh.values.size(), m.points.size());
+  for (size_t i = 0; i < m.points.size(); ++i) {
+    EXPECT_EQ(r->mesh.values[i], UnitVolume().Sample(m.points[i])) << "vertex " << i;
+  }
+
+  Mesh inverted = m;
+  std::swap(inverted.tets[1][0], inverted.tets[1][1]);
+  o.orientation = OrientationPolicy::kNormalize;
+  r = Refine(UnitVolume(), inverted, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->tets_reoriented, 1);
+  EXPECT_EQ(r->mesh.points, m.points);
+  ASSERT_EQ(r->mesh.tets.size(), 2u);
+  EXPECT_EQ(r->mesh.tets[0], m.tets[0]);
+  for (const Tet& t : r->mesh.tets) {
+    EXPECT_GT(SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]), 0.0);
+  }
+}
+
+// A reoriented input that is then refined: the children come from the flipped tets.
+TEST(Validation, ReorientedInputRefinesToPositiveConformalTets) {
+  GridGeometry g;
+  g.dims = {12, 12, 12};
+  const Volume v = testing::AnalyticVolume(
+      g, [](const Vec3& p) { return std::sin(0.9 * p[0]) * std::cos(0.7 * p[1]) + 0.1 * p[2]; });
+  const Mesh good = testing::FiveTetMesh({0, 0, 0}, {11, 11, 11}, {3, 3, 3});
+  Mesh flipped = good;
+  for (size_t t = 0; t < flipped.tets.size(); t += 3)
+    std::swap(flipped.tets[t][0], flipped.tets[t][1]);
+  RefineOptions o;
+  o.epsilon = 0.02;
+  o.max_iterations = 3;
+  o.orientation = OrientationPolicy::kNormalize;
+  auto r = Refine(v, flipped, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->tets_reoriented, static_cast<int64_t>((good.tets.size() + 2) / 3));
+  ASSERT_FALSE(r->iterations.empty());
+  EXPECT_EQ(testing::ConformityProblem(good, r->mesh), "");
+  // Flipping back by swapping corners 0 and 1 gives the same geometry as the good mesh's run.
+  o.orientation = OrientationPolicy::kReject;
+  auto reference = Refine(v, good, o);
+  ASSERT_TRUE(reference.ok()) << reference.status();
+  EXPECT_EQ(r->mesh.tets.size(), reference->mesh.tets.size());
+  EXPECT_EQ(r->final_max_error, reference->final_max_error);
 }
 
 TEST(Volume, TrilinearMatchesEquation1AndEveryVoxelType) {
