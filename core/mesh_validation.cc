@@ -218,13 +218,21 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
     return absl::InvalidArgumentError(
         absl::StrCat("mesh.points has ", num_points, " vertices; at most 2^31 are supported"));
   }
+  // Finite is not enough: a tet's 6V multiplies three coordinate differences and its quality
+  // squares that, so coordinates near 1e150 (found by the refine fuzzer) gave NaN volumes that
+  // passed every check. Within +-1e30 (a parsec is 3e19 mm) every such product stays finite.
+  constexpr double kMaxCoordinate = 1e30;
   const int64_t bad_point = FirstIndexWhere(num_points, [&](int64_t i) {
     const Vec3& p = mesh.points[i];
-    return !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]);
+    return !(std::abs(p[0]) <= kMaxCoordinate && std::abs(p[1]) <= kMaxCoordinate &&
+             std::abs(p[2]) <= kMaxCoordinate);
   });
   if (bad_point < num_points) {
+    const Vec3& p = mesh.points[bad_point];
+    const bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
     return absl::InvalidArgumentError(absl::StrCat(
-        "mesh.points[", bad_point, "] = ", Point(mesh.points[bad_point]), " is not finite"));
+        "mesh.points[", bad_point, "] = ", Point(p),
+        finite ? " is too large: coordinates must lie within +-1e30" : " is not finite"));
   }
   const int64_t num_tets = static_cast<int64_t>(mesh.tets.size());
   const bool reject_inverted = orientation == OrientationPolicy::kReject;

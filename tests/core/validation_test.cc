@@ -40,6 +40,9 @@ const BadCase kCases[] = {
     {"infinite coordinate",
      [](Mesh& m, RefineOptions&) { m.points[2][0] = std::numeric_limits<double>::infinity(); },
      "mesh.points[2]"},
+    // Found by the refine fuzzer: 6V of such a tet overflowed to NaN and passed every check.
+    {"huge coordinate", [](Mesh& m, RefineOptions&) { m.points[1][0] = 1e150; },
+     "mesh.points[1] = (1e+150, 1, 1) is too large"},
     {"index out of range", [](Mesh& m, RefineOptions&) { m.tets[1][2] = 9; },
      "mesh.tets[1][2] = 9 is out of range"},
     {"repeated vertex", [](Mesh& m, RefineOptions&) { m.tets[0][3] = m.tets[0][0]; },
