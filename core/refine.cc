@@ -357,7 +357,8 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
       std::array<uint32_t, kNumLocalPoints> global{};
       for (int c = 0; c < 4; ++c) global[c] = tet[c];
       const auto& te = edges.tet_edges[t];
-      for (int k = 0; k < 6; ++k) global[4 + k] = mid_id[te[k]];
+      // mid_id is written for split edges only (FillLater): read nothing else.
+      for (int k = 0; k < 6; ++k) global[4 + k] = errors.split[te[k]] ? mid_id[te[k]] : 0;
       if (entry.steiner) {
         std::array<Vec3, 6> pts;
         for (int i = 0; i < 6; ++i) pts[i] = next.mesh.points[global[entry.steiner_of[i]]];
