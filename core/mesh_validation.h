@@ -11,7 +11,8 @@
 namespace tetrefine {
 
 // Checks a mesh before any work, in this order, and reports the first problem found, naming the
-// field and index: finite coordinates within +-1e30; tet indices in range and distinct; no degenerate tet
+// field and index: finite coordinates within +-1e30; tet indices in range and distinct; no
+// degenerate tet
 // (|6V| <= 1e-12 L^3, L its longest edge); orientation (OrientationPolicy); every vertex inside
 // the volume's sampled box unless OutsidePolicy::kClamp; no face in more than two tets and no
 // two tets overlapping across a shared face.

@@ -271,9 +271,9 @@ absl::Status RequestReader::AddMeshHeader(const v1::MeshHeader& header) {
     if (has_values_) mesh_.values.reserve(static_cast<size_t>(vertex_count_));
   } catch (const std::bad_alloc&) {
     mesh_ = Mesh{};
-    return absl::ResourceExhaustedError(
-        absl::StrCat("mesh_header: this server cannot allocate ", vertex_count_, " vertices and ",
-                     tet_count_, " tets"));
+    return absl::ResourceExhaustedError(absl::StrCat("mesh_header: this server cannot allocate ",
+                                                     vertex_count_, " vertices and ", tet_count_,
+                                                     " tets"));
   }
   stage_ = Stage::kMeshData;
   return absl::OkStatus();

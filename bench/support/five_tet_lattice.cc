@@ -1,8 +1,9 @@
 #include "bench/support/five_tet_lattice.h"
 
 #include <cstdint>
-#include <utility>
 #include <vector>
+
+#include "core/five_tet_cell.h"
 
 namespace tetrefine::bench {
 
@@ -24,27 +25,13 @@ Mesh FiveTetLatticeMesh(const CellLattice& lattice,
     }
     return id;
   };
-  // Even cells cut off corners 1, 2, 4, 7 around the central tet (0, 3, 5, 6); odd cells the
-  // mirror image. Corner b of a cell is (i + (b & 1), j + (b >> 1 & 1), k + (b >> 2 & 1)).
-  static constexpr std::array<std::array<int, 4>, 5> kEven = {
-      {{0, 3, 5, 6}, {1, 0, 3, 5}, {2, 0, 6, 3}, {4, 0, 5, 6}, {7, 3, 6, 5}}};
-  static constexpr std::array<std::array<int, 4>, 5> kOdd = {
-      {{1, 2, 4, 7}, {0, 1, 4, 2}, {3, 1, 2, 7}, {5, 1, 7, 4}, {6, 2, 4, 7}}};
   for (int k = 0; k < cz; ++k) {
     for (int j = 0; j < cy; ++j) {
       for (int i = 0; i < cx; ++i) {
         if (!keep(i, j, k)) continue;
-        uint32_t c[8];
+        std::array<uint32_t, 8> c;
         for (int b = 0; b < 8; ++b) c[b] = vertex(i + (b & 1), j + (b >> 1 & 1), k + (b >> 2 & 1));
-        const auto& pattern = ((i + j + k) % 2 == 0) ? kEven : kOdd;
-        for (const auto& q : pattern) {
-          Tet tet = {c[q[0]], c[q[1]], c[q[2]], c[q[3]]};
-          if (SignedVolume6(m.points[tet[0]], m.points[tet[1]], m.points[tet[2]],
-                            m.points[tet[3]]) < 0) {
-            std::swap(tet[2], tet[3]);
-          }
-          m.tets.push_back(tet);
-        }
+        AppendFiveTetCell(c, (i + j + k) % 2 == 0, m.points, &m.tets);
       }
     }
   }

@@ -2,10 +2,10 @@
 
 #include <array>
 #include <limits>
-#include <utility>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "core/five_tet_cell.h"
 
 namespace tetrefine::cli {
 namespace {
@@ -17,13 +17,6 @@ std::vector<int64_t> AxisNodes(int64_t lo, int64_t hi, int64_t block) {
   nodes.push_back(hi - 1);
   return nodes;
 }
-
-// Corner b of a cell is (b & 1, b >> 1 & 1, b >> 2 & 1). Even cells cut off corners 1, 2, 4, 7
-// around the central tet (0, 3, 5, 6); odd cells are the mirror image.
-constexpr std::array<std::array<int, 4>, 5> kEvenTets = {
-    {{0, 3, 5, 6}, {1, 0, 3, 5}, {2, 0, 6, 3}, {4, 0, 5, 6}, {7, 3, 6, 5}}};
-constexpr std::array<std::array<int, 4>, 5> kOddTets = {
-    {{1, 2, 4, 7}, {0, 1, 4, 2}, {3, 1, 2, 7}, {5, 1, 7, 4}, {6, 2, 4, 7}}};
 
 }  // namespace
 
@@ -78,15 +71,7 @@ absl::StatusOr<GridMesh> MeshVolumeGrid(const Volume& volume, const GridMeshOpti
         std::array<uint32_t, 8> corner;
         for (int b = 0; b < 8; ++b)
           corner[b] = vertex(i + (b & 1), j + ((b >> 1) & 1), k + (b >> 2));
-        const auto& pattern = ((i + j + k) % 2 == 0) ? kEvenTets : kOddTets;
-        for (const auto& q : pattern) {
-          Tet tet = {corner[q[0]], corner[q[1]], corner[q[2]], corner[q[3]]};
-          if (SignedVolume6(mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]],
-                            mesh.points[tet[3]]) < 0.0) {
-            std::swap(tet[2], tet[3]);
-          }
-          mesh.tets.push_back(tet);
-        }
+        AppendFiveTetCell(corner, (i + j + k) % 2 == 0, mesh.points, &mesh.tets);
       }
     }
   }

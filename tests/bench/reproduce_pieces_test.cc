@@ -14,6 +14,7 @@
 #include "core/mesh_validation.h"
 #include "core/quality.h"
 #include "gtest/gtest.h"
+#include "tests/core/test_geometry.h"
 
 namespace tetrefine::reproduce {
 namespace {
@@ -42,12 +43,7 @@ TEST(UniformRefineTest, SplitsEveryTetIntoEightConformally) {
   SampleValues(volume, mesh);
   const Mesh fine = UniformRefine(volume, mesh);
   ASSERT_EQ(fine.tets.size(), 8 * mesh.tets.size());
-  std::set<std::pair<uint32_t, uint32_t>> edges;
-  for (const Tet& t : mesh.tets) {
-    for (int a = 0; a < 4; ++a) {
-      for (int b = a + 1; b < 4; ++b) edges.insert(std::minmax(t[a], t[b]));
-    }
-  }
+  const auto edges = testing::UniqueEdges(mesh.tets);
   // One new vertex per edge: shared midpoints.
   EXPECT_EQ(fine.points.size(), mesh.points.size() + edges.size());
   EXPECT_NEAR(TotalVolume(fine), TotalVolume(mesh), 1e-9 * TotalVolume(mesh));

@@ -19,16 +19,6 @@
 namespace tetrefine {
 namespace {
 
-std::set<std::pair<uint32_t, uint32_t>> ReferenceEdges(const std::vector<Tet>& tets) {
-  std::set<std::pair<uint32_t, uint32_t>> edges;
-  for (const Tet& t : tets) {
-    for (int i = 0; i < 4; ++i) {
-      for (int j = i + 1; j < 4; ++j) edges.insert(std::minmax(t[i], t[j]));
-    }
-  }
-  return edges;
-}
-
 // A 5-tet box mesh refined by `iterations` rounds of Refine on a rough field: some edges split,
 // some not, and the old vertices end with dozens of edges.
 Mesh RefinedMesh(uint64_t seed, int iterations) {
@@ -53,7 +43,7 @@ TEST(EdgeTableTest, ListsEachEdgeOnceInOrderOnRefinedMeshes) {
   for (uint64_t seed : testing::Seeds(4)) {
     std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
     const Mesh m = RefinedMesh(seed, 3);
-    const auto reference = ReferenceEdges(m.tets);
+    const auto reference = testing::UniqueEdges(m.tets);
     const EdgeTable table = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size()));
     ASSERT_EQ(table.size(), static_cast<int64_t>(reference.size()));
     auto it = reference.begin();

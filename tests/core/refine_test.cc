@@ -135,12 +135,7 @@ struct FreshErrors {
 };
 FreshErrors EvaluateFromScratch(const Volume& v, const Mesh& m, double norm, double epsilon,
                                 double min_length) {
-  std::set<std::pair<uint32_t, uint32_t>> edges;
-  for (const Tet& t : m.tets) {
-    for (int i = 0; i < 4; ++i) {
-      for (int j = i + 1; j < 4; ++j) edges.insert(std::minmax(t[i], t[j]));
-    }
-  }
+  const auto edges = testing::UniqueEdges(m.tets);
   FreshErrors f;
   for (const auto& [a, b] : edges) {
     const Vec3 &p = m.points[a], &q = m.points[b];

@@ -1,8 +1,10 @@
 #include "tests/core/test_geometry.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <string>
 
+#include "core/five_tet_cell.h"
 #include "core/quality.h"
 
 namespace tetrefine::testing {
@@ -27,6 +29,16 @@ std::array<Vec3, 4> RandomTet(std::mt19937_64& rng, double min_quality) {
   }
 }
 
+std::set<std::pair<uint32_t, uint32_t>> UniqueEdges(const std::vector<Tet>& tets) {
+  std::set<std::pair<uint32_t, uint32_t>> edges;
+  for (const Tet& t : tets) {
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j) edges.insert(std::minmax(t[i], t[j]));
+    }
+  }
+  return edges;
+}
+
 Mesh FiveTetMesh(const Vec3& lo, const Vec3& hi, const std::array<int, 3>& cells) {
   Mesh m;
   const int nx = cells[0] + 1, ny = cells[1] + 1, nz = cells[2] + 1;
@@ -40,26 +52,9 @@ Mesh FiveTetMesh(const Vec3& lo, const Vec3& hi, const std::array<int, 3>& cells
   for (int k = 0; k < cells[2]; ++k)
     for (int j = 0; j < cells[1]; ++j)
       for (int i = 0; i < cells[0]; ++i) {
-        uint32_t c[8];
+        std::array<uint32_t, 8> c;
         for (int b = 0; b < 8; ++b) c[b] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
-        // Even cells cut off corners 1, 2, 4, 7 around the central tet (0, 3, 5, 6); odd cells
-        // the mirror image. Alternating by parity makes neighbouring cells split their shared
-        // square face by the same diagonal.
-        const bool even = ((i + j + k) % 2) == 0;
-        std::array<std::array<int, 4>, 5> t;
-        if (even) {
-          t = {{{0, 3, 5, 6}, {1, 0, 3, 5}, {2, 0, 6, 3}, {4, 0, 5, 6}, {7, 3, 6, 5}}};
-        } else {
-          t = {{{1, 2, 4, 7}, {0, 1, 4, 2}, {3, 1, 2, 7}, {5, 1, 7, 4}, {6, 2, 4, 7}}};
-        }
-        for (const auto& q : t) {
-          Tet tet = {c[q[0]], c[q[1]], c[q[2]], c[q[3]]};
-          if (SignedVolume6(m.points[tet[0]], m.points[tet[1]], m.points[tet[2]],
-                            m.points[tet[3]]) < 0) {
-            std::swap(tet[2], tet[3]);
-          }
-          m.tets.push_back(tet);
-        }
+        AppendFiveTetCell(c, (i + j + k) % 2 == 0, m.points, &m.tets);
       }
   return m;
 }

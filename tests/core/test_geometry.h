@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <random>
+#include <set>
+#include <utility>
 #include <vector>
 
 #include "core/mesh.h"
@@ -30,6 +32,10 @@ Volume AnalyticVolume(const GridGeometry& g, F f) {
                    g.origin[2] + k * g.spacing[2]});
   return *Volume::FromDoubles(g, v);
 }
+
+// The unique edges of a tet mesh as (smaller id, larger id): the reference the edge table and the
+// edge-error checks are tested against.
+std::set<std::pair<uint32_t, uint32_t>> UniqueEdges(const std::vector<Tet>& tets);
 
 // A structured mesh of the box [lo, hi] with `cells` cells per axis, 5 tets per cell with
 // alternating orientation so that faces match (the paper's voxel tetrahedrization).
