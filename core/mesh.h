@@ -15,10 +15,12 @@ using Tet = std::array<uint32_t, 4>;
 //   tets:   T x 4 indices into points; positive orientation means
 //           dot(p1 - p0, cross(p2 - p0, p3 - p0)) > 0.
 //   values: V scalars (the field at each vertex); empty on input means "sample the volume".
+//   labels: T region labels (a Gmsh physical group, a Medit reference), or empty.
 struct Mesh {
   std::vector<Vec3> points;
   std::vector<Tet> tets;
   std::vector<double> values;
+  std::vector<int32_t> labels;
 };
 
 // Six times the signed volume of tet (a, b, c, d).

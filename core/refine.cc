@@ -1,6 +1,5 @@
 #include "core/refine.h"
 
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -8,41 +7,34 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <string_view>
 
 #include "absl/strings/str_cat.h"
+#include "core/edge_marking.h"
 #include "core/edge_table.h"
-#include "core/fill_later.h"
 #include "core/lattice.h"
 #include "core/mesh_validation.h"
 #include "core/parallel.h"
-#include "core/subdivision_table.h"
-#include "core/tet_topology.h"
+#include "core/refine_state.h"
+#include "core/subdivide.h"
 
 namespace tetrefine {
 namespace {
+
+using refine_internal::CancelFlag;
+using refine_internal::EdgeErrors;
+using refine_internal::EdgeTest;
+using refine_internal::EdgeTestParams;
+using refine_internal::KnownEdges;
+using refine_internal::State;
+using refine_internal::StepLimits;
+using refine_internal::StepOutcome;
 
 using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
-
-// The refinement state carried from one iteration to the next. Until the first subdivision the
-// points and tets are the caller's, not a copy (a copy of a large mesh is a serial step that
-// showed in the 2-thread profile); `points` and `tets` say where they are.
-struct State {
-  Mesh mesh;  // values always; points and tets once a subdivision has made them
-  const std::vector<Vec3>* points = nullptr;
-  const std::vector<Tet>* tets = nullptr;
-  std::vector<int32_t> tet_iteration;
-  std::vector<float> tet_quality;
-
-  // Points `points` and `tets` at the state's own mesh (after it was made or moved).
-  void UseOwnMesh() {
-    points = &mesh.points;
-    tets = &mesh.tets;
-  }
-};
 
 absl::Status CheckOptions(const RefineOptions& o) {
   if (!(o.epsilon > 0.0) || !std::isfinite(o.epsilon)) {
@@ -66,6 +58,14 @@ absl::Status CheckOptions(const RefineOptions& o) {
   if (o.lattice_n < 0 || o.lattice_n > 64) {
     return absl::InvalidArgumentError(
         absl::StrCat("options.lattice_n = ", o.lattice_n, ": must be in [0, 64]"));
+  }
+  if (o.certify && o.lattice_n < 1) {
+    return absl::InvalidArgumentError(absl::StrCat("options.lattice_n = ", o.lattice_n,
+                                                   ": certify needs a lattice (lattice_n >= 1)"));
+  }
+  if (o.scheme != RefineScheme::kPaper && o.scheme != RefineScheme::kLongestEdge) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("options.scheme = ", static_cast<int>(o.scheme), ": not a scheme"));
   }
   if (o.min_edge_length.has_value() &&
       (!(*o.min_edge_length >= 0.0) || !std::isfinite(*o.min_edge_length))) {
@@ -112,288 +112,70 @@ float TetQuality(const std::vector<Vec3>& p, const Tet& t) {
   return static_cast<float>(MeanRatio(p[t[0]], p[t[1]], p[t[2]], p[t[3]]));
 }
 
-// Trilinear value at a point inside the mesh's hull (a midpoint or a Steiner point).
-double SampleInside(const Volume& volume, const Vec3& p, bool clamp) {
-  Vec3 u = volume.ContinuousIndex(p);
-  if (clamp) u = volume.ClampToGrid(u);
-  return volume.SampleIndex(u);
-}
-
-Vec3 Midpoint(const Vec3& a, const Vec3& b) {
-  return {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-}
-
-// Cancellation polled from worker threads; once seen it stays set.
-class CancelFlag {
- public:
-  explicit CancelFlag(const std::function<bool()>& poll) : poll_(poll) {}
-  bool Check() {
-    if (set_.load(std::memory_order_relaxed)) return true;
-    if (poll_ && poll_()) set_.store(true, std::memory_order_relaxed);
-    return set_.load(std::memory_order_relaxed);
-  }
-  bool IsSet() const { return set_.load(std::memory_order_relaxed); }
-
- private:
-  const std::function<bool()>& poll_;
-  std::atomic<bool> set_{false};
+// What a scheme does, spelled out.
+//
+// The longest-edge scheme, and why (measured with the reproduction's cases, exp. notes in
+// docs/schemes.md; "quality" is mean ratio, min and mean as output / input):
+//  - The paper's scheme stops at the quality floor on most real cases: near a feature sharper
+//    than the mesh it splits short edges inside tets whose long edges pass the midpoint test,
+//    and the tets flatten (anatomical cube, eps 0.1: quality min 2e-6 after 14 iterations).
+//  - Deciding edges by the exact maximum along them (EdgeTest::kSegment) alone does not fix it
+//    (same case: quality_floor after 29 iterations, min 0.000, mean 0.53x).
+//  - Longest-edge closure (a tet with a split edge also splits its longest edge, Rivara) makes
+//    every case converge (10 of 10, eps 0.1 and 0.05, within 11 iterations) but keeps only
+//    0.80-0.99x of the mean quality and 0.04-0.47x of the min: some of the table's
+//    configurations lose quality fast (children / parent on random tets: 2b, 3c, 4a, 4b keep
+//    0.77-0.82 on average and 0.38-0.49 at worst; regular 1:8 refinement, configuration 6,
+//    keeps 0.99 and 0.77). Closure to a fixpoint helps little (min 0.31-0.57x) and is not
+//    bounded in radius; replacing the table by longest-marked-edge bisection (Plaza-like)
+//    did not help either (mean 0.80-0.88x: bisection's 8-way split keeps 0.85, red 0.99).
+//  - A quality guard that acts on the tets concerned: a tet whose split would make a child below
+//    kGuardRatio of its own quality splits all six edges instead (regular refinement); two
+//    rounds, each followed by the closure. With ratio 0.65 mean quality stays at 0.85-0.98x;
+//    0.75 keeps 0.92-1.0x but doubles to quadruples the tets; 0.5 barely acts.
+//  - The midpoint test with closure and guard converges as reliably as the exact segment test
+//    and needs 10-30% fewer tets (anatomical cube eps 0.1: 31,031 against 43,613), so the
+//    default keeps the paper's midpoint test; certified mode, which promises a bound, uses
+//    the exact segment test for edges and the lattice for tets.
+//  - Four closure rounds rather than two: fewer tets and a better worst tet (anatomical cube
+//    eps 0.1: 28,731 tets, min 0.65x, against 31,031 and 0.59x; sharp blob of
+//    tests/core/refine_test.cc: min 0.40x against 0.28x); more guard rounds cost tets for little.
+// Every rule reads only the tets around an edge, a bounded number of times per iteration
+// (closure and guard: at most 4 + 2 * (1 + 4) = 14 rings of tets), so decisions stay local.
+struct SchemeRules {
+  EdgeTest test = EdgeTest::kMidpoint;
+  int closure_rounds = 0;    // longest-edge closure rounds per iteration
+  double guard_ratio = 0.0;  // 0: no quality guard
+  int guard_rounds = 0;
 };
 
-// Edge-midpoint errors of every unique edge (eq. 3), with the midpoint values kept for the new
-// vertices.
-struct EdgeErrors {
-  FillLater<double> mid_value;
-  FillLater<uint8_t> split;
-  int64_t split_count = 0;
-  int64_t short_kept = 0;
-  double max_error = 0.0;
-  double mean_error = 0.0;
-};
+constexpr int kClosureRounds = 4;
+constexpr double kGuardRatio = 0.65;
+constexpr int kGuardRounds = 2;
 
-// The previous iteration's edges and their midpoint values. Subdivision keeps the old vertices'
-// ids and values, and joins two old vertices only along an old edge it did not split (a child's
-// corners are its parent's corners, edge midpoints and Steiner point), so every edge of the
-// refined mesh between two old vertices is in this table with the same midpoint value. The next
-// evaluation reads those instead of sampling the volume again: the same bits, and most of a
-// late iteration's edges are such edges.
-struct KnownMidpoints {
-  EdgeTable edges;  // without tet_edges
-  FillLater<double> mid_value;
-};
-
-EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& edges, double norm,
-                         double epsilon, double min_edge_length, bool clamp,
-                         const KnownMidpoints* known, CancelFlag& cancel) {
-  const double min_length2 = min_edge_length * min_edge_length;
-  EdgeErrors out;
-  const std::vector<Vec3>& points = *m.points;
-  const std::vector<double>& values = m.mesh.values;
-  const int64_t nv = static_cast<int64_t>(points.size());
-  out.mid_value.resize(edges.size());
-  out.split.resize(edges.size());
-  const int64_t blocks = BlockCount(nv);
-  std::vector<double> sums(blocks, 0.0), maxs(blocks, 0.0);
-  std::vector<int64_t> splits(blocks, 0), kept(blocks, 0);
-  ForEachBlock(nv, [&](int64_t b, int64_t begin, int64_t end) {
-    if (cancel.Check()) return;
-    double s = 0.0, mx = 0.0;
-    int64_t n_split = 0, n_kept = 0;
-    for (int64_t v = begin; v < end; ++v) {
-      // v's known edges, walked forward alongside its sorted new ones.
-      const uint32_t* kp = nullptr;
-      const uint32_t* ke = nullptr;
-      if (known != nullptr && v + 1 < static_cast<int64_t>(known->edges.first.size())) {
-        kp = known->edges.second.data() + known->edges.first[v];
-        ke = known->edges.second.data() + known->edges.first[v + 1];
-      }
-      for (uint32_t e = edges.first[v]; e < edges.first[v + 1]; ++e) {
-        const uint32_t w = edges.second[e];
-        while (kp < ke && *kp < w) ++kp;
-        const double real = kp < ke && *kp == w
-                                ? known->mid_value[kp - known->edges.second.data()]
-                                : SampleInside(volume, Midpoint(points[v], points[w]), clamp);
-        const double error = std::abs(real - 0.5 * (values[v] + values[w])) / norm;
-        out.mid_value[e] = real;
-        bool split = error > epsilon;
-        if (split && min_length2 > 0.0) {
-          const Vec3& a = points[v];
-          const Vec3& c = points[w];
-          const double dx = a[0] - c[0], dy = a[1] - c[1], dz = a[2] - c[2];
-          if (dx * dx + dy * dy + dz * dz < min_length2) {
-            split = false;
-            ++n_kept;
-          }
-        }
-        out.split[e] = split;
-        n_split += split;
-        s += error;
-        mx = std::max(mx, error);
-      }
-    }
-    sums[b] = s;
-    maxs[b] = mx;
-    splits[b] = n_split;
-    kept[b] = n_kept;
-  });
-  double sum = 0.0;
-  for (int64_t b = 0; b < blocks; ++b) {
-    sum += sums[b];
-    out.max_error = std::max(out.max_error, maxs[b]);
-    out.split_count += splits[b];
-    out.short_kept += kept[b];
+SchemeRules RulesOf(const RefineOptions& options) {
+  SchemeRules r;
+  if (options.scheme == RefineScheme::kLongestEdge) {
+    r.test = options.certify ? EdgeTest::kSegment : EdgeTest::kMidpoint;
+    r.closure_rounds = kClosureRounds;
+    r.guard_ratio = kGuardRatio;
+    r.guard_rounds = kGuardRounds;
   }
-  out.mean_error = edges.size() > 0 ? sum / static_cast<double>(edges.size()) : 0.0;
-  return out;
+  return r;
 }
 
-enum class StepOutcome { kApplied, kCancelled, kTetBudget, kQualityFloor };
-
-// One subdivision step. Leaves `state` alone unless it returns kApplied; for kTetBudget
-// *next_tets says how many tets it needed, for kQualityFloor *next_quality its worst tet.
-StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& errors,
-                      int iteration, const RefineOptions& options, CancelFlag& cancel, State& state,
-                      IterationStats& stats, int64_t* next_tets, double* next_quality) {
-  const struct {
-    const std::vector<Vec3>& points;
-    const std::vector<Tet>& tets;
-    const std::vector<double>& values;
-  } m{*state.points, *state.tets, state.mesh.values};
-  const bool clamp = options.outside == OutsidePolicy::kClamp;
-  const int64_t nt = static_cast<int64_t>(m.tets.size());
-  const int64_t nv = static_cast<int64_t>(m.points.size());
-  const auto& table = SubdivisionTable();
-  const auto& patterns = PatternTable();
-
-  // Pass 1: each tet's subdivision key and child counts, per block.
-  FillLater<uint16_t> keys(nt);
-  const int64_t tet_blocks = BlockCount(nt);
-  std::vector<int64_t> child_offset(tet_blocks), steiner_offset(tet_blocks);
-  std::vector<ConfigurationCounts> config_counts(tet_blocks);
-  ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
-    if (cancel.Check()) return;
-    int64_t children = 0, steiner = 0;
-    ConfigurationCounts counts{};
-    for (int64_t t = begin; t < end; ++t) {
-      const Tet& tet = m.tets[t];
-      const auto& te = edges.tet_edges[t];
-      uint32_t pattern = 0;
-      for (int k = 0; k < 6; ++k) pattern |= errors.split[te[k]] ? EdgeBit(k) : 0u;
-      uint32_t key = 0;
-      if (pattern != 0) {
-        std::array<Vec3, 10> p;
-        for (int c = 0; c < 4; ++c) p[c] = m.points[tet[c]];
-        for (int k = 0; k < 6; ++k) {
-          if ((pattern & EdgeBit(k)) != 0) {
-            p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
-          }
-        }
-        key = SubdivisionKey(pattern, p);
-      }
-      keys[t] = static_cast<uint16_t>(key);
-      const SubdivisionEntry& entry = table[key];
-      children += entry.tet_count;
-      steiner += entry.steiner;
-      ++counts[static_cast<int>(patterns[pattern].configuration)];
-    }
-    child_offset[b] = children;
-    steiner_offset[b] = steiner;
-    config_counts[b] = counts;
+int64_t CountSplit(const FillLater<uint8_t>& split) {
+  const int64_t n = static_cast<int64_t>(split.size());
+  const int64_t blocks = BlockCount(n);
+  std::vector<int64_t> counts(blocks, 0);
+  ForEachBlock(n, [&](int64_t b, int64_t begin, int64_t end) {
+    int64_t c = 0;
+    for (int64_t e = begin; e < end; ++e) c += split[e];
+    counts[b] = c;
   });
-  if (cancel.IsSet()) return StepOutcome::kCancelled;
-  const int64_t total_children = ExclusivePrefixSum(child_offset);
-  const int64_t total_steiner = ExclusivePrefixSum(steiner_offset);
-  if (total_children > options.max_tets) {
-    *next_tets = total_children;
-    return StepOutcome::kTetBudget;
-  }
-  for (const auto& c : config_counts) {
-    for (int i = 0; i < kNumConfigurations; ++i) stats.configurations[i] += c[i];
-  }
-  stats.schonhardt_prisms = total_steiner;
-  stats.tets_with_error = nt - stats.configurations[0];
-
-  // New vertex ids: midpoints in edge order after the old vertices, then Steiner points in tet
-  // order.
-  const int64_t vertex_blocks = BlockCount(nv);
-  std::vector<int64_t> mid_offset(vertex_blocks);
-  ForEachBlock(nv, [&](int64_t b, int64_t begin, int64_t end) {
-    int64_t n = 0;
-    for (uint32_t e = edges.first[begin]; e < edges.first[end]; ++e) n += errors.split[e];
-    mid_offset[b] = n;
-  });
-  const int64_t total_mid = ExclusivePrefixSum(mid_offset);
-  FillLater<uint32_t> mid_id(edges.size());
-  // The output arrays are the mesh's public std::vectors, which zero their elements on one
-  // thread (and take the page faults there) before the passes below overwrite them: that was
-  // the largest serial step of an iteration. Allocating them side by side cuts it by the number
-  // of workers.
-  State next;
-  const int64_t next_points = nv + total_mid + total_steiner;
-  tbb::parallel_invoke(
-      [&] {
-        next.mesh.points.reserve(next_points);
-        next.mesh.points.assign(m.points.begin(), m.points.end());
-        next.mesh.points.resize(next_points);
-      },
-      [&] {
-        next.mesh.values.reserve(next_points);
-        next.mesh.values.assign(m.values.begin(), m.values.end());
-        next.mesh.values.resize(next_points);
-      },
-      [&] { next.mesh.tets.resize(total_children); },
-      [&] { next.tet_iteration.resize(total_children); },
-      [&] { next.tet_quality.resize(total_children); });
-  ForEachBlock(nv, [&](int64_t b, int64_t begin, int64_t end) {
-    int64_t id = nv + mid_offset[b];
-    for (int64_t v = begin; v < end; ++v) {
-      for (uint32_t e = edges.first[v]; e < edges.first[v + 1]; ++e) {
-        if (!errors.split[e]) continue;
-        mid_id[e] = static_cast<uint32_t>(id);
-        next.mesh.points[id] = Midpoint(m.points[v], m.points[edges.second[e]]);
-        next.mesh.values[id] = errors.mid_value[e];
-        ++id;
-      }
-    }
-  });
-
-  // Pass 2: write the children.
-  const int64_t steiner_base = nv + total_mid;
-  std::vector<double> worst(tet_blocks, 1.0);
-  ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
-    if (cancel.Check()) return;
-    double block_worst = 1.0;
-    int64_t out = child_offset[b];
-    int64_t steiner_id = steiner_base + steiner_offset[b];
-    for (int64_t t = begin; t < end; ++t) {
-      const Tet& tet = m.tets[t];
-      if (keys[t] == 0) {
-        next.mesh.tets[out] = tet;
-        next.tet_iteration[out] = state.tet_iteration[t];
-        next.tet_quality[out] = state.tet_quality[t];
-        ++out;
-        continue;
-      }
-      const SubdivisionEntry& entry = table[keys[t]];
-      std::array<uint32_t, kNumLocalPoints> global{};
-      for (int c = 0; c < 4; ++c) global[c] = tet[c];
-      const auto& te = edges.tet_edges[t];
-      // mid_id is written for split edges only (FillLater): read nothing else.
-      for (int k = 0; k < 6; ++k) global[4 + k] = errors.split[te[k]] ? mid_id[te[k]] : 0;
-      if (entry.steiner) {
-        std::array<Vec3, 6> pts;
-        for (int i = 0; i < 6; ++i) pts[i] = next.mesh.points[global[entry.steiner_of[i]]];
-        const Vec3 s = SteinerPoint(pts);
-        global[kSteinerLocal] = static_cast<uint32_t>(steiner_id);
-        next.mesh.points[steiner_id] = s;
-        next.mesh.values[steiner_id] = SampleInside(volume, s, clamp);
-        ++steiner_id;
-      }
-      for (int i = 0; i < entry.tet_count; ++i) {
-        const auto& lt = entry.tets[i];
-        const Tet child = {global[lt[0]], global[lt[1]], global[lt[2]], global[lt[3]]};
-        next.mesh.tets[out] = child;
-        next.tet_iteration[out] = iteration;
-        const auto& np = next.mesh.points;
-        const Vec3 &a = np[child[0]], &b = np[child[1]], &c = np[child[2]], &d = np[child[3]];
-        const double v6 = SignedVolume6(a, b, c, d);
-        const float q = static_cast<float>(MeanRatioWithVolume6(a, b, c, d, v6));
-        next.tet_quality[out] = q;
-        if (v6 <= 0.0) block_worst = -1.0;
-        block_worst = std::min(block_worst, static_cast<double>(q));
-        ++out;
-      }
-    }
-    worst[b] = block_worst;
-  });
-  if (cancel.IsSet()) return StepOutcome::kCancelled;
-  const double worst_quality = *std::min_element(worst.begin(), worst.end());
-  if (worst_quality <= 0.0 || worst_quality < options.min_quality) {
-    *next_quality = worst_quality;
-    return StepOutcome::kQualityFloor;
-  }
-  state = std::move(next);
-  state.UseOwnMesh();
-  return StepOutcome::kApplied;
+  int64_t total = 0;
+  for (int64_t c : counts) total += c;
+  return total;
 }
 
 absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& input,
@@ -451,19 +233,44 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   });
   result.initial_quality = SummarizeQuality(state.tet_quality);
 
+  if (!input.labels.empty()) {
+    if (static_cast<int64_t>(input.labels.size()) != nt0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("mesh.labels has ", input.labels.size(), " entries for ", nt0, " tets"));
+    }
+    state.tet_label = input.labels;
+  }
+  if (options.track_parents) {
+    state.tet_parent.resize(nt0);
+    for (int64_t t = 0; t < nt0; ++t) state.tet_parent[t] = static_cast<uint32_t>(t);
+  }
+  if (options.certify) state.tet_lattice_error.assign(nt0, -1.0);
+
+  const SchemeRules rules = RulesOf(options);
+  EdgeTestParams params;
+  params.test = rules.test;
+  params.norm = norm;
+  params.epsilon = options.epsilon;
+  params.min_edge_length = min_edge_length;
+  params.clamp = clamp;
+  StepLimits limits;
+  limits.max_tets = options.max_tets;
+  limits.min_quality = options.min_quality;
+  limits.clamp = clamp;
+
   CancelFlag cancel(options.should_cancel);
   result.stop_reason = StopReason::kMaxIterations;
-  bool finished = false;
-  std::optional<KnownMidpoints> known;
-  for (int iteration = 1; !finished; ++iteration) {
+  std::optional<KnownEdges> known;
+  bool certified = false;
+  for (int iteration = 1;; ++iteration) {
     const auto iteration_start = Clock::now();
     if (cancel.Check()) {
       result.stop_reason = StopReason::kCancelled;
       break;
     }
     EdgeTable edges = BuildEdgeTable(*state.tets, static_cast<int64_t>(state.points->size()));
-    EdgeErrors errors = EvaluateEdges(volume, state, edges, norm, options.epsilon, min_edge_length,
-                                      clamp, known ? &*known : nullptr, cancel);
+    EdgeErrors errors =
+        EvaluateEdges(volume, state, edges, params, known ? &*known : nullptr, cancel);
     known.reset();
     if (cancel.IsSet()) {
       result.stop_reason = StopReason::kCancelled;
@@ -471,25 +278,51 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     }
     result.final_max_error = errors.max_error;
     result.final_mean_error = errors.mean_error;
-    if (errors.split_count == 0) {
+    int64_t failing_tets = 0;
+    if (options.certify) {
+      AddTetEdges(*state.tets, &edges);
+      double max_seen = 0.0;
+      failing_tets = refine_internal::MarkFailingTets(volume, state, edges, options.lattice_n,
+                                                      params, errors.split, &max_seen, cancel);
+      if (cancel.IsSet()) {
+        result.stop_reason = StopReason::kCancelled;
+        break;
+      }
+    }
+    if (errors.failing == 0 && failing_tets == 0) {
       result.stop_reason = StopReason::kConverged;
+      certified = options.certify;
       break;
     }
     if (iteration > options.max_iterations) {
       result.stop_reason = StopReason::kMaxIterations;
       break;
     }
-    AddTetEdges(*state.tets, &edges);
+    if (edges.tet_edges.empty()) AddTetEdges(*state.tets, &edges);
     IterationStats stats;
     stats.iteration = iteration;
     stats.initial_tets = static_cast<int64_t>(state.tets->size());
     stats.edges = edges.size();
-    stats.split_edges = errors.split_count;
     stats.short_edges_kept = errors.short_kept;
     stats.max_error = errors.max_error;
     stats.mean_error = errors.mean_error;
+    stats.max_segment_error = errors.max_segment_error;
+    stats.failing_tets = failing_tets;
+    if (rules.closure_rounds > 0) {
+      stats.closure_edges = refine_internal::CloseToLongestEdges(
+          *state.points, *state.tets, edges, rules.closure_rounds, errors.split);
+    }
+    for (int r = 0; r < rules.guard_rounds; ++r) {
+      stats.guard_edges += refine_internal::PromoteBadSplits(*state.points, *state.tets, edges,
+                                                             rules.guard_ratio, errors.split);
+      if (rules.closure_rounds > 0) {
+        stats.closure_edges += refine_internal::CloseToLongestEdges(
+            *state.points, *state.tets, edges, rules.closure_rounds, errors.split);
+      }
+    }
+    stats.split_edges = CountSplit(errors.split);
     const StepOutcome outcome =
-        Subdivide(volume, edges, errors, iteration, options, cancel, state, stats,
+        Subdivide(volume, edges, errors, iteration, limits, cancel, state, stats,
                   &result.next_iteration_tets, &result.next_iteration_min_quality);
     if (outcome != StepOutcome::kApplied) {
       result.stop_reason = outcome == StepOutcome::kCancelled   ? StopReason::kCancelled
@@ -498,7 +331,8 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       break;
     }
     edges.tet_edges = {};
-    known = KnownMidpoints{std::move(edges), std::move(errors.mid_value)};
+    known =
+        KnownEdges{std::move(edges), std::move(errors.mid_value), std::move(errors.segment_error)};
     stats.final_tets = static_cast<int64_t>(state.mesh.tets.size());
     stats.quality = SummarizeQuality(state.tet_quality);
     stats.seconds = SecondsSince(iteration_start);
@@ -510,8 +344,10 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   if (state.points != &state.mesh.points) state.mesh.points = input.points;
   if (state.tets != &state.mesh.tets) state.mesh.tets = input.tets;
   result.mesh = std::move(state.mesh);
+  result.mesh.labels = std::move(state.tet_label);
   result.tet_iteration = std::move(state.tet_iteration);
   result.tet_quality = std::move(state.tet_quality);
+  result.tet_parent = std::move(state.tet_parent);
   if (options.lattice_n > 0 && result.stop_reason != StopReason::kCancelled) {
     result.lattice = SampleLattice(volume, result.mesh, options.lattice_n, options.lattice_max_tets,
                                    options.lattice_seed, norm, options.epsilon, clamp,
@@ -519,11 +355,37 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     // An incomplete lattice is not a result: say the refinement was cancelled.
     if (cancel.IsSet()) result.stop_reason = StopReason::kCancelled;
   }
+  if (certified) {
+    result.certified_max_error = 0.0;
+    for (double e : state.tet_lattice_error) {
+      result.certified_max_error = std::max(result.certified_max_error, e);
+    }
+  }
   result.seconds = SecondsSince(start);
   return result;
 }
 
 }  // namespace
+
+std::string_view RefineSchemeName(RefineScheme s) {
+  switch (s) {
+    case RefineScheme::kPaper:
+      return "paper";
+    case RefineScheme::kLongestEdge:
+      return "longest-edge";
+  }
+  return "unknown";
+}
+
+bool ParseRefineScheme(std::string_view name, RefineScheme* out) {
+  for (RefineScheme s : {RefineScheme::kPaper, RefineScheme::kLongestEdge}) {
+    if (RefineSchemeName(s) == name) {
+      *out = s;
+      return true;
+    }
+  }
+  return false;
+}
 
 std::string_view StopReasonName(StopReason r) {
   switch (r) {

@@ -26,6 +26,23 @@ enum class OrientationPolicy : uint8_t {
   kNormalize,  // swap its last two vertices (for meshes written with the opposite convention)
 };
 
+// Which subdivision scheme Refine runs. Both split edges at their midpoints and subdivide every
+// tet by the paper's 64-case table, so both keep the mesh conformal with every face
+// triangulated from its own data; they differ in which edges they split.
+enum class RefineScheme : uint8_t {
+  // The paper exactly: an edge is split when the discrepancy at its midpoint exceeds epsilon.
+  kPaper,
+  // The default: the paper's midpoint test, then every tet with a split edge also splits its
+  // longest edge (longest-edge closure, as in Rivara's and Plaza's schemes), and a tet whose
+  // split would make a much flatter child is refined regularly (1:8) instead. It reaches
+  // epsilon where the paper's scheme stops with needles. See SchemeRules in core/refine.cc for
+  // the measurements behind each rule.
+  kLongestEdge,
+};
+std::string_view RefineSchemeName(RefineScheme s);
+// The scheme named `name` ("paper", "longest-edge"); false when there is none.
+bool ParseRefineScheme(std::string_view name, RefineScheme* out);
+
 // Per-iteration statistics, as the paper reports them (Tables 3-7).
 struct IterationStats {
   int iteration = 0;             // 1-based
@@ -33,10 +50,18 @@ struct IterationStats {
   int64_t final_tets = 0;        // FNT: tets after the iteration
   int64_t tets_with_error = 0;   // NTwE: tets with at least one split edge
   int64_t edges = 0;             // unique edges evaluated
-  int64_t split_edges = 0;       // edges whose midpoint error exceeded epsilon
+  int64_t split_edges = 0;       // edges split (failing the test, or added by the closure)
   int64_t short_edges_kept = 0;  // edges above epsilon left whole: shorter than min_edge_length
   double max_error = 0.0;        // max edge-midpoint error at the start of the iteration
   double mean_error = 0.0;       // mean over unique edges of the edge-midpoint error
+  // kLongestEdge: the largest discrepancy along any edge at the start of the iteration (0 for
+  // kPaper, which does not compute it).
+  double max_segment_error = 0.0;
+  int64_t closure_edges = 0;  // edges split only because they are a marked tet's longest edge
+  int64_t guard_edges = 0;    // edges split only by the quality guard (regular refinement)
+  // Certified mode: tets whose lattice discrepancy exceeded epsilon at the start of the
+  // iteration (each had its longest edge split).
+  int64_t failing_tets = 0;
   ConfigurationCounts configurations{};  // tets by configuration (Tables 3 and 4)
   int64_t schonhardt_prisms = 0;         // SP: prisms that needed a Steiner point
   QualityStats quality;                  // mean-ratio quality after the iteration
@@ -94,6 +119,15 @@ struct RefineOptions {
   // before it (kQualityFloor) and the output keeps no degenerate tet. In [0, 1).
   double min_quality = 1e-6;
 
+  RefineScheme scheme = RefineScheme::kLongestEdge;
+  // Certified mode: refinement also goes on until the discrepancy at every point of the
+  // lattice of order lattice_n (the paper's 165 points for 8) of every tet is <= epsilon; each
+  // tet that fails has its longest edge split. The result's `certified_max_error` is then the
+  // largest lattice discrepancy over every tet of the output (not a sample).
+  bool certify = false;
+  // Fill RefineResult::tet_parent (4 bytes per output tet).
+  bool track_parents = false;
+
   // Final lattice verification: lattice_n = 0 skips it. Meshes with more tets than
   // lattice_max_tets are verified on a sample of that many tets drawn with lattice_seed.
   int lattice_n = 8;
@@ -111,6 +145,8 @@ struct RefineResult {
   Mesh mesh;                           // refined mesh, values sampled from the volume
   std::vector<int32_t> tet_iteration;  // per tet: iteration that created it (0 = input)
   std::vector<float> tet_quality;      // per tet: mean-ratio quality eta
+  // Per tet: the input tet it lies in (options.track_parents), else empty.
+  std::vector<uint32_t> tet_parent;
   std::vector<IterationStats> iterations;
   StopReason stop_reason = StopReason::kConverged;
   int64_t next_iteration_tets = 0;          // for kTetBudget: tets the refused iteration needed
@@ -123,10 +159,16 @@ struct RefineResult {
   double final_max_error = 0.0;
   double final_mean_error = 0.0;
   int64_t tets_reoriented = 0;  // inverted input tets fixed under kNormalize
+  // Certified mode with stop_reason kConverged: the largest discrepancy on the lattice of order
+  // lattice_n over every output tet, <= epsilon. Otherwise (not certified, or stopped early)
+  // a negative value.
+  double certified_max_error = -1.0;
   double seconds = 0.0;
 };
 
-// Refines `mesh` inside `volume` until every edge-midpoint error is <= epsilon (or a limit).
+// Refines `mesh` inside `volume` until no edge fails the scheme's test (or a limit).
+// The output keeps the input's vertices first, with their ids (sharding relies on it), then
+// adds each iteration's new vertices; mesh.labels, when given, are inherited by every child.
 // Validates the input first: an invalid mesh, volume or option is an InvalidArgument error whose
 // message names the offending field and index. Cancellation is not an error: the result says
 // kCancelled and holds the mesh as of the last completed iteration.

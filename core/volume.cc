@@ -189,6 +189,48 @@ double Volume::SampleIndex(const Vec3& u) const {
 namespace {
 
 template <typename T>
+std::array<double, 8> CornersOf(const std::byte* d, int64_t base, int64_t dy, int64_t dz) {
+  return {Load<T>(d, base),           Load<T>(d, base + 1),          Load<T>(d, base + dy),
+          Load<T>(d, base + dy + 1),  Load<T>(d, base + dz),         Load<T>(d, base + dz + 1),
+          Load<T>(d, base + dz + dy), Load<T>(d, base + dz + dy + 1)};
+}
+
+}  // namespace
+
+std::array<double, 8> Volume::CellCorners(const Index3& cell) const {
+  const int64_t nx = hi_[0] - lo_[0], ny = hi_[1] - lo_[1];
+  const int64_t base = (cell[0] - lo_[0]) + nx * ((cell[1] - lo_[1]) + ny * (cell[2] - lo_[2]));
+  const int64_t dy = nx, dz = nx * ny;
+  const std::byte* d = data_.data();
+  switch (type_) {
+    case VoxelType::kUint8:
+      return CornersOf<uint8_t>(d, base, dy, dz);
+    case VoxelType::kInt16:
+      return CornersOf<int16_t>(d, base, dy, dz);
+    case VoxelType::kUint16:
+      return CornersOf<uint16_t>(d, base, dy, dz);
+    case VoxelType::kInt32:
+      return CornersOf<int32_t>(d, base, dy, dz);
+    case VoxelType::kFloat32:
+      return CornersOf<float>(d, base, dy, dz);
+    case VoxelType::kFloat64:
+      return CornersOf<double>(d, base, dy, dz);
+  }
+  return {};
+}
+
+Index3 Volume::CellOf(const Vec3& u) const {
+  Index3 cell;
+  for (int a = 0; a < 3; ++a) {
+    const double x = std::clamp(u[a], 0.0, static_cast<double>(grid_.dims[a] - 1));
+    cell[a] = std::clamp(static_cast<int64_t>(x), lo_[a], hi_[a] - 2);
+  }
+  return cell;
+}
+
+namespace {
+
+template <typename T>
 std::array<double, 2> RangeOf(const std::byte* data, int64_t n) {
   const int64_t blocks = BlockCount(n);
   std::vector<std::array<double, 2>> partial(blocks);

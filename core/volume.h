@@ -73,6 +73,15 @@ class Volume {
   // a slab and the whole volume agree to the bit.
   double SampleIndex(const Vec3& u) const;
 
+  // The 8 samples at the corners of cell `cell` (its lowest corner; each axis in [lo, hi - 2]),
+  // ordered c000, c100, c010, c110, c001, c101, c011, c111 (x fastest). For code that needs the
+  // trilinear field of a whole cell, such as the exact maximum along a segment.
+  std::array<double, 8> CellCorners(const Index3& cell) const;
+
+  // The cell whose trilinear field holds at continuous index u: floor(u) clamped to the grid's
+  // cells and then into the slab's, exactly as SampleIndex chooses it.
+  Index3 CellOf(const Vec3& u) const;
+
   // Trilinear value at world point p (which must lie in the sampled box).
   double Sample(const Vec3& p) const { return SampleIndex(ContinuousIndex(p)); }
 

@@ -1,0 +1,275 @@
+#include "core/edge_marking.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "core/parallel.h"
+#include "core/quality.h"
+#include "core/segment_error.h"
+#include "core/subdivision_table.h"
+#include "core/tet_topology.h"
+
+namespace tetrefine::refine_internal {
+namespace {
+
+bool LexLess(const Vec3& a, const Vec3& b) {
+  if (a[0] != b[0]) return a[0] < b[0];
+  if (a[1] != b[1]) return a[1] < b[1];
+  return a[2] < b[2];
+}
+
+// Marks edge e split. Many tets may mark the same edge at once; they all write 1.
+void MarkSplit(FillLater<uint8_t>& split, uint32_t e) {
+  std::atomic_ref<uint8_t>(split[e]).store(1, std::memory_order_relaxed);
+}
+
+// Largest lattice discrepancy of one tet (order n), stopping early once above epsilon: the
+// caller only needs to know whether it passes.
+double TetLatticeMax(const Volume& volume, const std::array<Vec3, 4>& p,
+                     const std::array<double, 4>& v, int n, double norm, double epsilon,
+                     bool clamp) {
+  const double inv_n = 1.0 / n;
+  double worst = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    for (int j = 0; i + j <= n; ++j) {
+      for (int k = 0; i + j + k <= n; ++k) {
+        const int l = n - i - j - k;
+        // Corners are exact samples (their error is 0 by construction).
+        if (i == n || j == n || k == n || l == n) continue;
+        const double b[4] = {i * inv_n, j * inv_n, k * inv_n, l * inv_n};
+        Vec3 x{0, 0, 0};
+        double approx = 0.0;
+        for (int c = 0; c < 4; ++c) {
+          for (int a = 0; a < 3; ++a) x[a] += b[c] * p[c][a];
+          approx += b[c] * v[c];
+        }
+        const double error = std::abs(SampleInside(volume, x, clamp) - approx) / norm;
+        worst = std::max(worst, error);
+        if (worst > epsilon) return worst;
+      }
+    }
+  }
+  return worst;
+}
+
+}  // namespace
+
+EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& edges,
+                         const EdgeTestParams& params, const KnownEdges* known,
+                         CancelFlag& cancel) {
+  const double min_length2 = params.min_edge_length * params.min_edge_length;
+  const bool segment = params.test == EdgeTest::kSegment;
+  EdgeErrors out;
+  const std::vector<Vec3>& points = *m.points;
+  const std::vector<double>& values = m.mesh.values;
+  const int64_t nv = static_cast<int64_t>(points.size());
+  out.mid_value.resize(edges.size());
+  out.split.resize(edges.size());
+  if (segment) out.segment_error.resize(edges.size());
+  const bool known_segment = known != nullptr && !known->segment_error.empty();
+  const int64_t blocks = BlockCount(nv);
+  std::vector<double> sums(blocks, 0.0), maxs(blocks, 0.0), seg_maxs(blocks, 0.0);
+  std::vector<int64_t> failing(blocks, 0), kept(blocks, 0);
+  ForEachBlock(nv, [&](int64_t b, int64_t begin, int64_t end) {
+    if (cancel.Check()) return;
+    double s = 0.0, mx = 0.0, seg_mx = 0.0;
+    int64_t n_failing = 0, n_kept = 0;
+    for (int64_t v = begin; v < end; ++v) {
+      // v's known edges, walked forward alongside its sorted new ones.
+      const uint32_t* kp = nullptr;
+      const uint32_t* ke = nullptr;
+      if (known != nullptr && v + 1 < static_cast<int64_t>(known->edges.first.size())) {
+        kp = known->edges.second.data() + known->edges.first[v];
+        ke = known->edges.second.data() + known->edges.first[v + 1];
+      }
+      for (uint32_t e = edges.first[v]; e < edges.first[v + 1]; ++e) {
+        const uint32_t w = edges.second[e];
+        while (kp < ke && *kp < w) ++kp;
+        const bool is_known = kp < ke && *kp == w;
+        const int64_t known_index = is_known ? kp - known->edges.second.data() : -1;
+        const double real =
+            is_known ? known->mid_value[known_index]
+                     : SampleInside(volume, Midpoint(points[v], points[w]), params.clamp);
+        const double error = std::abs(real - 0.5 * (values[v] + values[w])) / params.norm;
+        out.mid_value[e] = real;
+        double test_error = error;
+        if (segment) {
+          test_error = is_known && known_segment
+                           ? known->segment_error[known_index]
+                           : MaxSegmentDiscrepancy(volume, points[v], points[w], values[v],
+                                                   values[w], params.clamp) /
+                                 params.norm;
+          // The midpoint is a point of the segment: the two agree up to rounding, and the
+          // statistic must never say the midpoint is worse than the whole edge.
+          test_error = std::max(test_error, error);
+          out.segment_error[e] = test_error;
+          seg_mx = std::max(seg_mx, test_error);
+        }
+        bool split = test_error > params.epsilon;
+        if (split && min_length2 > 0.0 && SquaredDistance(points[v], points[w]) < min_length2) {
+          split = false;
+          ++n_kept;
+        }
+        out.split[e] = split;
+        n_failing += split;
+        s += error;
+        mx = std::max(mx, error);
+      }
+    }
+    sums[b] = s;
+    maxs[b] = mx;
+    seg_maxs[b] = seg_mx;
+    failing[b] = n_failing;
+    kept[b] = n_kept;
+  });
+  double sum = 0.0;
+  for (int64_t b = 0; b < blocks; ++b) {
+    sum += sums[b];
+    out.max_error = std::max(out.max_error, maxs[b]);
+    out.max_segment_error = std::max(out.max_segment_error, seg_maxs[b]);
+    out.failing += failing[b];
+    out.short_kept += kept[b];
+  }
+  out.mean_error = edges.size() > 0 ? sum / static_cast<double>(edges.size()) : 0.0;
+  return out;
+}
+
+int LongestEdge(const std::array<Vec3, 4>& p) {
+  int best = 0;
+  double best_length = SquaredDistance(p[0], p[1]);
+  for (int k = 1; k < 6; ++k) {
+    const Vec3& a = p[kTetEdges[k][0]];
+    const Vec3& b = p[kTetEdges[k][1]];
+    const double length = SquaredDistance(a, b);
+    if (length < best_length) continue;
+    if (length == best_length) {
+      // Exact tie: compare the edges as point pairs, each ordered lexicographically.
+      const Vec3& ba = p[kTetEdges[best][0]];
+      const Vec3& bb = p[kTetEdges[best][1]];
+      const Vec3& lo = LexLess(b, a) ? b : a;
+      const Vec3& hi = LexLess(b, a) ? a : b;
+      const Vec3& best_lo = LexLess(bb, ba) ? bb : ba;
+      const Vec3& best_hi = LexLess(bb, ba) ? ba : bb;
+      const bool smaller = LexLess(lo, best_lo) || (lo == best_lo && LexLess(hi, best_hi));
+      if (!smaller) continue;
+    }
+    best = k;
+    best_length = length;
+  }
+  return best;
+}
+
+int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                            const EdgeTable& edges, int rounds, FillLater<uint8_t>& split) {
+  const int64_t nt = static_cast<int64_t>(tets.size());
+  int64_t added = 0;
+  for (int round = 0; round < rounds; ++round) {
+    FillLater<uint8_t> next(split.begin(), split.end());
+    ForEachBlock(nt, [&](int64_t, int64_t begin, int64_t end) {
+      for (int64_t t = begin; t < end; ++t) {
+        const auto& te = edges.tet_edges[t];
+        bool any = false;
+        for (int k = 0; k < 6; ++k) any |= split[te[k]] != 0;
+        if (!any) continue;
+        const Tet& tet = tets[t];
+        const int longest =
+            LongestEdge({points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]});
+        if (split[te[longest]] == 0) MarkSplit(next, te[longest]);
+      }
+    });
+    const int64_t ne = edges.size();
+    const int64_t blocks = BlockCount(ne);
+    std::vector<int64_t> changed(blocks, 0);
+    ForEachBlock(ne, [&](int64_t b, int64_t begin, int64_t end) {
+      int64_t c = 0;
+      for (int64_t e = begin; e < end; ++e) c += next[e] != split[e];
+      changed[b] = c;
+    });
+    int64_t round_added = 0;
+    for (int64_t c : changed) round_added += c;
+    split.swap(next);
+    added += round_added;
+    if (round_added == 0) break;
+  }
+  return added;
+}
+
+int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                         const EdgeTable& edges, double ratio, FillLater<uint8_t>& split) {
+  const int64_t nt = static_cast<int64_t>(tets.size());
+  const auto& table = SubdivisionTable();
+  FillLater<uint8_t> next(split.begin(), split.end());
+  ForEachBlock(nt, [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t t = begin; t < end; ++t) {
+      const auto& te = edges.tet_edges[t];
+      uint32_t pattern = 0;
+      for (int k = 0; k < 6; ++k) pattern |= split[te[k]] ? EdgeBit(k) : 0u;
+      if (pattern == 0 || pattern == 63) continue;
+      const Tet& tet = tets[t];
+      const std::array<Vec3, 4> corners = {points[tet[0]], points[tet[1]], points[tet[2]],
+                                           points[tet[3]]};
+      std::array<Vec3, 10> p;
+      for (int c = 0; c < 4; ++c) p[c] = corners[c];
+      for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+      const SubdivisionEntry& entry = table[SubdivisionKey(pattern, p)];
+      const auto local = LocalPoints(corners, entry);
+      const double own = MeanRatio(corners[0], corners[1], corners[2], corners[3]);
+      bool bad = false;
+      for (int i = 0; i < entry.tet_count && !bad; ++i) {
+        const auto& c = entry.tets[i];
+        bad = MeanRatio(local[c[0]], local[c[1]], local[c[2]], local[c[3]]) < ratio * own;
+      }
+      if (!bad) continue;
+      for (int k = 0; k < 6; ++k) {
+        if (!split[te[k]]) MarkSplit(next, te[k]);
+      }
+    }
+  });
+  int64_t added = 0;
+  for (size_t e = 0; e < split.size(); ++e) added += next[e] != split[e];
+  split.swap(next);
+  return added;
+}
+
+int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,
+                        const EdgeTestParams& params, FillLater<uint8_t>& split, double* max_seen,
+                        CancelFlag& cancel) {
+  const std::vector<Vec3>& points = *state.points;
+  const std::vector<Tet>& tets = *state.tets;
+  const std::vector<double>& values = state.mesh.values;
+  const int64_t nt = static_cast<int64_t>(tets.size());
+  const int64_t blocks = BlockCount(nt);
+  std::vector<int64_t> failing(blocks, 0);
+  std::vector<double> worst(blocks, 0.0);
+  ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
+    if (cancel.Check()) return;
+    int64_t f = 0;
+    double w = 0.0;
+    for (int64_t t = begin; t < end; ++t) {
+      if (state.tet_lattice_error[t] >= 0.0) continue;
+      const Tet& tet = tets[t];
+      const std::array<Vec3, 4> p = {points[tet[0]], points[tet[1]], points[tet[2]],
+                                     points[tet[3]]};
+      const double max_error =
+          TetLatticeMax(volume, p, {values[tet[0]], values[tet[1]], values[tet[2]], values[tet[3]]},
+                        n, params.norm, params.epsilon, params.clamp);
+      w = std::max(w, max_error);
+      state.tet_lattice_error[t] = max_error;
+      if (max_error <= params.epsilon) continue;
+      ++f;
+      MarkSplit(split, edges.tet_edges[t][LongestEdge(p)]);
+    }
+    failing[b] = f;
+    worst[b] = w;
+  });
+  int64_t total = 0;
+  *max_seen = 0.0;
+  for (int64_t b = 0; b < blocks; ++b) {
+    total += failing[b];
+    *max_seen = std::max(*max_seen, worst[b]);
+  }
+  return total;
+}
+
+}  // namespace tetrefine::refine_internal

@@ -1,0 +1,86 @@
+#pragma once
+
+// Which edges an iteration splits: the edge test of the scheme (core/refine.h), then the
+// longest-edge closure of the conforming schemes and, in certified mode, the tets whose lattice
+// fails. Internal to Refine.
+
+#include <cstdint>
+
+#include "core/edge_table.h"
+#include "core/fill_later.h"
+#include "core/refine_state.h"
+#include "core/volume.h"
+
+namespace tetrefine::refine_internal {
+
+// How an edge is judged.
+enum class EdgeTest : uint8_t {
+  kMidpoint,  // the paper's eq. 3 at the edge midpoint only
+  kSegment,   // the exact maximum of eq. 3 along the whole edge (core/segment_error.h)
+};
+
+struct EdgeTestParams {
+  EdgeTest test = EdgeTest::kMidpoint;
+  double norm = 1.0;             // normCoeff of eq. 3
+  double epsilon = 0.1;          // an edge whose error exceeds this fails
+  double min_edge_length = 0.0;  // failing edges shorter than this are kept whole
+  bool clamp = false;            // sample points clamped into the grid
+};
+
+// Per unique edge (EdgeTable order): the trilinear value at its midpoint (the value a new vertex
+// there gets) and whether the iteration splits it. Statistics are over unique edges.
+struct EdgeErrors {
+  FillLater<double> mid_value;      // E
+  FillLater<double> segment_error;  // E, normalised; kSegment only (empty for kMidpoint)
+  FillLater<uint8_t> split;         // E: 1 when split
+  int64_t failing = 0;              // edges whose test failed (and were long enough to split)
+  int64_t short_kept = 0;           // failing edges kept whole: shorter than min_edge_length
+  double max_error = 0.0;           // max midpoint error (the paper's statistic, whatever the test)
+  double mean_error = 0.0;
+  double max_segment_error = 0.0;  // kSegment: max along edges; else 0
+};
+
+// The previous iteration's edges and what was computed for them. Subdivision keeps the old
+// vertices' ids and values, and joins two old vertices only along an old edge it did not split
+// (a child's corners are its parent's corners, edge midpoints and Steiner point), so every edge
+// of the refined mesh between two old vertices is in this table with the same midpoint value
+// and segment error. The next evaluation reads those instead of sampling the volume again: the
+// same bits, and most of a late iteration's edges are such edges.
+struct KnownEdges {
+  EdgeTable edges;  // without tet_edges
+  FillLater<double> mid_value;
+  FillLater<double> segment_error;  // empty unless the test was kSegment
+};
+
+// Judges every unique edge of the state's mesh. `known` may be null.
+EdgeErrors EvaluateEdges(const Volume& volume, const State& state, const EdgeTable& edges,
+                         const EdgeTestParams& params, const KnownEdges* known, CancelFlag& cancel);
+
+// Local index (kTetEdges) of the longest edge of the tet with corners p. Equal lengths are broken
+// by geometry (the edge whose lexicographically smaller endpoint, then larger endpoint, is
+// smallest), never by numbering, so every tet sharing the edge agrees and shards agree.
+int LongestEdge(const std::array<Vec3, 4>& p);
+
+// Longest-edge closure, `rounds` times: every tet with a split edge also splits its longest
+// edge. Each round reads the marks of the round before (never marks made in the same round), so
+// the result does not depend on the order tets are visited in. Needs edges.tet_edges. Returns
+// the number of edges the closure added.
+int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                            const EdgeTable& edges, int rounds, FillLater<uint8_t>& split);
+
+// One round of the quality guard: every tet whose split (by the paper's table) would make a
+// child of mean-ratio quality below `ratio` times its own splits all six edges instead (regular
+// 1:8 refinement keeps at least 0.77 of the parent's quality, measured). Returns edges added.
+int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                         const EdgeTable& edges, double ratio, FillLater<uint8_t>& split);
+
+// Certified mode: samples every tet not yet certified on the lattice of order n (the paper's
+// 165 points for n = 8); a tet whose discrepancy exceeds epsilon gets its longest edge split, a
+// tet's discrepancy is kept in state.tet_lattice_error (it is final until the tet is split).
+// Returns the number of failing tets and the largest discrepancy seen among the tets sampled now
+// (max_failing) in *max_seen.
+int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,
+                        const EdgeTestParams& params, FillLater<uint8_t>& split, double* max_seen,
+                        CancelFlag& cancel);
+
+}  // namespace tetrefine::refine_internal

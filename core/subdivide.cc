@@ -1,0 +1,197 @@
+#include "core/subdivide.h"
+
+#include <tbb/parallel_invoke.h>
+
+#include <algorithm>
+#include <array>
+#include <vector>
+
+#include "core/parallel.h"
+#include "core/quality.h"
+#include "core/subdivision_table.h"
+#include "core/tet_topology.h"
+
+namespace tetrefine::refine_internal {
+StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& errors,
+                      int iteration, const StepLimits& limits, CancelFlag& cancel, State& state,
+                      IterationStats& stats, int64_t* next_tets, double* next_quality) {
+  const struct {
+    const std::vector<Vec3>& points;
+    const std::vector<Tet>& tets;
+    const std::vector<double>& values;
+  } m{*state.points, *state.tets, state.mesh.values};
+  const bool clamp = limits.clamp;
+  const int64_t nt = static_cast<int64_t>(m.tets.size());
+  const int64_t nv = static_cast<int64_t>(m.points.size());
+  const auto& table = SubdivisionTable();
+  const auto& patterns = PatternTable();
+
+  // Pass 1: each tet's subdivision key and child counts, per block.
+  FillLater<uint16_t> keys(nt);
+  const int64_t tet_blocks = BlockCount(nt);
+  std::vector<int64_t> child_offset(tet_blocks), steiner_offset(tet_blocks);
+  std::vector<ConfigurationCounts> config_counts(tet_blocks);
+  ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
+    if (cancel.Check()) return;
+    int64_t children = 0, steiner = 0;
+    ConfigurationCounts counts{};
+    for (int64_t t = begin; t < end; ++t) {
+      const Tet& tet = m.tets[t];
+      const auto& te = edges.tet_edges[t];
+      uint32_t pattern = 0;
+      for (int k = 0; k < 6; ++k) pattern |= errors.split[te[k]] ? EdgeBit(k) : 0u;
+      uint32_t key = 0;
+      if (pattern != 0) {
+        std::array<Vec3, 10> p;
+        for (int c = 0; c < 4; ++c) p[c] = m.points[tet[c]];
+        for (int k = 0; k < 6; ++k) {
+          if ((pattern & EdgeBit(k)) != 0) {
+            p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+          }
+        }
+        key = SubdivisionKey(pattern, p);
+      }
+      keys[t] = static_cast<uint16_t>(key);
+      const SubdivisionEntry& entry = table[key];
+      children += entry.tet_count;
+      steiner += entry.steiner;
+      ++counts[static_cast<int>(patterns[pattern].configuration)];
+    }
+    child_offset[b] = children;
+    steiner_offset[b] = steiner;
+    config_counts[b] = counts;
+  });
+  if (cancel.IsSet()) return StepOutcome::kCancelled;
+  const int64_t total_children = ExclusivePrefixSum(child_offset);
+  const int64_t total_steiner = ExclusivePrefixSum(steiner_offset);
+  if (total_children > limits.max_tets) {
+    *next_tets = total_children;
+    return StepOutcome::kTetBudget;
+  }
+  for (const auto& c : config_counts) {
+    for (int i = 0; i < kNumConfigurations; ++i) stats.configurations[i] += c[i];
+  }
+  stats.schonhardt_prisms = total_steiner;
+  stats.tets_with_error = nt - stats.configurations[0];
+
+  // New vertex ids: midpoints in edge order after the old vertices, then Steiner points in tet
+  // order.
+  const int64_t vertex_blocks = BlockCount(nv);
+  std::vector<int64_t> mid_offset(vertex_blocks);
+  ForEachBlock(nv, [&](int64_t b, int64_t begin, int64_t end) {
+    int64_t n = 0;
+    for (uint32_t e = edges.first[begin]; e < edges.first[end]; ++e) n += errors.split[e];
+    mid_offset[b] = n;
+  });
+  const int64_t total_mid = ExclusivePrefixSum(mid_offset);
+  FillLater<uint32_t> mid_id(edges.size());
+  // The output arrays are the mesh's public std::vectors, which zero their elements on one
+  // thread (and take the page faults there) before the passes below overwrite them: that was
+  // the largest serial step of an iteration. Allocating them side by side cuts it by the number
+  // of workers.
+  State next;
+  const int64_t next_points = nv + total_mid + total_steiner;
+  tbb::parallel_invoke(
+      [&] {
+        next.mesh.points.reserve(next_points);
+        next.mesh.points.assign(m.points.begin(), m.points.end());
+        next.mesh.points.resize(next_points);
+      },
+      [&] {
+        next.mesh.values.reserve(next_points);
+        next.mesh.values.assign(m.values.begin(), m.values.end());
+        next.mesh.values.resize(next_points);
+      },
+      [&] { next.mesh.tets.resize(total_children); },
+      [&] { next.tet_iteration.resize(total_children); },
+      [&] { next.tet_quality.resize(total_children); },
+      [&] {
+        if (!state.tet_label.empty()) next.tet_label.resize(total_children);
+        if (!state.tet_parent.empty()) next.tet_parent.resize(total_children);
+        if (!state.tet_lattice_error.empty()) next.tet_lattice_error.resize(total_children);
+      });
+  const bool labels = !state.tet_label.empty();
+  const bool parents = !state.tet_parent.empty();
+  const bool certified = !state.tet_lattice_error.empty();
+  ForEachBlock(nv, [&](int64_t b, int64_t begin, int64_t end) {
+    int64_t id = nv + mid_offset[b];
+    for (int64_t v = begin; v < end; ++v) {
+      for (uint32_t e = edges.first[v]; e < edges.first[v + 1]; ++e) {
+        if (!errors.split[e]) continue;
+        mid_id[e] = static_cast<uint32_t>(id);
+        next.mesh.points[id] = Midpoint(m.points[v], m.points[edges.second[e]]);
+        next.mesh.values[id] = errors.mid_value[e];
+        ++id;
+      }
+    }
+  });
+
+  // Pass 2: write the children.
+  const int64_t steiner_base = nv + total_mid;
+  std::vector<double> worst(tet_blocks, 1.0);
+  ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
+    if (cancel.Check()) return;
+    double block_worst = 1.0;
+    int64_t out = child_offset[b];
+    int64_t steiner_id = steiner_base + steiner_offset[b];
+    auto write_child = [&](const Tet& child, int64_t t) {
+      next.mesh.tets[out] = child;
+      next.tet_iteration[out] = iteration;
+      if (labels) next.tet_label[out] = state.tet_label[t];
+      if (parents) next.tet_parent[out] = state.tet_parent[t];
+      if (certified) next.tet_lattice_error[out] = -1.0;
+      const auto& np = next.mesh.points;
+      const Vec3 &a = np[child[0]], &b = np[child[1]], &c = np[child[2]], &d = np[child[3]];
+      const double v6 = SignedVolume6(a, b, c, d);
+      const float q = static_cast<float>(MeanRatioWithVolume6(a, b, c, d, v6));
+      next.tet_quality[out] = q;
+      if (v6 <= 0.0) block_worst = -1.0;
+      block_worst = std::min(block_worst, static_cast<double>(q));
+      ++out;
+    };
+    for (int64_t t = begin; t < end; ++t) {
+      const Tet& tet = m.tets[t];
+      if (keys[t] == 0) {
+        next.mesh.tets[out] = tet;
+        next.tet_iteration[out] = state.tet_iteration[t];
+        next.tet_quality[out] = state.tet_quality[t];
+        if (labels) next.tet_label[out] = state.tet_label[t];
+        if (parents) next.tet_parent[out] = state.tet_parent[t];
+        if (certified) next.tet_lattice_error[out] = state.tet_lattice_error[t];
+        ++out;
+        continue;
+      }
+      std::array<uint32_t, kNumLocalPoints> global{};
+      for (int c = 0; c < 4; ++c) global[c] = tet[c];
+      const auto& te = edges.tet_edges[t];
+      // mid_id is written for split edges only (FillLater): read nothing else.
+      for (int k = 0; k < 6; ++k) global[4 + k] = errors.split[te[k]] ? mid_id[te[k]] : 0;
+      const SubdivisionEntry& entry = table[keys[t]];
+      if (entry.steiner) {
+        std::array<Vec3, 6> pts;
+        for (int i = 0; i < 6; ++i) pts[i] = next.mesh.points[global[entry.steiner_of[i]]];
+        const Vec3 s = SteinerPoint(pts);
+        global[kSteinerLocal] = static_cast<uint32_t>(steiner_id);
+        next.mesh.points[steiner_id] = s;
+        next.mesh.values[steiner_id] = SampleInside(volume, s, clamp);
+        ++steiner_id;
+      }
+      for (int i = 0; i < entry.tet_count; ++i) {
+        const auto& lt = entry.tets[i];
+        write_child({global[lt[0]], global[lt[1]], global[lt[2]], global[lt[3]]}, t);
+      }
+    }
+    worst[b] = block_worst;
+  });
+  if (cancel.IsSet()) return StepOutcome::kCancelled;
+  const double worst_quality = *std::min_element(worst.begin(), worst.end());
+  if (worst_quality <= 0.0 || worst_quality < limits.min_quality) {
+    *next_quality = worst_quality;
+    return StepOutcome::kQualityFloor;
+  }
+  state = std::move(next);
+  state.UseOwnMesh();
+  return StepOutcome::kApplied;
+}
+
+}  // namespace tetrefine::refine_internal
