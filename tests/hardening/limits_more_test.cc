@@ -12,12 +12,12 @@
 #include "client/refine_client.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/wire_conversion.h"
-#include "server/wire_request_writer.h"
 #include "tests/hardening/server_process.h"
 #include "tests/hardening/workloads.h"
 #include "tests/server/service_test_support.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "wire/conversion.h"
+#include "wire/request_writer.h"
 
 namespace tetrefine::hardening {
 namespace {

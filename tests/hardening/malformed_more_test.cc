@@ -18,11 +18,11 @@
 #include "client/refine_client.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/wire_request_writer.h"
 #include "tests/hardening/raw_call.h"
 #include "tests/hardening/server_process.h"
 #include "tests/hardening/workloads.h"
 #include "tests/server/service_test_support.h"
+#include "wire/request_writer.h"
 
 namespace tetrefine::hardening {
 namespace {

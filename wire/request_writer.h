@@ -5,8 +5,8 @@
 
 #include "core/mesh.h"
 #include "core/volume.h"
-#include "server/wire_conversion.h"
 #include "tetrefine/v1/tetrefine.pb.h"
+#include "wire/conversion.h"
 
 namespace tetrefine::wire {
 

@@ -1,4 +1,4 @@
-#include "server/wire_response_reader.h"
+#include "wire/response_reader.h"
 
 #include <algorithm>
 #include <string_view>

@@ -1,4 +1,4 @@
-#include "server/wire_request_writer.h"
+#include "wire/request_writer.h"
 
 #include <algorithm>
 #include <cstdint>

@@ -1,4 +1,4 @@
-#include "server/wire_response_writer.h"
+#include "wire/response_writer.h"
 
 #include <algorithm>
 #include <utility>

@@ -7,9 +7,9 @@
 #include "absl/status/status.h"
 #include "core/mesh.h"
 #include "core/volume.h"
-#include "server/service_limits.h"
-#include "server/wire_conversion.h"
 #include "tetrefine/v1/tetrefine.pb.h"
+#include "wire/conversion.h"
+#include "wire/service_limits.h"
 
 namespace tetrefine::wire {
 

@@ -1,7 +1,7 @@
 #pragma once
 
 // Conversions between core types and tetrefine.v1 messages that are one message (or enum) each.
-// The streamed parts (volume and mesh chunks) are in wire_request_* and wire_response_*.
+// The streamed parts (volume and mesh chunks) are in request_* and response_*.
 
 #include <cstddef>
 #include <cstdint>
@@ -12,8 +12,8 @@
 #include "core/refine.h"
 #include "core/voxel_type.h"
 #include "grpcpp/support/status.h"
-#include "server/service_limits.h"
 #include "tetrefine/v1/tetrefine.pb.h"
+#include "wire/service_limits.h"
 
 namespace tetrefine::wire {
 

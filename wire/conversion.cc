@@ -1,4 +1,4 @@
-#include "server/wire_conversion.h"
+#include "wire/conversion.h"
 
 #include <cmath>
 #include <string>

@@ -1,4 +1,4 @@
-#include "server/wire_request_reader.h"
+#include "wire/request_reader.h"
 
 #include <cmath>
 #include <cstring>

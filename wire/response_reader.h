@@ -9,8 +9,8 @@
 #include "absl/status/statusor.h"
 #include "core/mesh.h"
 #include "core/refine.h"
-#include "server/wire_conversion.h"
 #include "tetrefine/v1/tetrefine.pb.h"
+#include "wire/conversion.h"
 
 namespace tetrefine::wire {
 
