@@ -2,7 +2,7 @@
 
 #include <cstring>
 
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
 #include "wire/conversion.h"
 
 namespace tetrefine::hardening {

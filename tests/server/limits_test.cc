@@ -7,7 +7,8 @@
 #include "client/refine_client.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
+#include "tests/support/loopback_server.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
 #include "wire/request_writer.h"
 

@@ -10,6 +10,7 @@
 
 #include "core/mesh.h"
 #include "core/volume.h"
+#include "core/voxel_type.h"
 
 namespace tetrefine::testing {
 
@@ -37,8 +38,22 @@ Volume AnalyticVolume(const GridGeometry& g, F f) {
 // edge-error checks are tested against.
 std::set<std::pair<uint32_t, uint32_t>> UniqueEdges(const std::vector<Tet>& tets);
 
-// A structured mesh of the box [lo, hi] with `cells` cells per axis, 5 tets per cell with
-// alternating orientation so that faces match (the paper's voxel tetrahedrization).
+// A structured mesh of the box [lo, hi] with `cells` cells per axis, each cut into 5 positively
+// oriented tets by core's AppendFiveTetCell (the paper's voxel tetrahedrization, the split the CLI
+// mesher uses), cell (i, j, k) even when i + j + k is, so that shared faces match. Vertex
+// (i, j, k) of the (cells + 1)^3 grid has id i + (cells[0] + 1) * (j + (cells[1] + 1) * k).
 Mesh FiveTetMesh(const Vec3& lo, const Vec3& hi, const std::array<int, 3>& cells);
+
+// The service tests' field: smooth, with enough curvature that refinement runs a few
+// iterations.
+double TestField(const Vec3& p);
+
+// A whole volume of `dims` samples, spacing 1, origin 0, sampling TestField, stored as `type`
+// (integer types round the field scaled by 100).
+Volume TestVolume(const Index3& dims, VoxelType type = VoxelType::kFloat64);
+
+// The slab [lo, hi) of TestVolume(dims, type).
+Volume TestSlab(const Index3& dims, const Index3& lo, const Index3& hi,
+                VoxelType type = VoxelType::kFloat64);
 
 }  // namespace tetrefine::testing

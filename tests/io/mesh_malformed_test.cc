@@ -13,7 +13,7 @@
 #include "client/io/vtu_format.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "tests/client/io_test_util.h"
+#include "tests/io/io_test_util.h"
 
 namespace tetrefine::io {
 namespace {

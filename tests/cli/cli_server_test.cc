@@ -9,9 +9,9 @@
 #include "absl/strings/match.h"
 #include "client/io/mesh_io.h"
 #include "gtest/gtest.h"
-#include "tests/client/cli_test_util.h"
-#include "tests/client/io_test_util.h"
-#include "tests/core/test_geometry.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::clitest {
 namespace {
@@ -20,13 +20,22 @@ using io::iotest::ScratchDir;
 
 class CliServer : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { server_ = new ServerProcess({"--threads=2"}); }
+  static void SetUpTestSuite() {
+    absl::StatusOr<std::unique_ptr<ServerProcess>> server = ServerProcess::Start({"--threads=2"});
+    if (server.ok()) {
+      server_ = server->release();
+    } else {
+      start_error_ = new std::string(server.status().ToString());
+    }
+  }
   static void TearDownTestSuite() {
     delete server_;
     server_ = nullptr;
+    delete start_error_;
+    start_error_ = nullptr;
   }
   void SetUp() override {
-    ASSERT_TRUE(server_->started()) << "tetrefine_server did not start:\n" << server_->log();
+    ASSERT_NE(server_, nullptr) << *start_error_;
     volume_ = dir_.File("bump.nii");
     mesh_ = dir_.File("grid.vtu");
     WriteVolume(volume_, BumpVolume({9, 9, 9}, {0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}));
@@ -34,12 +43,14 @@ class CliServer : public ::testing::Test {
   }
 
   static ServerProcess* server_;
+  static std::string* start_error_;
   ScratchDir dir_;
   std::string volume_;
   std::string mesh_;
 };
 
 ServerProcess* CliServer::server_ = nullptr;
+std::string* CliServer::start_error_ = nullptr;
 
 TEST_F(CliServer, RemoteRefineGivesTheEmbeddedResult) {
   const std::string remote = dir_.File("remote.vtu");
@@ -47,10 +58,10 @@ TEST_F(CliServer, RemoteRefineGivesTheEmbeddedResult) {
   const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
                                            mesh_,    "--epsilon", "0.05"};
   std::vector<std::string> args = common;
-  args.insert(args.end(), {"--server", server_->address(), "--output", remote});
+  args.insert(args.end(), {"--server", server_->target(), "--output", remote});
   const ProcessResult run_remote = RunTetrefine(args);
   ASSERT_EQ(run_remote.exit_code, 0) << run_remote.err;
-  EXPECT_TRUE(absl::StrContains(run_remote.err, "server " + server_->address())) << run_remote.err;
+  EXPECT_TRUE(absl::StrContains(run_remote.err, "server " + server_->target())) << run_remote.err;
   args = common;
   args.insert(args.end(), {"--output", embedded});
   const ProcessResult run_embedded = RunTetrefine(args);
@@ -65,8 +76,9 @@ TEST_F(CliServer, RemoteRefineGivesTheEmbeddedResult) {
 }
 
 TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
-  ServerProcess second({"--threads=1"});
-  ASSERT_TRUE(second.started()) << second.log();
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start({"--threads=1"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  const ServerProcess& second = **started;
   const std::string embedded = dir_.File("embedded.vtu");
   const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
                                            mesh_,    "--epsilon", "0.05"};
@@ -88,7 +100,7 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   for (const char* shards : {"2", "3"}) {
     const std::string sharded = dir_.File(std::string("sharded") + shards + ".vtu");
     args = common;
-    args.insert(args.end(), {"--server", server_->address() + "," + second.address(), "--shards",
+    args.insert(args.end(), {"--server", server_->target() + "," + second.target(), "--shards",
                              shards, "--output", sharded});
     const ProcessResult run = RunTetrefine(args);
     ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -100,7 +112,7 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   }
   // Sharding merges finished parts, so per-iteration meshes cannot be streamed.
   args = common;
-  args.insert(args.end(), {"--server", server_->address() + "," + second.address(),
+  args.insert(args.end(), {"--server", server_->target() + "," + second.target(),
                            "--every-iteration", "--output", dir_.File("x.vtu")});
   const ProcessResult refused = RunTetrefine(args);
   EXPECT_EQ(refused.exit_code, 2);
@@ -117,9 +129,9 @@ TEST_F(CliServer, ServerSideValidationErrorNamesTheMesh) {
   const std::string out = dir_.File("never.vtu");
   const ProcessResult run =
       RunTetrefine({"refine", "--volume", volume_, "--mesh", path, "--epsilon", "0.1", "--server",
-                    server_->address(), "--output", out, "--quiet"});
+                    server_->target(), "--output", out, "--quiet"});
   EXPECT_EQ(run.exit_code, 2) << run.err;
-  ASSERT_EQ(Lines(run.err).size(), 1u) << run.err;
+  ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
   EXPECT_TRUE(absl::StartsWith(run.err, "tetrefine: " + path + ": ")) << run.err;
   EXPECT_FALSE(FileExists(out));
 }
@@ -127,7 +139,7 @@ TEST_F(CliServer, ServerSideValidationErrorNamesTheMesh) {
 TEST_F(CliServer, HealthIsServing) {
   for (const char* service : {"", "tetrefine.v1.Refiner"}) {
     const ProcessResult run =
-        RunTetrefine({"health", "--server", server_->address(), "--service", service});
+        RunTetrefine({"health", "--server", server_->target(), "--service", service});
     EXPECT_EQ(run.exit_code, 0) << service << ": " << run.err;
     EXPECT_EQ(run.out, "SERVING\n");
   }
@@ -135,9 +147,9 @@ TEST_F(CliServer, HealthIsServing) {
 
 TEST_F(CliServer, HealthOfAnUnknownServiceFails) {
   const ProcessResult run =
-      RunTetrefine({"health", "--server", server_->address(), "--service", "no.such.Service"});
+      RunTetrefine({"health", "--server", server_->target(), "--service", "no.such.Service"});
   EXPECT_EQ(run.exit_code, 1) << run.err;
-  EXPECT_EQ(Lines(run.err).size(), 1u) << run.err;
+  EXPECT_EQ(SplitLines(run.err).size(), 1u) << run.err;
 }
 
 TEST(CliHealth, ClosedPortFailsQuickly) {
@@ -146,7 +158,7 @@ TEST(CliHealth, ClosedPortFailsQuickly) {
       RunTetrefine({"health", "--server", address, "--timeout", "2"}, "", /*timeout_seconds=*/30);
   EXPECT_EQ(run.exit_code, 1) << run.err;
   EXPECT_LT(run.seconds, 10.0);
-  ASSERT_EQ(Lines(run.err).size(), 1u) << run.err;
+  ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
   EXPECT_TRUE(absl::StrContains(run.err, address)) << run.err;
 }
 

@@ -8,7 +8,7 @@
 
 #include "client/io/mesh_io.h"
 #include "gtest/gtest.h"
-#include "tests/client/io_test_util.h"
+#include "tests/io/io_test_util.h"
 
 namespace tetrefine::io {
 namespace {

@@ -17,8 +17,8 @@
 #include "client/io/json_writer.h"
 #include "core/mesh_validation.h"
 #include "gtest/gtest.h"
-#include "tests/client/cli_test_util.h"
-#include "tests/core/test_geometry.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::cli {
 

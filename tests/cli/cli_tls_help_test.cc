@@ -7,8 +7,8 @@
 #include "absl/strings/match.h"
 #include "client/cli/commands.h"
 #include "gtest/gtest.h"
-#include "tests/client/cli_test_util.h"
-#include "tests/client/io_test_util.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
 
 namespace tetrefine::clitest {
 namespace {
@@ -66,27 +66,29 @@ class CliTls : public ::testing::Test {
 
 TEST_F(CliTls, HealthOverTlsAndMutualTls) {
   {
-    ServerProcess server(
+    absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
         {"--tls_cert=" + dir_.File("server.pem"), "--tls_key=" + dir_.File("server.key")});
-    ASSERT_TRUE(server.started()) << server.log();
+    ASSERT_TRUE(started.ok()) << started.status();
+    const ServerProcess& server = **started;
     const ProcessResult tls =
-        RunTetrefine({"health", "--server", server.address(), "--tls-ca", dir_.File("ca.pem")});
+        RunTetrefine({"health", "--server", server.target(), "--tls-ca", dir_.File("ca.pem")});
     EXPECT_EQ(tls.exit_code, 0) << tls.err;
-    const ProcessResult plain = RunTetrefine({"health", "--server", server.address()});
+    const ProcessResult plain = RunTetrefine({"health", "--server", server.target()});
     EXPECT_EQ(plain.exit_code, 1) << "a plaintext client must not reach a TLS server";
   }
-  ServerProcess server({"--tls_cert=" + dir_.File("server.pem"),
-                        "--tls_key=" + dir_.File("server.key"),
-                        "--tls_client_ca=" + dir_.File("ca.pem")});
-  ASSERT_TRUE(server.started()) << server.log();
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
+      {"--tls_cert=" + dir_.File("server.pem"), "--tls_key=" + dir_.File("server.key"),
+       "--tls_client_ca=" + dir_.File("ca.pem")});
+  ASSERT_TRUE(started.ok()) << started.status();
+  const ServerProcess& server = **started;
   const ProcessResult with_cert =
-      RunTetrefine({"health", "--server", server.address(), "--tls-ca", dir_.File("ca.pem"),
+      RunTetrefine({"health", "--server", server.target(), "--tls-ca", dir_.File("ca.pem"),
                     "--tls-cert", dir_.File("client.pem"), "--tls-key", dir_.File("client.key")});
   EXPECT_EQ(with_cert.exit_code, 0) << with_cert.err;
   const ProcessResult without_cert =
-      RunTetrefine({"health", "--server", server.address(), "--tls-ca", dir_.File("ca.pem")});
+      RunTetrefine({"health", "--server", server.target(), "--tls-ca", dir_.File("ca.pem")});
   EXPECT_EQ(without_cert.exit_code, 1) << "mutual TLS must refuse a client without certificate";
-  EXPECT_EQ(Lines(without_cert.err).size(), 1u) << without_cert.err;
+  EXPECT_EQ(SplitLines(without_cert.err).size(), 1u) << without_cert.err;
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "tests/core/mesh_checks.h"
+#include "tests/support/mesh_checks.h"
 
 #include <algorithm>
 #include <cmath>

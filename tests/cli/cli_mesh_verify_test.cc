@@ -7,8 +7,8 @@
 #include "client/io/mesh_io.h"
 #include "core/mesh_validation.h"
 #include "gtest/gtest.h"
-#include "tests/client/cli_test_util.h"
-#include "tests/client/io_test_util.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
 
 namespace tetrefine::clitest {
 namespace {
@@ -89,7 +89,7 @@ TEST_F(CliMeshVerify, InvertedTetIsNotValid) {
   ASSERT_TRUE(io::WriteMesh(dir_.File("inverted.vtu"), mesh).ok());
   const ProcessResult run = Verify(dir_.File("inverted.vtu"));
   EXPECT_EQ(run.exit_code, 1);
-  ASSERT_EQ(Lines(run.err).size(), 1u) << run.err;
+  ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
   EXPECT_TRUE(absl::StrContains(run.err, dir_.File("inverted.vtu"))) << run.err;
   EXPECT_TRUE(absl::StrContains(run.err, "1 inverted tets (first: tet 7)")) << run.err;
   EXPECT_TRUE(absl::StrContains(run.out, "NOT VALID")) << run.out;
@@ -103,7 +103,7 @@ TEST_F(CliMeshVerify, FaceInThreeTetsIsNotValid) {
   ASSERT_TRUE(io::WriteMesh(dir_.File("triple.vtu"), mesh).ok());
   const ProcessResult run = Verify(dir_.File("triple.vtu"));
   EXPECT_EQ(run.exit_code, 1) << run.out;
-  ASSERT_EQ(Lines(run.err).size(), 1u) << run.err;
+  ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
   EXPECT_TRUE(absl::StrContains(run.err, "shared by 3 tets")) << run.err;
 }
 

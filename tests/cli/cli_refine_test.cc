@@ -10,9 +10,9 @@
 #include "core/mesh_validation.h"
 #include "core/refine.h"
 #include "gtest/gtest.h"
-#include "tests/client/cli_test_util.h"
-#include "tests/client/io_test_util.h"
-#include "tests/core/test_geometry.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::clitest {
 namespace {
@@ -61,7 +61,7 @@ TEST_F(CliRefine, EmbeddedMatchesCoreRefineAndPrintsThePapersTables) {
 
   // One progress line per iteration on stderr, the tables on stdout.
   int progress = 0;
-  for (const std::string& line : Lines(run.err)) {
+  for (const std::string& line : SplitLines(run.err)) {
     if (absl::StrContains(line, "tetrefine: iteration ")) ++progress;
   }
   EXPECT_EQ(progress, static_cast<int>(want->iterations.size())) << run.err;

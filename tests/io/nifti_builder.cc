@@ -1,4 +1,4 @@
-#include "tests/client/nifti_builder.h"
+#include "tests/io/nifti_builder.h"
 
 #include <algorithm>
 #include <cstring>

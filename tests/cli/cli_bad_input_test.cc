@@ -9,9 +9,9 @@
 
 #include "absl/strings/match.h"
 #include "gtest/gtest.h"
-#include "tests/client/cli_test_util.h"
-#include "tests/client/io_test_util.h"
-#include "tests/core/test_geometry.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::clitest {
 namespace {
@@ -95,7 +95,7 @@ TEST_P(CliBadInput, OneLineNamingTheProblemExitTwoNothingWritten) {
   const ProcessResult run = RunTetrefine(args, "", /*timeout_seconds=*/60);
   EXPECT_FALSE(run.timed_out);
   EXPECT_EQ(run.exit_code, 2) << run.err;
-  const std::vector<std::string> lines = Lines(run.err);
+  const std::vector<std::string> lines = SplitLines(run.err);
   ASSERT_EQ(lines.size(), 1u) << "stderr:\n" << run.err;
   EXPECT_TRUE(absl::StartsWith(lines[0], "tetrefine: ")) << lines[0];
   const std::string expected = Expand(c.expected, dir_->path());

@@ -1,4 +1,4 @@
-#include "tests/client/io_test_util.h"
+#include "tests/io/io_test_util.h"
 
 #include <unistd.h>
 

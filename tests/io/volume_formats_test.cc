@@ -7,8 +7,8 @@
 #include "client/io/zlib_codec.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "tests/client/io_test_util.h"
-#include "tests/client/nifti_builder.h"
+#include "tests/io/io_test_util.h"
+#include "tests/io/nifti_builder.h"
 
 namespace tetrefine::io {
 namespace {
