@@ -9,7 +9,7 @@
 #include <map>
 
 #include "core/refine.h"
-#include "tests/core/test_geometry.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine {
 namespace {

@@ -6,8 +6,8 @@
 
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpcpp/grpcpp.h"
-#include "server/wire_request_writer.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "wire/request_writer.h"
 
 namespace tetrefine::client {
 namespace {

@@ -16,9 +16,9 @@
 #include "core/refine.h"
 #include "core/volume.h"
 #include "grpcpp/channel.h"
-#include "server/service_limits.h"
-#include "server/wire_conversion.h"
-#include "server/wire_response_reader.h"
+#include "wire/conversion.h"
+#include "wire/response_reader.h"
+#include "wire/service_limits.h"
 
 namespace tetrefine::client {
 

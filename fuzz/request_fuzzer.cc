@@ -12,10 +12,10 @@
 #include "absl/strings/str_cat.h"
 #include "core/refine.h"
 #include "fuzz/fuzz_support.h"
-#include "server/wire_conversion.h"
-#include "server/wire_request_reader.h"
-#include "server/wire_response_reader.h"
-#include "server/wire_response_writer.h"
+#include "wire/conversion.h"
+#include "wire/request_reader.h"
+#include "wire/response_reader.h"
+#include "wire/response_writer.h"
 
 namespace tetrefine::fuzz {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "fuzz/fuzz_support.h"
-#include "server/wire_response_reader.h"
+#include "wire/response_reader.h"
 
 namespace tetrefine::fuzz {
 namespace {

@@ -17,9 +17,9 @@
 #include "client/io/vtu_format.h"
 #include "client/io/zlib_codec.h"
 #include "core/refine.h"
-#include "server/wire_conversion.h"
-#include "server/wire_request_writer.h"
-#include "server/wire_response_writer.h"
+#include "wire/conversion.h"
+#include "wire/request_writer.h"
+#include "wire/response_writer.h"
 
 namespace tetrefine::fuzz {
 namespace {

@@ -9,9 +9,9 @@
 
 #include "absl/strings/str_cat.h"
 #include "core/refine.h"
-#include "server/wire_conversion.h"
-#include "server/wire_request_reader.h"
-#include "server/wire_response_writer.h"
+#include "wire/conversion.h"
+#include "wire/request_reader.h"
+#include "wire/response_writer.h"
 
 namespace tetrefine::server {
 namespace {

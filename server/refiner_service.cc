@@ -6,8 +6,8 @@
 #include "absl/strings/str_cat.h"
 #include "server/metrics.h"
 #include "server/refine_call.h"
-#include "server/wire_conversion.h"
 #include "spdlog/spdlog.h"
+#include "wire/conversion.h"
 
 #ifndef TETREFINE_VERSION
 #define TETREFINE_VERSION "unknown"

@@ -4,8 +4,8 @@
 #include <memory>
 
 #include "grpcpp/grpcpp.h"
-#include "server/service_limits.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "wire/service_limits.h"
 
 namespace tetrefine::server {
 

@@ -14,7 +14,7 @@
 #include "core/mesh_validation.h"
 #include "core/quality.h"
 #include "gtest/gtest.h"
-#include "tests/core/test_geometry.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::reproduce {
 namespace {

@@ -14,7 +14,7 @@
 #include "core/counting_sort.h"
 #include "core/refine.h"
 #include "core/tet_topology.h"
-#include "tests/core/test_geometry.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine {
 namespace {

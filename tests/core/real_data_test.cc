@@ -17,8 +17,8 @@
 
 #include "client/io/read_volume.h"
 #include "core/refine.h"
-#include "tests/core/mesh_checks.h"
-#include "tests/core/test_geometry.h"
+#include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
 
 namespace tetrefine {
 namespace {

@@ -10,8 +10,8 @@
 #include <set>
 #include <utility>
 
-#include "tests/core/mesh_checks.h"
-#include "tests/core/test_geometry.h"
+#include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
 
 namespace tetrefine {
 namespace {

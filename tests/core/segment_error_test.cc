@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "tests/core/test_geometry.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "core/mesh.h"
 #include "core/subdivision_table.h"
-#include "tests/core/test_geometry.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine {
 namespace {

@@ -5,8 +5,8 @@
 #include <limits>
 
 #include "core/refine.h"
-#include "tests/core/mesh_checks.h"
-#include "tests/core/test_geometry.h"
+#include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
 
 namespace tetrefine {
 namespace {

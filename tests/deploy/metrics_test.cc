@@ -9,8 +9,8 @@
 #include "grpcpp/create_channel.h"
 #include "grpcpp/security/credentials.h"
 #include "gtest/gtest.h"
-#include "tests/deploy/server_process.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
+#include "tests/support/server_process.h"
 
 namespace tetrefine::testing {
 namespace {
@@ -42,8 +42,7 @@ double Get(const std::map<std::string, double>& samples, const std::string& seri
 }
 
 std::unique_ptr<ServerProcess> StartServer(const std::vector<std::string>& flags) {
-  absl::StatusOr<std::unique_ptr<ServerProcess>> server =
-      ServerProcess::Start(TETREFINE_SERVER_BINARY, flags);
+  absl::StatusOr<std::unique_ptr<ServerProcess>> server = ServerProcess::Start(flags);
   EXPECT_TRUE(server.ok()) << server.status();
   return server.ok() ? *std::move(server) : nullptr;
 }

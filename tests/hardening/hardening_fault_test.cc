@@ -15,18 +15,22 @@
 #include "client/refine_client.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/wire_request_writer.h"
-#include "tests/hardening/child_process.h"
-#include "tests/hardening/server_process.h"
 #include "tests/hardening/workloads.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/child_process.h"
+#include "tests/support/geometry.h"
+#include "tests/support/server_process.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "wire/request_writer.h"
 
 namespace tetrefine::hardening {
 namespace {
 
+using ::tetrefine::testing::ChildProcess;
 using ::tetrefine::testing::FiveTetMesh;
+using ::tetrefine::testing::NewUnsharedChannel;
+using ::tetrefine::testing::ServerProcess;
 using ::tetrefine::testing::TestVolume;
+using ::tetrefine::testing::TimeUntilCpuIdle;
 
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
@@ -47,10 +51,9 @@ constexpr milliseconds kPromptly{1000};
 // A short drain unless a test is about draining: these tests keep connections open, and a
 // server with open connections takes the whole drain time to stop.
 std::unique_ptr<ServerProcess> StartServer(std::vector<std::string> flags = {"--drain_seconds=2"}) {
-  std::string error;
-  std::unique_ptr<ServerProcess> server = ServerProcess::Start(flags, 0, &error);
-  EXPECT_NE(server, nullptr) << error;
-  return server;
+  absl::StatusOr<std::unique_ptr<ServerProcess>> server = ServerProcess::Start(flags);
+  EXPECT_TRUE(server.ok()) << server.status();
+  return server.ok() ? *std::move(server) : nullptr;
 }
 
 // Waits until the server is clearly working: at least 0.15 s of CPU time within half a second
@@ -329,16 +332,15 @@ TEST(HardeningFaultTest, ClientRetryingAgainstARestartedServerSucceeds) {
     return client::RefineViaService(channel, w.volume, w.mesh, w.options, {}, waiting);
   });
   std::this_thread::sleep_for(milliseconds(500));
-  std::string error;
-  std::unique_ptr<ServerProcess> second = ServerProcess::Start({}, port, &error);
-  ASSERT_NE(second, nullptr) << error;
+  absl::StatusOr<std::unique_ptr<ServerProcess>> second = ServerProcess::Start({}, port);
+  ASSERT_TRUE(second.ok()) << second.status();
   const Clock::time_point restarted = Clock::now();
   absl::StatusOr<client::ClientResult> result = retry.get();
   ASSERT_TRUE(result.ok()) << result.status();
   std::printf("[faults] a waiting call got through %.2f s after the server restarted\n",
               std::chrono::duration<double>(Clock::now() - restarted).count());
   EXPECT_EQ(ResultDifference(expected, result->result), "");
-  EXPECT_EQ(second->Stop(), 0);
+  EXPECT_EQ((*second)->Stop(), 0);
 }
 
 }  // namespace

@@ -11,14 +11,15 @@
 #include "client/refine_client.h"
 #include "gtest/gtest.h"
 #include "tests/hardening/call_stats.h"
-#include "tests/hardening/server_process.h"
 #include "tests/hardening/workloads.h"
+#include "tests/support/server_process.h"
 
 namespace tetrefine::hardening {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
+using ::tetrefine::testing::ServerProcess;
 
 // Under AddressSanitizer freed memory sits in a quarantine of up to 256 MB, so VmRSS grows with
 // churn whatever leaks; there LeakSanitizer checks the server at exit instead (Stop() then
@@ -86,10 +87,10 @@ TEST(HardeningLoadTest, ConcurrentClientsGetCorrectResultsAndMemoryStaysFlat) {
   constexpr int kClients = 8;
   constexpr int kRounds = 3;
   const Clock::duration round = milliseconds(3300);
-  std::string error;
-  std::unique_ptr<ServerProcess> server =
-      ServerProcess::Start({"--max_concurrent=8", "--threads=1"}, 0, &error);
-  ASSERT_NE(server, nullptr) << error;
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--max_concurrent=8", "--threads=1"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
   std::vector<int64_t> rss;
   CallStats total;
   for (int r = 1; r <= kRounds; ++r) {
@@ -117,10 +118,10 @@ TEST(HardeningLoadTest, PastTheConcurrencyLimitCallersAreRefusedQuickly) {
   ExpectedResults();
   constexpr int kClients = 8;
   const Clock::duration duration = milliseconds(4000);
-  std::string error;
-  std::unique_ptr<ServerProcess> server =
-      ServerProcess::Start({"--max_concurrent=2", "--threads=1"}, 0, &error);
-  ASSERT_NE(server, nullptr) << error;
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--max_concurrent=2", "--threads=1"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
   CallStats warmup;
   RunClients(*server, 2, milliseconds(500), warmup);
   const int64_t rss_before = server->process().RssKb();

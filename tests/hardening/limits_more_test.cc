@@ -12,18 +12,20 @@
 #include "client/refine_client.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/wire_conversion.h"
-#include "server/wire_request_writer.h"
-#include "tests/hardening/server_process.h"
 #include "tests/hardening/workloads.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
+#include "tests/support/loopback_server.h"
+#include "tests/support/server_process.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "wire/conversion.h"
+#include "wire/request_writer.h"
 
 namespace tetrefine::hardening {
 namespace {
 
 using ::tetrefine::testing::FiveTetMesh;
 using ::tetrefine::testing::SendRaw;
+using ::tetrefine::testing::ServerProcess;
 using ::tetrefine::testing::TestVolume;
 
 struct Responses {
@@ -59,9 +61,10 @@ Responses Call(const std::shared_ptr<grpc::Channel>& channel, const Workload& w)
 class HardeningLimitsTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    std::string error;
-    server_ = ServerProcess::Start({"--drain_seconds=2"}, 0, &error);
-    ASSERT_NE(server_, nullptr) << error;
+    absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+        ServerProcess::Start({"--drain_seconds=2"});
+    ASSERT_TRUE(server.ok()) << server.status();
+    server_ = *std::move(server);
   }
   void TearDown() override {
     if (server_ != nullptr) {
@@ -137,11 +140,10 @@ TEST(HardeningMemoryLimitTest, DeclaredSizesThisProcessCannotHoldAreRefusedByNam
   GTEST_SKIP() << "AddressSanitizer maps terabytes of shadow memory: no address-space limit fits";
 #else
   // 1.5 GiB of address space, and limits that allow a 2 GiB volume and 4.8 GB of vertices.
-  std::string error;
-  std::unique_ptr<ServerProcess> server =
-      ServerProcess::Start({"--drain_seconds=2", "--max_input_tets=60000000", "--threads=1"}, 0,
-                           &error, int64_t{1536} << 20);
-  ASSERT_NE(server, nullptr) << error;
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
+      {"--drain_seconds=2", "--max_input_tets=60000000", "--threads=1"}, 0, int64_t{1536} << 20);
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
   const Workload& w = SmallWorkloads()[0];
 
   const grpc::Status volume =

@@ -4,8 +4,8 @@
 #include <cstdio>
 
 #include "client/refine_client.h"
-#include "tests/hardening/server_process.h"
 #include "tests/hardening/workloads.h"
+#include "tests/support/server_process.h"
 
 int main(int argc, char** argv) {
   if (argc != 2) {
@@ -21,8 +21,8 @@ int main(int argc, char** argv) {
   std::printf("sending\n");
   std::fflush(stdout);
   const absl::StatusOr<tetrefine::client::ClientResult> result =
-      tetrefine::client::RefineViaService(tetrefine::hardening::NewUnsharedChannel(argv[1]),
-                                          w.volume, w.mesh, w.options, callbacks);
+      tetrefine::client::RefineViaService(tetrefine::testing::NewUnsharedChannel(argv[1]), w.volume,
+                                          w.mesh, w.options, callbacks);
   std::printf("finished: %s\n", result.status().ToString().c_str());
   return result.ok() ? 0 : 1;
 }

@@ -2,8 +2,8 @@
 
 #include <cstring>
 
-#include "server/wire_conversion.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
+#include "wire/conversion.h"
 
 namespace tetrefine::hardening {
 namespace {

@@ -7,7 +7,7 @@
 #include "core/mesh.h"
 #include "core/refine.h"
 #include "core/volume.h"
-#include "server/service_limits.h"
+#include "wire/service_limits.h"
 
 namespace tetrefine::hardening {
 

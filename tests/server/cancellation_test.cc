@@ -6,7 +6,8 @@
 
 #include "client/refine_client.h"
 #include "gtest/gtest.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
+#include "tests/support/loopback_server.h"
 
 namespace tetrefine::testing {
 namespace {

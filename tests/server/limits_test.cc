@@ -7,9 +7,10 @@
 #include "client/refine_client.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/wire_request_writer.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
+#include "tests/support/loopback_server.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "wire/request_writer.h"
 
 namespace tetrefine::testing {
 namespace {

@@ -8,7 +8,9 @@
 #include "client/refine_client.h"
 #include "gtest/gtest.h"
 #include "server/embedded_server.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
+#include "tests/support/loopback_server.h"
+#include "tests/support/result_compare.h"
 
 namespace tetrefine::testing {
 namespace {

@@ -14,9 +14,10 @@
 #include "client/refine_client.h"
 #include "grpcpp/security/credentials.h"
 #include "gtest/gtest.h"
-#include "tests/deploy/server_process.h"
-#include "tests/server/service_test_support.h"
 #include "tests/sharding/refinement_compare.h"
+#include "tests/support/geometry.h"
+#include "tests/support/result_compare.h"
+#include "tests/support/server_process.h"
 
 namespace tetrefine::testing {
 namespace {
@@ -27,7 +28,7 @@ class ShardedRefineTest : public ::testing::Test {
   void SetUp() override {
     for (int i = 0; i < 3; ++i) {
       absl::StatusOr<std::unique_ptr<ServerProcess>> server =
-          ServerProcess::Start(TETREFINE_SERVER_BINARY, {"--metrics_listen=", "--threads=1"});
+          ServerProcess::Start({"--metrics_listen=", "--threads=1"});
       ASSERT_TRUE(server.ok()) << server.status();
       addresses_.push_back((*server)->target());
       servers_.push_back(*std::move(server));

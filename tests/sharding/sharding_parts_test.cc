@@ -12,7 +12,7 @@
 #include "client/sharding/result_combine.h"
 #include "client/sharding/volume_slab.h"
 #include "gtest/gtest.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::testing {
 namespace {

@@ -1,0 +1,154 @@
+// `tetrefine mesh`, `verify` and `info` on generated files.
+
+#include <string>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "client/io/mesh_io.h"
+#include "core/mesh_validation.h"
+#include "gtest/gtest.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
+
+namespace tetrefine::clitest {
+namespace {
+
+using io::iotest::ScratchDir;
+
+class CliMeshVerify : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    volume_ = dir_.File("bump.nii");
+    WriteVolume(volume_, BumpVolume({11, 9, 7}, {-5.0, 0.0, 10.0}, {1.0, 1.5, 2.0}));
+  }
+
+  // `tetrefine mesh` into `name`; returns the mesh it wrote.
+  io::MeshFile MakeMesh(const std::string& name, const std::vector<std::string>& flags) {
+    std::vector<std::string> args = {"mesh", "--volume", volume_, "--output", dir_.File(name)};
+    args.insert(args.end(), flags.begin(), flags.end());
+    const ProcessResult run = RunTetrefine(args);
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    absl::StatusOr<io::MeshFile> mesh = io::ReadMesh(dir_.File(name));
+    EXPECT_TRUE(mesh.ok()) << mesh.status();
+    return mesh.ok() ? *mesh : io::MeshFile{};
+  }
+
+  ProcessResult Verify(const std::string& mesh, const std::vector<std::string>& flags = {}) {
+    std::vector<std::string> args = {"verify", "--volume", volume_, "--mesh", mesh};
+    args.insert(args.end(), flags.begin(), flags.end());
+    return RunTetrefine(args);
+  }
+
+  ScratchDir dir_;
+  std::string volume_;
+};
+
+TEST_F(CliMeshVerify, MeshThenVerifyRoundTrip) {
+  const io::MeshFile mesh = MakeMesh("grid.vtu", {"--block", "3"});
+  // 10 x 8 x 6 voxels in blocks of 3: 4 x 3 x 2 cells (the last ones thinner).
+  EXPECT_EQ(mesh.mesh.tets.size(), 5u * 4 * 3 * 2);
+  EXPECT_EQ(mesh.mesh.values.size(), mesh.mesh.points.size());
+  EXPECT_TRUE(CheckFaces(mesh.mesh.points, mesh.mesh.tets).ok());
+  const ProcessResult run = Verify(dir_.File("grid.vtu"), {"--epsilon", "0.05"});
+  EXPECT_EQ(run.exit_code, 0) << run.err << run.out;
+  EXPECT_EQ(run.err, "");
+  for (const char* text :
+       {"valid", "total volume", "1440 mm^3", "boundary area", "discrepancy", "above epsilon 0.05",
+        "values resampled from the volume", "quality (mean ratio)"}) {
+    EXPECT_TRUE(absl::StrContains(run.out, text)) << text << " missing from\n" << run.out;
+  }
+}
+
+TEST_F(CliMeshVerify, MaskThresholdMeshesFewerCells) {
+  const io::MeshFile all = MakeMesh("all.mesh", {});
+  const io::MeshFile masked = MakeMesh("masked.mesh", {"--mask-threshold", "40"});
+  EXPECT_EQ(all.mesh.tets.size(), 5u * 10 * 8 * 6);
+  EXPECT_GT(masked.mesh.tets.size(), 0u);
+  EXPECT_LT(masked.mesh.tets.size(), all.mesh.tets.size());
+  EXPECT_LT(masked.mesh.points.size(), all.mesh.points.size());
+  EXPECT_EQ(Verify(dir_.File("masked.mesh")).exit_code, 0);
+  const ProcessResult none = RunTetrefine(
+      {"mesh", "--volume", volume_, "--mask-threshold", "1e9", "--output", dir_.File("none.vtu")});
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_TRUE(absl::StrContains(none.err, "no cell")) << none.err;
+  EXPECT_FALSE(FileExists(dir_.File("none.vtu")));
+}
+
+TEST_F(CliMeshVerify, RefinedMeshVerifies) {
+  MakeMesh("coarse.vtu", {"--block", "4"});
+  const ProcessResult refine =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", dir_.File("coarse.vtu"), "--epsilon",
+                    "0.05", "--output", dir_.File("fine.vtu"), "--quiet"});
+  ASSERT_EQ(refine.exit_code, 0) << refine.err;
+  EXPECT_EQ(Verify(dir_.File("fine.vtu")).exit_code, 0);
+}
+
+TEST_F(CliMeshVerify, InvertedTetIsNotValid) {
+  io::MeshFile mesh = MakeMesh("grid.vtu", {"--block", "3"});
+  std::swap(mesh.mesh.tets[7][0], mesh.mesh.tets[7][1]);
+  ASSERT_TRUE(io::WriteMesh(dir_.File("inverted.vtu"), mesh).ok());
+  const ProcessResult run = Verify(dir_.File("inverted.vtu"));
+  EXPECT_EQ(run.exit_code, 1);
+  ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, dir_.File("inverted.vtu"))) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "1 inverted tets (first: tet 7)")) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.out, "NOT VALID")) << run.out;
+}
+
+TEST_F(CliMeshVerify, FaceInThreeTetsIsNotValid) {
+  io::MeshFile mesh;
+  mesh.mesh.points = {{-2, 2, 14},     {0, 2, 14},      {-2, 4, 14},
+                      {-1.5, 2.5, 12}, {-1.5, 2.5, 16}, {-1.4, 2.4, 18}};
+  mesh.mesh.tets = {{0, 1, 2, 4}, {0, 2, 1, 3}, {0, 1, 2, 5}};
+  ASSERT_TRUE(io::WriteMesh(dir_.File("triple.vtu"), mesh).ok());
+  const ProcessResult run = Verify(dir_.File("triple.vtu"));
+  EXPECT_EQ(run.exit_code, 1) << run.out;
+  ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "shared by 3 tets")) << run.err;
+}
+
+TEST_F(CliMeshVerify, DuplicateVerticesAreNotValid) {
+  io::MeshFile mesh = MakeMesh("grid.vtu", {"--block", "3"});
+  // A crack: tet 0 uses a copy of its first vertex instead of the shared one.
+  mesh.mesh.points.push_back(mesh.mesh.points[mesh.mesh.tets[0][0]]);
+  mesh.mesh.values.push_back(mesh.mesh.values[mesh.mesh.tets[0][0]]);
+  mesh.mesh.tets[0][0] = static_cast<uint32_t>(mesh.mesh.points.size() - 1);
+  ASSERT_TRUE(io::WriteMesh(dir_.File("crack.vtu"), mesh).ok());
+  const ProcessResult run = Verify(dir_.File("crack.vtu"));
+  EXPECT_EQ(run.exit_code, 1) << run.out;
+  EXPECT_TRUE(absl::StrContains(run.err, "duplicate vertices")) << run.err;
+}
+
+TEST_F(CliMeshVerify, VerticesOutsideNeedClamp) {
+  io::MeshFile mesh = MakeMesh("grid.vtu", {"--block", "3"});
+  for (Vec3& p : mesh.mesh.points) p[2] += 1.0;  // the top layer leaves the volume
+  ASSERT_TRUE(io::WriteMesh(dir_.File("shifted.vtu"), mesh).ok());
+  const ProcessResult strict = Verify(dir_.File("shifted.vtu"));
+  EXPECT_EQ(strict.exit_code, 1);
+  EXPECT_TRUE(absl::StrContains(strict.err, "outside the volume")) << strict.err;
+  EXPECT_EQ(Verify(dir_.File("shifted.vtu"), {"--clamp"}).exit_code, 0);
+}
+
+TEST_F(CliMeshVerify, InfoOnAVolume) {
+  const ProcessResult run = RunTetrefine({"info", volume_});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  for (const char* text :
+       {"11 x 9 x 7 (693 voxels)", "float64", "1 x 1.5 x 2 mm", "(-5, 0, 10) mm, world RAS",
+        "[-5, 5] x [0, 12] x [10, 22]", "value range", "file affine", "warnings"}) {
+    EXPECT_TRUE(absl::StrContains(run.out, text)) << text << " missing from\n" << run.out;
+  }
+}
+
+TEST_F(CliMeshVerify, InfoOnAMesh) {
+  MakeMesh("grid.vtu", {"--block", "3"});
+  const ProcessResult run = RunTetrefine({"info", dir_.File("grid.vtu")});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  for (const char* text :
+       {"tetrahedral mesh", "tets                  120", "[-5, 5] x [0, 12] x [10, 22]", "1440",
+        "value (per vertex)", "inverted tets         0"}) {
+    EXPECT_TRUE(absl::StrContains(run.out, text)) << text << " missing from\n" << run.out;
+  }
+}
+
+}  // namespace
+}  // namespace tetrefine::clitest

@@ -1,0 +1,183 @@
+// `tetrefine refine` with the embedded service, end to end: the real binary on generated files.
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "client/io/mesh_io.h"
+#include "client/io/read_volume.h"
+#include "core/mesh_validation.h"
+#include "core/refine.h"
+#include "gtest/gtest.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/geometry.h"
+
+namespace tetrefine::clitest {
+namespace {
+
+using io::iotest::ScratchDir;
+
+class CliRefine : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    volume_ = dir_.File("bump.nii");
+    mesh_ = dir_.File("grid.vtu");
+    WriteVolume(volume_, BumpVolume({9, 9, 9}, {0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}));
+    WriteMeshFile(mesh_, testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
+  }
+
+  ScratchDir dir_;
+  std::string volume_;
+  std::string mesh_;
+};
+
+TEST_F(CliRefine, EmbeddedMatchesCoreRefineAndPrintsThePapersTables) {
+  const std::string out = dir_.File("out.vtu");
+  const ProcessResult run = RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_,
+                                          "--epsilon", "0.05", "--output", out, "--threads", "1"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+
+  // The same inputs through core Refine in this process.
+  absl::StatusOr<io::VolumeFile> volume = io::ReadVolume(volume_);
+  ASSERT_TRUE(volume.ok()) << volume.status();
+  absl::StatusOr<io::MeshFile> input = io::ReadMesh(mesh_);
+  ASSERT_TRUE(input.ok()) << input.status();
+  RefineOptions options;
+  options.epsilon = 0.05;
+  absl::StatusOr<RefineResult> want = Refine(volume->volume, input->mesh, options);
+  ASSERT_TRUE(want.ok()) << want.status();
+  ASSERT_GE(want->iterations.size(), 2u) << "the test volume should need several iterations";
+
+  absl::StatusOr<io::MeshFile> got = io::ReadMesh(out);
+  ASSERT_TRUE(got.ok()) << got.status();
+  EXPECT_EQ(got->mesh.points, want->mesh.points);
+  EXPECT_EQ(got->mesh.tets, want->mesh.tets);
+  EXPECT_EQ(got->mesh.values, want->mesh.values);
+  EXPECT_EQ(got->tet_iteration, want->tet_iteration);
+  EXPECT_EQ(got->tet_quality, want->tet_quality);
+  EXPECT_TRUE(CheckFaces(got->mesh.points, got->mesh.tets).ok());
+
+  // One progress line per iteration on stderr, the tables on stdout.
+  int progress = 0;
+  for (const std::string& line : SplitLines(run.err)) {
+    if (absl::StrContains(line, "tetrefine: iteration ")) ++progress;
+  }
+  EXPECT_EQ(progress, static_cast<int>(want->iterations.size())) << run.err;
+  for (const char* text :
+       {"INT", "FNT", "NTwE", "max error", "mean error", "2a", "4b", "SP", "Table 7", "before",
+        "after", "Lattice-sampled error", "Stopped after"}) {
+    EXPECT_TRUE(absl::StrContains(run.out, text)) << text << " missing from\n" << run.out;
+  }
+  EXPECT_TRUE(absl::StrContains(run.out, std::string(StopReasonName(want->stop_reason))));
+}
+
+TEST_F(CliRefine, StatsJsonParsesAndAgreesWithTheRun) {
+  const std::string out = dir_.File("out.msh");
+  const std::string stats = dir_.File("stats.json");
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.05", "--output",
+                    out, "--stats-json", stats, "--quiet"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.err, "") << "--quiet prints no progress";
+  absl::StatusOr<io::MeshFile> got = io::ReadMesh(out);
+  ASSERT_TRUE(got.ok()) << got.status();
+
+  const std::string script =
+      "import json, sys\n"
+      "d = json.load(open(sys.argv[1]))\n"
+      "its = d['iterations']\n"
+      "assert its[0]['initial_tets'] == d['input']['tets'] == 40\n"
+      "assert all(a['final_tets'] == b['initial_tets'] for a, b in zip(its, its[1:]))\n"
+      "assert sum(its[0]['configurations'].values()) == its[0]['initial_tets']\n"
+      "assert set(its[0]['configurations']) == "
+      "{'0','1','2a','2b','3a','3b','3c','4a','4b','5','6'}\n"
+      "assert d['options']['epsilon'] == 0.05\n"
+      "print(its[-1]['final_tets'], d['output_mesh']['tets'], d['stop_reason'],\n"
+      "      d['quality']['final']['count'], d['lattice']['n'])\n";
+  const ProcessResult check = RunProcess({"/usr/bin/python3", "-c", script, stats});
+  ASSERT_EQ(check.exit_code, 0) << check.err;
+  const std::string tets = std::to_string(got->mesh.tets.size());
+  EXPECT_TRUE(absl::StartsWith(check.out, tets + " " + tets + " ")) << check.out;
+  EXPECT_TRUE(absl::StrContains(check.out, " " + tets + " 8")) << check.out;
+}
+
+TEST_F(CliRefine, EveryIterationWritesOneFilePerIteration) {
+  const std::string out = dir_.File("series.vtk");
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.05", "--output",
+                    out, "--every-iteration", "--max-iterations", "3"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  absl::StatusOr<io::MeshFile> final_mesh = io::ReadMesh(out);
+  ASSERT_TRUE(final_mesh.ok()) << final_mesh.status();
+  const auto step_path = [&](int i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "series.iter%02d.vtk", i);
+    return dir_.File(name);
+  };
+  int last = 0;
+  while (last < 3 && FileExists(step_path(last + 1))) ++last;
+  EXPECT_FALSE(FileExists(step_path(last + 1)));
+  EXPECT_TRUE(absl::StrContains(run.out, "Stopped after " + std::to_string(last) + " iteration"))
+      << run.out;
+  ASSERT_GE(last, 2) << run.out;
+  for (int i = 1; i <= last; ++i) {
+    absl::StatusOr<io::MeshFile> step = io::ReadMesh(step_path(i));
+    ASSERT_TRUE(step.ok()) << step.status();
+    EXPECT_EQ(step->tet_quality.size(), step->mesh.tets.size());
+    if (i == last) {
+      EXPECT_EQ(step->mesh.tets, final_mesh->mesh.tets) << "the last is the output";
+    }
+  }
+  EXPECT_GE(last, 2) << run.out;
+}
+
+TEST_F(CliRefine, DefaultOutputIsTheMeshNameInTheWorkingDirectory) {
+  const ProcessResult run = RunTetrefine(
+      {"refine", "--volume", "bump.nii", "--mesh", "grid.vtu", "--epsilon", "0.2"}, dir_.path());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(FileExists(dir_.File("grid.refined.vtu")));
+  EXPECT_TRUE(absl::StrContains(run.out, "Wrote grid.refined.vtu")) << run.out;
+}
+
+TEST_F(CliRefine, FixOrientationAcceptsInvertedTets) {
+  Mesh mesh = testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2});
+  std::swap(mesh.tets[5][2], mesh.tets[5][3]);
+  const std::string inverted = dir_.File("inverted.vtu");
+  WriteMeshFile(inverted, mesh);
+  const std::string out = dir_.File("fixed.vtu");
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", inverted, "--epsilon", "0.1",
+                    "--output", out, "--fix-orientation"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.out, "Inverted input tets reoriented: 1")) << run.out;
+}
+
+TEST_F(CliRefine, ClampAcceptsAMeshReachingOutsideTheVolume) {
+  const std::string outside = dir_.File("outside.vtu");
+  WriteMeshFile(outside, testing::FiveTetMesh({-1, 1, 1}, {7, 7, 9.5}, {2, 2, 2}));
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", outside, "--epsilon", "0.1",
+                    "--output", dir_.File("c.vtu"), "--clamp"});
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+}
+
+// The README's example: the bundled MRI and unit cube, the cube fitted into the volume.
+TEST(CliRefineExample, BundledExampleWithFitMeshToVolume) {
+  ScratchDir dir;
+  const std::string source = TETREFINE_SOURCE_DIR;
+  const std::string out = dir.File("cube.refined.vtu");
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", source + "/examples/anatomical_33x41x25.nii", "--mesh",
+                    source + "/examples/unit_cube_1782tets.mesh", "--fit-mesh-to-volume",
+                    "--epsilon", "0.1", "--max-iterations", "2", "--output", out});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  absl::StatusOr<io::MeshFile> got = io::ReadMesh(out);
+  ASSERT_TRUE(got.ok()) << got.status();
+  EXPECT_GT(got->mesh.tets.size(), 1782u);
+  EXPECT_TRUE(CheckFaces(got->mesh.points, got->mesh.tets).ok());
+}
+
+}  // namespace
+}  // namespace tetrefine::clitest

@@ -1,0 +1,182 @@
+// `tetrefine refine --server` and `tetrefine health` against a real tetrefine_server process on a
+// loopback port.
+
+#include <algorithm>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "client/io/mesh_io.h"
+#include "gtest/gtest.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/geometry.h"
+
+namespace tetrefine::clitest {
+namespace {
+
+using io::iotest::ScratchDir;
+
+class CliServer : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    absl::StatusOr<std::unique_ptr<ServerProcess>> server = ServerProcess::Start({"--threads=2"});
+    if (server.ok()) {
+      server_ = server->release();
+    } else {
+      start_error_ = new std::string(server.status().ToString());
+    }
+  }
+  static void TearDownTestSuite() {
+    delete server_;
+    server_ = nullptr;
+    delete start_error_;
+    start_error_ = nullptr;
+  }
+  void SetUp() override {
+    ASSERT_NE(server_, nullptr) << *start_error_;
+    volume_ = dir_.File("bump.nii");
+    mesh_ = dir_.File("grid.vtu");
+    WriteVolume(volume_, BumpVolume({9, 9, 9}, {0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}));
+    WriteMeshFile(mesh_, testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
+  }
+
+  static ServerProcess* server_;
+  static std::string* start_error_;
+  ScratchDir dir_;
+  std::string volume_;
+  std::string mesh_;
+};
+
+ServerProcess* CliServer::server_ = nullptr;
+std::string* CliServer::start_error_ = nullptr;
+
+TEST_F(CliServer, RemoteRefineGivesTheEmbeddedResult) {
+  const std::string remote = dir_.File("remote.vtu");
+  const std::string embedded = dir_.File("embedded.vtu");
+  const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
+                                           mesh_,    "--epsilon", "0.05"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--server", server_->target(), "--output", remote});
+  const ProcessResult run_remote = RunTetrefine(args);
+  ASSERT_EQ(run_remote.exit_code, 0) << run_remote.err;
+  EXPECT_TRUE(absl::StrContains(run_remote.err, "server " + server_->target())) << run_remote.err;
+  args = common;
+  args.insert(args.end(), {"--output", embedded});
+  const ProcessResult run_embedded = RunTetrefine(args);
+  ASSERT_EQ(run_embedded.exit_code, 0) << run_embedded.err;
+
+  absl::StatusOr<io::MeshFile> a = io::ReadMesh(remote);
+  absl::StatusOr<io::MeshFile> b = io::ReadMesh(embedded);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(a->mesh.points, b->mesh.points);
+  EXPECT_EQ(a->mesh.tets, b->mesh.tets);
+  EXPECT_EQ(a->tet_iteration, b->tet_iteration);
+}
+
+TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start({"--threads=1"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  const ServerProcess& second = **started;
+  const std::string embedded = dir_.File("embedded.vtu");
+  const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
+                                           mesh_,    "--epsilon", "0.05"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--output", embedded});
+  ASSERT_EQ(RunTetrefine(args).exit_code, 0);
+  absl::StatusOr<io::MeshFile> want = io::ReadMesh(embedded);
+  ASSERT_TRUE(want.ok());
+  auto sorted_tets = [](const Mesh& m) {
+    std::vector<std::array<Vec3, 4>> out;
+    for (const Tet& t : m.tets) {
+      std::array<Vec3, 4> q = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
+      std::sort(q.begin(), q.end());
+      out.push_back(q);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  for (const char* shards : {"2", "3"}) {
+    const std::string sharded = dir_.File(std::string("sharded") + shards + ".vtu");
+    args = common;
+    args.insert(args.end(), {"--server", server_->target() + "," + second.target(), "--shards",
+                             shards, "--output", sharded});
+    const ProcessResult run = RunTetrefine(args);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_TRUE(absl::StrContains(run.err, std::string(shards) + " shards over 2 servers"))
+        << run.err;
+    absl::StatusOr<io::MeshFile> got = io::ReadMesh(sharded);
+    ASSERT_TRUE(got.ok());
+    EXPECT_EQ(sorted_tets(got->mesh), sorted_tets(want->mesh)) << shards << " shards";
+  }
+  // Sharding merges finished parts, so per-iteration meshes cannot be streamed.
+  args = common;
+  args.insert(args.end(), {"--server", server_->target() + "," + second.target(),
+                           "--every-iteration", "--output", dir_.File("x.vtu")});
+  const ProcessResult refused = RunTetrefine(args);
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_TRUE(absl::StartsWith(refused.err, "tetrefine: --every-iteration: ")) << refused.err;
+}
+
+TEST_F(CliServer, ServerSideValidationErrorNamesTheMesh) {
+  // Two tets above one triangle: a face in three tets, which only the service's check finds.
+  Mesh bad;
+  bad.points = {{2, 2, 2}, {4, 2, 2}, {2, 4, 2}, {2.5, 2.5, 1}, {2.5, 2.5, 3}, {2.6, 2.4, 4}};
+  bad.tets = {{0, 1, 2, 4}, {0, 2, 1, 3}, {0, 1, 2, 5}};
+  const std::string path = dir_.File("triple.vtu");
+  WriteMeshFile(path, bad);
+  const std::string out = dir_.File("never.vtu");
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", path, "--epsilon", "0.1", "--server",
+                    server_->target(), "--output", out, "--quiet"});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
+  EXPECT_TRUE(absl::StartsWith(run.err, "tetrefine: " + path + ": ")) << run.err;
+  EXPECT_FALSE(FileExists(out));
+}
+
+TEST_F(CliServer, HealthIsServing) {
+  for (const char* service : {"", "tetrefine.v1.Refiner"}) {
+    const ProcessResult run =
+        RunTetrefine({"health", "--server", server_->target(), "--service", service});
+    EXPECT_EQ(run.exit_code, 0) << service << ": " << run.err;
+    EXPECT_EQ(run.out, "SERVING\n");
+  }
+}
+
+TEST_F(CliServer, HealthOfAnUnknownServiceFails) {
+  const ProcessResult run =
+      RunTetrefine({"health", "--server", server_->target(), "--service", "no.such.Service"});
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_EQ(SplitLines(run.err).size(), 1u) << run.err;
+}
+
+TEST(CliHealth, ClosedPortFailsQuickly) {
+  const std::string address = "127.0.0.1:" + std::to_string(ClosedPort());
+  const ProcessResult run =
+      RunTetrefine({"health", "--server", address, "--timeout", "2"}, "", /*timeout_seconds=*/30);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_LT(run.seconds, 10.0);
+  ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, address)) << run.err;
+}
+
+TEST(CliHealth, RefineAgainstAClosedPortFailsWithoutOutput) {
+  ScratchDir dir;
+  const std::string volume = dir.File("v.nii");
+  const std::string mesh = dir.File("m.vtu");
+  WriteVolume(volume, BumpVolume({5, 5, 5}, {0, 0, 0}, {1, 1, 1}));
+  WriteMeshFile(mesh, testing::FiveTetMesh({0, 0, 0}, {4, 4, 4}, {1, 1, 1}));
+  const std::string out = dir.File("out.vtu");
+  const std::string address = "127.0.0.1:" + std::to_string(ClosedPort());
+  const ProcessResult run = RunTetrefine({"refine", "--volume", volume, "--mesh", mesh, "--epsilon",
+                                          "0.1", "--server", address, "--output", out, "--quiet"},
+                                         "", /*timeout_seconds=*/60);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "UNAVAILABLE")) << run.err;
+  EXPECT_FALSE(FileExists(out));
+}
+
+}  // namespace
+}  // namespace tetrefine::clitest

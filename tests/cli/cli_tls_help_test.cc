@@ -1,0 +1,95 @@
+// `tetrefine --help` and `tetrefine COMMAND --help` list everything; `--server` with TLS and
+// mutual TLS against a real tetrefine_server.
+
+#include <string>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "client/cli/commands.h"
+#include "gtest/gtest.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
+
+namespace tetrefine::clitest {
+namespace {
+
+using io::iotest::ScratchDir;
+
+TEST(CliHelp, ListsEveryCommandAndEveryFlag) {
+  const ProcessResult top = RunTetrefine({"--help"});
+  ASSERT_EQ(top.exit_code, 0) << top.err;
+  for (const cli::Subcommand& command : cli::Subcommands()) {
+    const cli::CommandSpec& spec = command.spec();
+    EXPECT_TRUE(absl::StrContains(top.out, "  " + spec.name + " ")) << spec.name;
+    const ProcessResult help = RunTetrefine({spec.name, "--help"});
+    ASSERT_EQ(help.exit_code, 0) << help.err;
+    EXPECT_EQ(help.err, "");
+    EXPECT_TRUE(absl::StrContains(help.out, spec.usage)) << help.out;
+    for (const cli::FlagSpec& flag : spec.flags) {
+      EXPECT_TRUE(absl::StrContains(help.out, "--" + flag.name)) << spec.name << " --" << flag.name;
+    }
+    // `help COMMAND` says the same.
+    EXPECT_EQ(RunTetrefine({"help", spec.name}).out, help.out);
+  }
+}
+
+// PEM files made with openssl: a CA, a server certificate for 127.0.0.1 and a client certificate.
+class CliTls : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!FileExists("/usr/bin/openssl")) GTEST_SKIP() << "no /usr/bin/openssl";
+    MakeCa("ca");
+    MakeLeaf("server", "subjectAltName=IP:127.0.0.1\nextendedKeyUsage=serverAuth\n");
+    MakeLeaf("client", "extendedKeyUsage=clientAuth\n");
+  }
+
+  void OpenSsl(const std::vector<std::string>& args) {
+    std::vector<std::string> argv = {"/usr/bin/openssl"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const ProcessResult run = RunProcess(argv, dir_.path(), 60);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+  }
+  void MakeCa(const std::string& name) {
+    OpenSsl({"req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2", "-subj", "/CN=" + name,
+             "-keyout", name + ".key", "-out", name + ".pem"});
+  }
+  void MakeLeaf(const std::string& name, const std::string& extensions) {
+    io::iotest::WriteBytes(dir_.File(name + ".ext"), extensions);
+    OpenSsl({"req", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=" + name, "-keyout",
+             name + ".key", "-out", name + ".csr"});
+    OpenSsl({"x509", "-req", "-in", name + ".csr", "-CA", "ca.pem", "-CAkey", "ca.key",
+             "-CAcreateserial", "-days", "2", "-extfile", name + ".ext", "-out", name + ".pem"});
+  }
+
+  ScratchDir dir_;
+};
+
+TEST_F(CliTls, HealthOverTlsAndMutualTls) {
+  {
+    absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
+        {"--tls_cert=" + dir_.File("server.pem"), "--tls_key=" + dir_.File("server.key")});
+    ASSERT_TRUE(started.ok()) << started.status();
+    const ServerProcess& server = **started;
+    const ProcessResult tls =
+        RunTetrefine({"health", "--server", server.target(), "--tls-ca", dir_.File("ca.pem")});
+    EXPECT_EQ(tls.exit_code, 0) << tls.err;
+    const ProcessResult plain = RunTetrefine({"health", "--server", server.target()});
+    EXPECT_EQ(plain.exit_code, 1) << "a plaintext client must not reach a TLS server";
+  }
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
+      {"--tls_cert=" + dir_.File("server.pem"), "--tls_key=" + dir_.File("server.key"),
+       "--tls_client_ca=" + dir_.File("ca.pem")});
+  ASSERT_TRUE(started.ok()) << started.status();
+  const ServerProcess& server = **started;
+  const ProcessResult with_cert =
+      RunTetrefine({"health", "--server", server.target(), "--tls-ca", dir_.File("ca.pem"),
+                    "--tls-cert", dir_.File("client.pem"), "--tls-key", dir_.File("client.key")});
+  EXPECT_EQ(with_cert.exit_code, 0) << with_cert.err;
+  const ProcessResult without_cert =
+      RunTetrefine({"health", "--server", server.target(), "--tls-ca", dir_.File("ca.pem")});
+  EXPECT_EQ(without_cert.exit_code, 1) << "mutual TLS must refuse a client without certificate";
+  EXPECT_EQ(SplitLines(without_cert.err).size(), 1u) << without_cert.err;
+}
+
+}  // namespace
+}  // namespace tetrefine::clitest

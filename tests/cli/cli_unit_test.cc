@@ -1,0 +1,263 @@
+// Unit tests of the pieces of the tetrefine command line: argument parsing, JSON, the grid
+// mesher, mesh fitting and the mesh report. Suites are named Cli* (`ctest -R '^Cli'`).
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "client/cli/arg_parser.h"
+#include "client/cli/file_kind.h"
+#include "client/cli/grid_mesher.h"
+#include "client/cli/mesh_placement.h"
+#include "client/cli/mesh_report.h"
+#include "client/cli/text_table.h"
+#include "client/io/json_writer.h"
+#include "core/mesh_validation.h"
+#include "gtest/gtest.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/support/geometry.h"
+
+namespace tetrefine::cli {
+
+using io::JsonWriter;
+namespace {
+
+CommandSpec TestSpec() {
+  return CommandSpec{.name = "test",
+                     .summary = "a test command",
+                     .usage = "tetrefine test --in F",
+                     .description = "",
+                     .flags = {{"in", "F", "input", true},
+                               {"max-count", "N", "a number"},
+                               {"loud", "", "a switch"}},
+                     .positional = ""};
+}
+
+TEST(CliArgParser, AcceptsBothValueFormsSwitchesAndUnderscores) {
+  absl::StatusOr<ParsedArgs> parsed =
+      ParseArgs(TestSpec(), {"--in", "a.nii", "--max_count=3", "--loud"});
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  EXPECT_EQ(parsed->Get("in"), "a.nii");
+  EXPECT_EQ(parsed->Get("max-count"), "3");
+  EXPECT_TRUE(parsed->Has("loud"));
+  EXPECT_FALSE(parsed->help());
+}
+
+TEST(CliArgParser, NegativeNumbersAreValues) {
+  absl::StatusOr<ParsedArgs> parsed = ParseArgs(TestSpec(), {"--in", "x", "--max-count", "-5"});
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  EXPECT_EQ(parsed->Get("max-count"), "-5");
+}
+
+TEST(CliArgParser, ErrorsNameTheFlag) {
+  const CommandSpec spec = TestSpec();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--in", "x", "--nope"}, "unknown flag --nope"},
+      {{"--in", "x", "--in", "y"}, "--in given twice"},
+      {{"--in"}, "--in: missing value"},
+      {{"--in", "--loud"}, "--in: missing value"},
+      {{"--loud"}, "missing required flag --in"},
+      {{"--in", "x", "--loud=yes"}, "--loud takes no value"},
+      {{"--in", "x", "stray"}, "unexpected argument 'stray'"},
+      {{"--in", "x", "-v"}, "unknown flag -v"},
+  };
+  for (const auto& [args, expected] : cases) {
+    absl::StatusOr<ParsedArgs> parsed = ParseArgs(spec, args);
+    ASSERT_FALSE(parsed.ok()) << expected;
+    EXPECT_NE(parsed.status().message().find(expected), std::string::npos)
+        << parsed.status().message() << " should contain " << expected;
+  }
+}
+
+TEST(CliArgParser, HelpSkipsRequiredFlagsAndListsEveryFlag) {
+  absl::StatusOr<ParsedArgs> parsed = ParseArgs(TestSpec(), {"--help"});
+  ASSERT_TRUE(parsed.ok());
+  EXPECT_TRUE(parsed->help());
+  const std::string help = HelpText(TestSpec());
+  for (const char* flag : {"--in F", "--max-count N", "--loud", "--help", "(required)"}) {
+    EXPECT_NE(help.find(flag), std::string::npos) << flag << " missing from\n" << help;
+  }
+}
+
+TEST(CliArgParser, Numbers) {
+  EXPECT_EQ(*ParseFiniteDouble("e", "0.25"), 0.25);
+  EXPECT_EQ(*ParseFiniteDouble("e", "1e-3"), 1e-3);
+  for (const char* bad : {"", "abc", "0.1x", "nan", "NaN", "inf", "-inf", "1e999", " 1"}) {
+    EXPECT_FALSE(ParseFiniteDouble("e", bad).ok()) << "'" << bad << "'";
+  }
+  EXPECT_EQ(*ParseInteger("n", "12", 0, 100), 12);
+  for (const char* bad : {"", "1.5", "x", "-1", "101", "99999999999999999999"}) {
+    EXPECT_FALSE(ParseInteger("n", bad, 0, 100).ok()) << "'" << bad << "'";
+  }
+}
+
+TEST(CliJsonWriter, NestsEscapesAndWritesNullForNonFinite) {
+  JsonWriter json;
+  json.BeginObject();
+  json.Key("a\"b");
+  json.String("line\nnext\x01");
+  json.Key("list");
+  json.BeginArray();
+  json.Int(-3);
+  json.Number(0.1);
+  json.Number(std::nan(""));
+  json.Bool(true);
+  json.BeginObject();
+  json.EndObject();
+  json.BeginArray();
+  json.EndArray();
+  json.EndArray();
+  json.Key("none");
+  json.Null();
+  json.Field("x", 1.5);
+  json.Field("n", int64_t{7});
+  json.Field("s", "t");
+  json.EndObject();
+  EXPECT_EQ(json.Take(),
+            "{\n  \"a\\\"b\": \"line\\nnext\\u0001\",\n  \"list\": [\n    -3,\n    0.1,\n"
+            "    null,\n    true,\n    {},\n    []\n  ],\n  \"none\": null,\n  \"x\": 1.5,\n"
+            "  \"n\": 7,\n  \"s\": \"t\"\n}\n");
+}
+
+TEST(CliFileKind, ExtensionsAndStems) {
+  EXPECT_TRUE(IsVolumePath("a/b.NII.GZ"));
+  EXPECT_TRUE(IsVolumePath("b.mha"));
+  EXPECT_FALSE(IsVolumePath("b.vtu"));
+  EXPECT_TRUE(IsMeshPath("x.Mesh"));
+  EXPECT_FALSE(IsMeshPath("x.obj"));
+  EXPECT_EQ(PathStem("out/brain.refined.vtu"), "out/brain.refined");
+  EXPECT_EQ(PathExtension("out/brain.refined.vtu"), ".vtu");
+  EXPECT_EQ(PathStem("dir.d/noext"), "dir.d/noext");
+  EXPECT_EQ(FileStem("dir/cube.mesh"), "cube");
+  EXPECT_EQ(FileStem(".hidden"), ".hidden");
+}
+
+TEST(CliTextTable, AlignsColumns) {
+  EXPECT_EQ(FormatTable({{"a", "bb"}, {"ccc", "d"}}), "    a  bb\n  ccc   d\n");
+  EXPECT_EQ(FormatTable({{"a", "bb"}, {"ccc", "d"}}, true), "  a    bb\n  ccc   d\n");
+}
+
+GridMeshOptions Options(int64_t block, std::optional<double> threshold = std::nullopt,
+                        int64_t max_tets = 50'000'000) {
+  GridMeshOptions options;
+  options.block = block;
+  options.mask_threshold = threshold;
+  options.max_tets = max_tets;
+  return options;
+}
+
+// Every tet positive, faces conformal, the mesh fills the grid's box exactly.
+void ExpectGoodGridMesh(const Mesh& mesh, double box_volume) {
+  double total = 0.0;
+  for (const Tet& t : mesh.tets) {
+    const double v6 =
+        SignedVolume6(mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]], mesh.points[t[3]]);
+    ASSERT_GT(v6, 0.0);
+    total += v6 / 6.0;
+  }
+  EXPECT_NEAR(total, box_volume, 1e-9 * box_volume);
+  EXPECT_TRUE(CheckFaces(mesh.points, mesh.tets).ok()) << CheckFaces(mesh.points, mesh.tets);
+  const MeshReport report = AnalyzeMesh(mesh);
+  EXPECT_TRUE(report.valid());
+  EXPECT_EQ(report.unused_vertices, 0);
+}
+
+TEST(CliGridMesher, FiveTetsPerCellConformalWithRemainderBlocks) {
+  // 8 x 6 x 5 samples: cells of 3 leave remainders of 1, 2 and 1 voxels.
+  const Volume volume = clitest::BumpVolume({8, 6, 5}, {-1.0, 2.0, 0.5}, {0.5, 1.0, 2.0});
+  for (int64_t block : {1, 2, 3, 7, 100}) {
+    SCOPED_TRACE(block);
+    absl::StatusOr<GridMesh> grid = MeshVolumeGrid(volume, Options(block));
+    ASSERT_TRUE(grid.ok()) << grid.status();
+    const auto cells = [&](int64_t d) { return (d - 1 + block - 1) / block; };
+    EXPECT_EQ(grid->cells, cells(8) * cells(6) * cells(5));
+    EXPECT_EQ(grid->cells_kept, grid->cells);
+    EXPECT_EQ(static_cast<int64_t>(grid->mesh.tets.size()), 5 * grid->cells);
+    ExpectGoodGridMesh(grid->mesh, 3.5 * 5.0 * 8.0);
+    // Vertices sit on samples and carry them.
+    for (size_t v = 0; v < grid->mesh.points.size(); ++v) {
+      ASSERT_DOUBLE_EQ(grid->mesh.values[v], volume.Sample(grid->mesh.points[v]));
+    }
+  }
+}
+
+TEST(CliGridMesher, MaskKeepsCellsWithAllCornersAboveThreshold) {
+  // Value = x index: only cells with i >= 2 have all corners >= 2.
+  std::vector<double> values;
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 5; ++i) values.push_back(i);
+  const Volume volume = *Volume::FromDoubles({{5, 3, 3}, {0, 0, 0}, {1, 1, 1}}, values);
+  absl::StatusOr<GridMesh> grid = MeshVolumeGrid(volume, Options(1, 2.0));
+  ASSERT_TRUE(grid.ok()) << grid.status();
+  EXPECT_EQ(grid->cells, 16);
+  EXPECT_EQ(grid->cells_kept, 8);
+  EXPECT_EQ(grid->mesh.points.size(), 27u);  // unused vertices at x = 0, 1 are dropped
+  for (const Vec3& p : grid->mesh.points) EXPECT_GE(p[0], 2.0);
+  ExpectGoodGridMesh(grid->mesh, 8.0);
+
+  absl::StatusOr<GridMesh> none = MeshVolumeGrid(volume, Options(1, 10.0));
+  ASSERT_FALSE(none.ok());
+  EXPECT_NE(none.status().message().find("no cell"), std::string::npos) << none.status();
+}
+
+TEST(CliGridMesher, RefusesHugeGrids) {
+  const Volume volume = clitest::BumpVolume({11, 11, 11}, {0, 0, 0}, {1, 1, 1});
+  EXPECT_FALSE(MeshVolumeGrid(volume, Options(1, std::nullopt, 4999)).ok());
+  EXPECT_TRUE(MeshVolumeGrid(volume, Options(1, std::nullopt, 5000)).ok());
+}
+
+TEST(CliMeshPlacement, FitFillsTheBoxLessAVoxelAndKeepsOrientation) {
+  const Volume volume = clitest::BumpVolume({9, 11, 6}, {-4.0, 10.0, 0.0}, {1.0, 2.0, 0.5});
+  Mesh mesh = testing::FiveTetMesh({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}, {2, 2, 2});
+  EXPECT_GE(FirstVertexOutside(volume, mesh), 0);
+  ASSERT_TRUE(FitMeshToVolume(volume, &mesh).ok());
+  EXPECT_EQ(FirstVertexOutside(volume, mesh), -1);
+  const MeshReport report = AnalyzeMesh(mesh);
+  EXPECT_TRUE(report.valid());
+  const Box want = {Vec3{-3.0, 12.0, 0.5}, Vec3{3.0, 28.0, 2.0}};
+  EXPECT_EQ(report.bounding_box, want);
+
+  Mesh flat;
+  flat.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  flat.tets = {{0, 1, 2, 3}};
+  EXPECT_FALSE(FitMeshToVolume(volume, &flat).ok());
+}
+
+TEST(CliMeshReport, FindsDuplicatesInvertedTetsAndOverusedFaces) {
+  const Mesh good = testing::FiveTetMesh({0, 0, 0}, {1, 1, 1}, {2, 1, 1});
+  const MeshReport ok = AnalyzeMesh(good);
+  EXPECT_TRUE(ok.valid());
+  EXPECT_NEAR(ok.volume, 1.0, 1e-12);
+  EXPECT_NEAR(ok.boundary_area, 6.0, 1e-12);
+  EXPECT_EQ(ok.boundary_faces, 20);
+
+  Mesh inverted = good;
+  std::swap(inverted.tets[3][2], inverted.tets[3][3]);
+  MeshReport r = AnalyzeMesh(inverted);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(r.inverted_tets, 1);
+  EXPECT_EQ(r.first_inverted, 3);
+
+  // Three tets on one triangle: one below it, two above.
+  Mesh triple;
+  triple.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, -1}, {0.2, 0.2, 1}, {0.3, 0.1, 2}};
+  triple.tets = {{0, 1, 2, 4}, {0, 2, 1, 3}, {0, 1, 2, 5}};
+  r = AnalyzeMesh(triple);
+  EXPECT_EQ(r.inverted_tets, 0);
+  EXPECT_FALSE(r.faces.ok());
+  EXPECT_FALSE(r.valid());
+
+  Mesh duplicate = good;
+  duplicate.points.push_back(duplicate.points[4]);
+  r = AnalyzeMesh(duplicate);
+  EXPECT_EQ(r.duplicate_vertices, 1);
+  EXPECT_EQ(r.first_duplicate[0], 4);
+  EXPECT_FALSE(r.valid());
+}
+
+}  // namespace
+}  // namespace tetrefine::cli

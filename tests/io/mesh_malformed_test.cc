@@ -1,0 +1,195 @@
+// Malformed mesh files: every reader returns an error naming the file, never crashes, and never
+// allocates from a count the file cannot back up.
+#include <cctype>
+#include <ostream>
+#include <random>
+#include <string>
+
+#include "absl/strings/str_replace.h"
+#include "client/io/gmsh_format.h"
+#include "client/io/medit_format.h"
+#include "client/io/mesh_io.h"
+#include "client/io/vtk_legacy_format.h"
+#include "client/io/vtu_format.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "tests/io/io_test_util.h"
+
+namespace tetrefine::io {
+namespace {
+
+using iotest::RandomMesh;
+using iotest::RandomMeshOptions;
+using iotest::ScratchDir;
+using iotest::WriteBytes;
+using ::testing::HasSubstr;
+
+MeshFile SmallMesh() {
+  RandomMeshOptions options;
+  options.vertices = 6;
+  options.tets = 4;
+  return RandomMesh(11, options);
+}
+
+std::string Written(const std::string& extension, const MeshFile& mesh) {
+  if (extension == ".vtu") return FormatVtu(mesh);
+  if (extension == ".vtk") return FormatVtkLegacy(mesh);
+  if (extension == ".msh") return FormatGmsh41(mesh);
+  return FormatMedit(mesh);
+}
+
+class IoMeshMalformedTest : public ::testing::TestWithParam<std::string> {
+ protected:
+  std::string Path(const std::string& stem) const { return dir_.File(stem + GetParam()); }
+
+  // Reads `bytes` as a file of this format; must fail with the path in the message.
+  void ExpectError(const std::string& bytes, const std::string& context) {
+    const std::string path = Path("bad");
+    WriteBytes(path, bytes);
+    absl::StatusOr<MeshFile> file = ReadMesh(path);
+    ASSERT_FALSE(file.ok()) << context;
+    EXPECT_THAT(std::string(file.status().message()), HasSubstr(path)) << context;
+  }
+
+  ScratchDir dir_;
+};
+
+// True when cutting `bytes` at `size` leaves a file that ends between sections, or inside the
+// final token of a section (the next line starts a keyword: a letter or '$'). Gmsh's trailing
+// data sections are optional and legacy VTK and Medit (whose "End" is optional) have no end
+// marker, so such a file is complete and merely different ("10" cut to "1", later sections
+// gone); no reader can tell. Every other cut must fail.
+bool CutsAtSectionEnd(const std::string& bytes, size_t size) {
+  const auto keyword_start = [](char c) {
+    return std::isalpha(static_cast<unsigned char>(c)) || c == '$';
+  };
+  if (size > 0 && bytes[size - 1] == '\n' && keyword_start(bytes[size])) return true;
+  const size_t newline = bytes.find('\n', size);
+  if (newline == std::string::npos) return true;
+  if (bytes.substr(size, newline - size).find(' ') != std::string::npos) return false;
+  if (size > 0 && bytes[size - 1] == ' ') return false;
+  return newline + 1 >= bytes.size() || keyword_start(bytes[newline + 1]);
+}
+
+TEST_P(IoMeshMalformedTest, EveryTruncationFails) {
+  const MeshFile mesh = SmallMesh();
+  const std::string bytes = Written(GetParam(), mesh);
+  const std::string path = Path("cut");
+  size_t last_token = bytes.find_last_not_of(" \n");
+  last_token = bytes.find_last_of(" \n", last_token) + 1;
+  for (size_t size = 0; size < last_token; ++size) {
+    SCOPED_TRACE(::testing::Message() << "truncated to " << size << " of " << bytes.size());
+    WriteBytes(path, bytes.substr(0, size));
+    absl::StatusOr<MeshFile> file = ReadMesh(path);
+    if (!file.ok()) {
+      EXPECT_THAT(std::string(file.status().message()), HasSubstr(path));
+      continue;
+    }
+    EXPECT_NE(GetParam(), ".vtu");  // XML must be closed
+    EXPECT_TRUE(CutsAtSectionEnd(bytes, size));
+    EXPECT_EQ(file->mesh.points, mesh.mesh.points);
+  }
+}
+
+TEST_P(IoMeshMalformedTest, RandomCorruptionNeverCrashes) {
+  const std::string bytes = Written(GetParam(), SmallMesh());
+  const std::string path = Path("fuzz");
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string corrupt = bytes;
+    const int edits = 1 + static_cast<int>(rng() % 4);
+    for (int e = 0; e < edits; ++e) {
+      const size_t at = rng() % corrupt.size();
+      switch (rng() % 3) {
+        case 0:
+          corrupt[at] = static_cast<char>(rng());
+          break;
+        case 1:
+          corrupt[at] = "0123456789-.e \n"[rng() % 15];
+          break;
+        default:
+          corrupt.insert(at, std::to_string(rng()));  // huge numbers, e.g. in counts
+      }
+    }
+    WriteBytes(path, corrupt);
+    absl::StatusOr<MeshFile> file = ReadMesh(path);
+    if (file.ok()) {
+      EXPECT_TRUE(ValidateMeshFile(*file, path).ok());
+    } else {
+      EXPECT_THAT(std::string(file.status().message()), HasSubstr(path));
+    }
+  }
+  std::string garbage(4096, '\0');
+  for (char& c : garbage) c = static_cast<char>(rng());
+  ExpectError(garbage, "garbage");
+  ExpectError("", "empty file");
+}
+
+// Text edits that make the mesh invalid, per format: {from, to, why}.
+struct Edit {
+  std::string extension;
+  std::string from;
+  std::string to;
+  std::string message;  // expected in the error
+};
+
+void PrintTo(const Edit& edit, std::ostream* os) {
+  *os << edit.extension << ": \"" << edit.from << "\" -> \"" << edit.to << "\"";
+}
+
+class IoMeshBadContentTest : public ::testing::TestWithParam<Edit> {};
+
+TEST_P(IoMeshBadContentTest, ClearError) {
+  const Edit& edit = GetParam();
+  RandomMeshOptions options;
+  options.vertices = 5;
+  options.tets = 2;
+  MeshFile mesh = RandomMesh(2, options);
+  mesh.mesh.points[0] = {0.125, 0.25, 0.5};
+  mesh.mesh.tets[0] = {0, 1, 2, 3};
+  mesh.mesh.values[0] = 0.75;
+  std::string bytes = Written(edit.extension, mesh);
+  ASSERT_THAT(bytes, HasSubstr(edit.from));
+  bytes = absl::StrReplaceAll(bytes, {{edit.from, edit.to}});
+  ScratchDir dir;
+  const std::string path = dir.File("bad" + edit.extension);
+  WriteBytes(path, bytes);
+  const absl::Status status = ReadMesh(path).status();
+  ASSERT_FALSE(status.ok());
+  EXPECT_THAT(std::string(status.message()), HasSubstr(path));
+  EXPECT_THAT(std::string(status.message()), HasSubstr(edit.message));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    IoEdits, IoMeshBadContentTest,
+    ::testing::Values(
+        // Declared counts larger than the file: refused before allocating.
+        Edit{".mesh", "Vertices\n5\n", "Vertices\n5000000000\n", "out of range"},
+        Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n2000000000\n", "bytes remain"},
+        Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n3\n", "tetrahedron vertex index"},
+        Edit{".mesh", "1 2 3 4 ", "1 2 3 9 ", "out of range"},
+        Edit{".mesh", "0.125 0.25 0.5", "0.125 nan 0.5", "not finite"},
+        Edit{".vtk", "POINTS 5 double", "POINTS 4000000 double", "bytes remain"},
+        Edit{".vtk", "CELLS 2 10\n4 0 1 2 3", "CELLS 2 10\n4 0 1 2 7", "out of range"},
+        Edit{".vtk", "0.125 0.25 0.5", "0.125 0.25 nan", "non-finite"},
+        Edit{".vtk", "\n0.75\n", "\nnan\n", "not finite"},
+        Edit{".vtk", "POINT_DATA 5", "POINT_DATA 6", "does not match"},
+        Edit{".msh", "$Nodes\n1 5 1 5\n3 1 0 5", "$Nodes\n1 5 1 5\n3 1 0 4", "header says 5"},
+        Edit{".msh", "1 1 2 3 4\n", "1 1 2 3 9\n", "not defined"},
+        Edit{".msh", "0.125 0.25 0.5", "0.125 0.25 inf", "not finite"},
+        Edit{".msh", "$Elements\n1 2 1 2", "$Elements\n1 200000000000 1 2", "bytes remain"},
+        Edit{".msh", "$EndNodes", "$EndNodez", "expected $EndNodes"},
+        Edit{".vtu", "NumberOfPoints=\"5\"", "NumberOfPoints=\"6\"", "header says"},
+        Edit{".vtu", "NumberOfCells=\"2\"", "NumberOfCells=\"99999999999\"", "header says"},
+        Edit{".vtu", "</Points>", "</Pointz>", "closes <Points>"},
+        Edit{".vtu", "format=\"binary\">\n          ", "format=\"binary\">\n          !",
+             "invalid base64"}),
+    [](const ::testing::TestParamInfo<Edit>& info) {
+      return info.param.extension.substr(1) + "_" + std::to_string(info.index);
+    });
+
+INSTANTIATE_TEST_SUITE_P(IoFormats, IoMeshMalformedTest,
+                         ::testing::Values(".vtu", ".vtk", ".msh", ".mesh"));
+
+}  // namespace
+}  // namespace tetrefine::io

@@ -1,0 +1,205 @@
+// Mesh formats: write-then-read round trips, hand-written inputs, the real Medit mesh, and
+// atomic writes.
+#include <filesystem>
+#include <string>
+
+#include "client/io/gmsh_format.h"
+#include "client/io/mesh_io.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "tests/io/io_test_util.h"
+
+namespace tetrefine::io {
+namespace {
+
+using iotest::RandomMesh;
+using iotest::RandomMeshOptions;
+using iotest::ScratchDir;
+using iotest::SharedData;
+using iotest::WriteBytes;
+using ::testing::HasSubstr;
+
+// What a format keeps of a MeshFile.
+MeshFile Expected(const MeshFile& written, const std::string& extension) {
+  if (extension != ".mesh") return written;
+  MeshFile kept;
+  kept.mesh.points = written.mesh.points;
+  kept.mesh.tets = written.mesh.tets;
+  kept.tet_iteration = written.tet_iteration;
+  if (kept.tet_iteration.empty()) kept.tet_iteration.assign(written.mesh.tets.size(), 0);
+  return kept;
+}
+
+void ExpectSame(const MeshFile& a, const MeshFile& b) {
+  // Exact: binary formats store the bits, text formats the shortest round-trip decimal.
+  EXPECT_EQ(a.mesh.points, b.mesh.points);
+  EXPECT_EQ(a.mesh.tets, b.mesh.tets);
+  EXPECT_EQ(a.mesh.values, b.mesh.values);
+  EXPECT_EQ(a.tet_iteration, b.tet_iteration);
+  EXPECT_EQ(a.tet_quality, b.tet_quality);
+}
+
+class IoMeshRoundTripTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(IoMeshRoundTripTest, RandomMeshesManySeeds) {
+  ScratchDir dir;
+  const std::string path = dir.File("mesh" + GetParam());
+  for (uint64_t seed = 0; seed < 60; ++seed) {
+    SCOPED_TRACE(::testing::Message() << "seed " << seed << " format " << GetParam());
+    RandomMeshOptions options;
+    options.vertices = 4 + static_cast<int>(seed * 7 % 200);
+    options.tets = static_cast<int>(seed * 13 % 300);
+    options.values = seed % 4 != 1;
+    options.iteration = seed % 4 != 2;
+    options.quality = seed % 4 != 3;
+    const MeshFile mesh = RandomMesh(seed, options);
+    ASSERT_TRUE(WriteMesh(path, mesh).ok());
+    absl::StatusOr<MeshFile> back = ReadMesh(path);
+    ASSERT_TRUE(back.ok()) << back.status();
+    ExpectSame(*back, Expected(mesh, GetParam()));
+  }
+  // Nothing but the target is left in the directory: temporaries were renamed away.
+  int files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    ++files;
+  }
+  EXPECT_EQ(files, 1);
+}
+
+INSTANTIATE_TEST_SUITE_P(IoFormats, IoMeshRoundTripTest,
+                         ::testing::Values(".vtu", ".vtk", ".msh", ".mesh"));
+
+TEST(IoMeshTest, RealMeditCube) {
+  absl::StatusOr<MeshFile> file = ReadMesh(SharedData("unit_cube_1782tets.mesh"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.points.size(), 448u);
+  EXPECT_EQ(file->mesh.tets.size(), 1782u);
+  EXPECT_TRUE(file->mesh.values.empty());
+  for (const Vec3& p : file->mesh.points) {
+    for (double x : p) {
+      EXPECT_GE(x, -0.5);
+      EXPECT_LE(x, 0.5);
+    }
+  }
+  // Every format carries it through unchanged.
+  ScratchDir dir;
+  for (const char* extension : {".vtu", ".vtk", ".msh", ".mesh"}) {
+    const std::string path = dir.File(std::string("cube") + extension);
+    ASSERT_TRUE(WriteMesh(path, *file).ok());
+    absl::StatusOr<MeshFile> back = ReadMesh(path);
+    ASSERT_TRUE(back.ok()) << back.status();
+    ExpectSame(*back, *file);
+  }
+}
+
+TEST(IoMeshTest, ReadsGmsh22WithOtherElementsAndSparseTags) {
+  ScratchDir dir;
+  const std::string path = dir.File("old.msh");
+  WriteBytes(path,
+             "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
+             "$PhysicalNames\n1\n3 1 \"body\"\n$EndPhysicalNames\n"
+             "$Nodes\n5\n10 0 0 0\n20 1 0 0\n30 0 1 0\n40 0 0 1\n50 1 1 1\n$EndNodes\n"
+             "$Elements\n4\n1 15 2 0 1 10\n2 2 2 0 1 10 20 30\n7 4 2 1 1 10 20 30 40\n"
+             "9 4 2 1 1 20 30 40 50\n$EndElements\n"
+             "$NodeData\n1\n\"value\"\n1\n0.0\n3\n0\n1\n5\n10 1.5\n20 2.5\n30 3.5\n40 4.5\n"
+             "50 5.5\n$EndNodeData\n"
+             "$ElementData\n1\n\"iteration\"\n1\n0.0\n3\n0\n1\n3\n2 99\n7 3\n9 4\n"
+             "$EndElementData\n");
+  absl::StatusOr<MeshFile> file = ReadMesh(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  ASSERT_EQ(file->mesh.tets.size(), 2u);
+  EXPECT_EQ(file->mesh.tets[0], (Tet{0, 1, 2, 3}));
+  EXPECT_EQ(file->mesh.tets[1], (Tet{1, 2, 3, 4}));
+  EXPECT_EQ(file->mesh.values, (std::vector<double>{1.5, 2.5, 3.5, 4.5, 5.5}));
+  EXPECT_EQ(file->tet_iteration, (std::vector<int32_t>{3, 4}));
+  GmshReadInfo info;
+  ASSERT_TRUE(ParseGmsh(iotest::ReadBytes(path), path, &info).ok());
+  EXPECT_EQ(info.ignored_elements, 2);
+}
+
+TEST(IoMeshTest, ReadsAsciiVtuWithOtherCells) {
+  ScratchDir dir;
+  const std::string path = dir.File("ascii.vtu");
+  WriteBytes(path, R"(<?xml version="1.0"?>
+<!-- written by hand -->
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="5" NumberOfCells="3">
+      <PointData Scalars="value">
+        <DataArray type="Float32" Name="value" format="ascii">1 2 3 4 5</DataArray>
+        <DataArray type="Float64" Name="other" NumberOfComponents="2" format="ascii">
+          0 0 0 0 0 0 0 0 0 0</DataArray>
+      </PointData>
+      <CellData>
+        <DataArray type="Int32" Name="iteration" format="ascii">7 8 9</DataArray>
+      </CellData>
+      <Points>
+        <DataArray type="Float64" NumberOfComponents="3" format="ascii">
+          0 0 0  1 0 0  0 1 0  0 0 1  1 1 1
+        </DataArray>
+      </Points>
+      <Cells>
+        <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 0 1 2 1 2 3 4</DataArray>
+        <DataArray type="Int32" Name="offsets" format="ascii">4 7 11</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">10 5 10</DataArray>
+      </Cells>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>
+)");
+  absl::StatusOr<MeshFile> file = ReadMesh(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.tets, (std::vector<Tet>{{0, 1, 2, 3}, {1, 2, 3, 4}}));
+  EXPECT_EQ(file->mesh.values, (std::vector<double>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(file->tet_iteration, (std::vector<int32_t>{7, 9}));
+  EXPECT_TRUE(file->tet_quality.empty());
+}
+
+TEST(IoMeshTest, ReadsLegacyVtk51AndFieldData) {
+  ScratchDir dir;
+  const std::string path = dir.File("v5.vtk");
+  WriteBytes(path,
+             "# vtk DataFile Version 5.1\nmade by hand\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+             "POINTS 4 float\n0 0 0 1 0 0\n0 1 0 0 0 1\n"
+             "CELLS 3 5\nOFFSETS vtktypeint64\n0 1 5\nCONNECTIVITY vtktypeint64\n0 0 1 2 3\n"
+             "CELL_TYPES 2\n1\n10\n"
+             "CELL_DATA 2\nFIELD FieldData 2\nquality 1 2 float\n0.5 0.25\n"
+             "junk 3 2 double\n1 2 3 4 5 6\n"
+             "POINT_DATA 4\nSCALARS value double\nLOOKUP_TABLE default\n-1 -2 -3 -4\n"
+             "VECTORS v double\n0 0 0 0 0 0 0 0 0 0 0 0\n");
+  absl::StatusOr<MeshFile> file = ReadMesh(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.tets, (std::vector<Tet>{{0, 1, 2, 3}}));
+  EXPECT_EQ(file->mesh.values, (std::vector<double>{-1, -2, -3, -4}));
+  EXPECT_EQ(file->tet_quality, (std::vector<float>{0.25f}));
+}
+
+TEST(IoMeshTest, FailedWriteLeavesOldFileAndNoTemporary) {
+  ScratchDir dir;
+  const std::string path = dir.File("keep.vtu");
+  const MeshFile good = RandomMesh(1);
+  ASSERT_TRUE(WriteMesh(path, good).ok());
+  const std::string before = iotest::ReadBytes(path);
+  MeshFile bad = good;
+  bad.mesh.tets[0][2] = 1000000;  // out of range: refused before anything is written
+  const absl::Status status = WriteMesh(path, bad);
+  EXPECT_THAT(std::string(status.message()), HasSubstr("keep.vtu"));
+  EXPECT_THAT(std::string(status.message()), HasSubstr("out of range"));
+  EXPECT_EQ(iotest::ReadBytes(path), before);
+  EXPECT_FALSE(WriteMesh(dir.File("no/such/dir/x.vtu"), good).ok());
+  int files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    ++files;
+  }
+  EXPECT_EQ(files, 1);
+}
+
+TEST(IoMeshTest, UnknownExtensionNamesTheFile) {
+  for (const char* name : {"mesh.obj", "mesh.vtu.bak", "mesh"}) {
+    EXPECT_THAT(std::string(ReadMesh(name).status().message()), HasSubstr(name));
+    EXPECT_THAT(std::string(WriteMesh(name, MeshFile{}).message()), HasSubstr("unknown extension"));
+  }
+}
+
+}  // namespace
+}  // namespace tetrefine::io

@@ -1,0 +1,341 @@
+// NIfTI reading and writing: real files, the RAS frame, byte order, versions, scaling, errors.
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "client/io/nifti_reader.h"
+#include "client/io/nifti_writer.h"
+#include "client/io/read_volume.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "tests/io/io_test_util.h"
+#include "tests/io/nifti_builder.h"
+
+namespace tetrefine::io {
+namespace {
+
+using iotest::FloatSamples;
+using iotest::Int16Samples;
+using iotest::NiftiHeaderBytes;
+using iotest::NiftiSpec;
+using iotest::ScratchDir;
+using iotest::SharedData;
+using iotest::WriteBytes;
+using ::testing::HasSubstr;
+
+struct RealVolume {
+  const char* file;
+  Index3 dims;
+  Vec3 voxel_mm;
+  bool oblique;  // sform rotates or permutes axes
+};
+
+// Grid and voxel size from ../shared/data/README.md.
+class IoNiftiRealTest : public ::testing::TestWithParam<RealVolume> {};
+
+TEST_P(IoNiftiRealTest, ReadsDimsAndVoxelSize) {
+  const RealVolume& real = GetParam();
+  absl::StatusOr<VolumeFile> file = ReadVolume(SharedData(real.file));
+  ASSERT_TRUE(file.ok()) << file.status();
+  const GridGeometry& grid = file->volume.grid();
+  EXPECT_EQ(grid.dims, real.dims);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(grid.spacing[a], real.voxel_mm[a], 1e-4) << "axis " << a;
+  EXPECT_EQ(file->volume.type(), VoxelType::kInt16);
+  EXPECT_EQ(file->warnings.empty(), !real.oblique);
+  for (const std::string& warning : file->warnings) EXPECT_THAT(warning, HasSubstr(real.file));
+  const auto range = file->volume.ValueRange();
+  EXPECT_LT(range[0], range[1]);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    IoSharedData, IoNiftiRealTest,
+    ::testing::Values(RealVolume{"anatomical_33x41x25.nii", {33, 41, 25}, {2, 2, 2}, false},
+                      RealVolume{"epi_brain_58x58x24.nii.gz", {58, 58, 24}, {4, 4, 5}, true},
+                      RealVolume{"t1_brain_128x128x62.nii.gz", {128, 128, 62}, {2, 2, 3}, true}));
+
+// anatomical.nii is big-endian with sform x = -2 i + 32: reading must flip x so that the first
+// sample is the most-left voxel.
+TEST(IoNiftiRealTest, AnatomicalIsInRasMillimetres) {
+  absl::StatusOr<VolumeFile> file = ReadNifti(SharedData("anatomical_33x41x25.nii"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  const GridGeometry& grid = file->volume.grid();
+  EXPECT_DOUBLE_EQ(grid.origin[0], 32.0 - 2.0 * 32);
+  EXPECT_DOUBLE_EQ(grid.origin[1], -40.0);
+  EXPECT_DOUBLE_EQ(grid.origin[2], -16.0);
+  EXPECT_DOUBLE_EQ(file->affine[0][0], -2.0);
+  EXPECT_DOUBLE_EQ(file->affine[0][3], 32.0);
+}
+
+// The frame pin: a file whose sform has a negative x scale. Sampling at the world position
+// (RAS mm) of file voxel (i, j, k) must give that voxel's value.
+void ExpectWorldSamplesMatchVoxels(const VolumeFile& file, const std::vector<float>& values,
+                                   const std::array<int, 3>& n,
+                                   const std::array<std::array<double, 4>, 3>& affine) {
+  for (int k = 0; k < n[2]; ++k) {
+    for (int j = 0; j < n[1]; ++j) {
+      for (int i = 0; i < n[0]; ++i) {
+        Vec3 world;
+        for (int r = 0; r < 3; ++r) {
+          world[r] = affine[r][0] * i + affine[r][1] * j + affine[r][2] * k + affine[r][3];
+        }
+        EXPECT_NEAR(file.volume.Sample(world), values[(k * n[1] + j) * n[0] + i], 1e-9)
+            << "voxel (" << i << ", " << j << ", " << k << ") at world (" << world[0] << ", "
+            << world[1] << ", " << world[2] << ")";
+      }
+    }
+  }
+}
+
+std::vector<float> Ramp(int count) {
+  std::vector<float> values(count);
+  for (int i = 0; i < count; ++i) values[i] = static_cast<float>(i * 3 % 17) + 0.25f * i;
+  return values;
+}
+
+TEST(IoNiftiFrameTest, NegativeXScaleSformIsWorldRas) {
+  ScratchDir dir;
+  const std::array<int, 3> n{4, 3, 5};
+  const std::array<std::array<double, 4>, 3> sform{
+      {{-2.0, 0, 0, 10.0}, {0, 3.0, 0, -20.0}, {0, 0, 1.5, 5.0}}};
+  NiftiSpec spec;
+  spec.dim = {3, n[0], n[1], n[2], 1, 1, 1, 1};
+  spec.pixdim = {1, 2, 3, 1.5, 0, 0, 0, 0};
+  spec.sform_code = 2;
+  spec.srow = sform;
+  const std::vector<float> values = Ramp(n[0] * n[1] * n[2]);
+  const std::string path = dir.File("neg_x.nii");
+  WriteBytes(path, NiftiHeaderBytes(spec) + FloatSamples(values, false));
+
+  absl::StatusOr<VolumeFile> file = ReadVolume(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_TRUE(file->warnings.empty());
+  const GridGeometry& grid = file->volume.grid();
+  EXPECT_EQ(grid.spacing, (Vec3{2.0, 3.0, 1.5}));
+  EXPECT_EQ(grid.origin, (Vec3{10.0 - 2.0 * 3, -20.0, 5.0}));
+  ExpectWorldSamplesMatchVoxels(*file, values, n, sform);
+  // Between voxels the trilinear value is the average of the neighbours, in world terms too.
+  const double mid = file->volume.Sample({10.0 - 1.0, -20.0, 5.0});
+  EXPECT_NEAR(mid, (values[0] + values[1]) / 2.0, 1e-9);
+}
+
+TEST(IoNiftiFrameTest, QformWithQfacIsWorldRas) {
+  ScratchDir dir;
+  const std::array<int, 3> n{3, 4, 2};
+  // Quaternion (b, c, d) = (0, 1, 0) is a 180 degree turn about y: diag(-1, 1, -1); qfac = -1
+  // negates the z column, giving diag(-1, 1, 1) * pixdim.
+  NiftiSpec spec;
+  spec.dim = {3, n[0], n[1], n[2], 1, 1, 1, 1};
+  spec.pixdim = {-1, 2, 2.5, 4, 0, 0, 0, 0};
+  spec.qform_code = 1;
+  spec.quatern = {0, 1, 0};
+  spec.qoffset = {7, -3, 11};
+  const std::vector<float> values = Ramp(n[0] * n[1] * n[2]);
+  const std::string path = dir.File("qform.nii.gz");
+  // Written uncompressed under a .gz name: the reader decides by content, not name.
+  WriteBytes(path, NiftiHeaderBytes(spec) + FloatSamples(values, false));
+  absl::StatusOr<VolumeFile> file = ReadNifti(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_TRUE(file->warnings.empty());
+  ExpectWorldSamplesMatchVoxels(*file, values, n,
+                                {{{-2, 0, 0, 7}, {0, 2.5, 0, -3}, {0, 0, 4, 11}}});
+}
+
+TEST(IoNiftiFrameTest, ObliqueSformWarnsAndKeepsAffine) {
+  ScratchDir dir;
+  NiftiSpec spec;
+  spec.dim = {3, 3, 3, 3, 1, 1, 1, 1};
+  spec.pixdim = {1, 2, 2, 2, 0, 0, 0, 0};
+  spec.sform_code = 1;
+  const double c = std::cos(0.3) * 2, s = std::sin(0.3) * 2;
+  spec.srow = {{{c, -s, 0, 1}, {s, c, 0, 2}, {0, 0, 2, 3}}};
+  const std::string path = dir.File("oblique.nii");
+  WriteBytes(path, NiftiHeaderBytes(spec) + FloatSamples(Ramp(27), false));
+  absl::StatusOr<VolumeFile> file = ReadNifti(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  ASSERT_EQ(file->warnings.size(), 1u);
+  EXPECT_THAT(file->warnings[0], HasSubstr("oblique"));
+  EXPECT_THAT(file->warnings[0], HasSubstr(path));
+  EXPECT_NEAR(file->affine[1][0], s, 1e-6);
+  const GridGeometry& grid = file->volume.grid();
+  EXPECT_EQ(grid.origin, (Vec3{1, 2, 3}));
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(grid.spacing[a], 2.0, 1e-6);
+  EXPECT_FLOAT_EQ(file->volume.At(1, 0, 0), Ramp(27)[1]);
+}
+
+TEST(IoNiftiTest, BigEndianAndNifti2AndPairsReadTheSameVolume) {
+  ScratchDir dir;
+  const std::vector<float> values = Ramp(2 * 3 * 4);
+  for (int version : {1, 2}) {
+    for (bool big : {false, true}) {
+      for (bool pair : {false, true}) {
+        SCOPED_TRACE(::testing::Message()
+                     << "version " << version << " big " << big << " pair " << pair);
+        NiftiSpec spec;
+        spec.version = version;
+        spec.big_endian = big;
+        spec.pair = pair;
+        spec.dim = {3, 2, 3, 4, 1, 1, 1, 1};
+        spec.sform_code = 1;
+        spec.srow = {{{0.5, 0, 0, -1}, {0, 0.75, 0, 2}, {0, 0, 1.25, 3}}};
+        std::string path;
+        const std::string header = NiftiHeaderBytes(spec);
+        const std::string samples = FloatSamples(values, big);
+        if (pair) {
+          path = dir.File("pair.hdr");
+          WriteBytes(path, header);
+          WriteBytes(dir.File("pair.img"), samples);
+        } else {
+          path = dir.File("single.nii");
+          WriteBytes(path, header + samples);
+        }
+        absl::StatusOr<VolumeFile> file = ReadVolume(path);
+        ASSERT_TRUE(file.ok()) << file.status();
+        EXPECT_EQ(file->volume.grid().spacing, (Vec3{0.5, 0.75, 1.25}));
+        EXPECT_EQ(file->volume.grid().origin, (Vec3{-1, 2, 3}));
+        for (int k = 0; k < 4; ++k) {
+          for (int j = 0; j < 3; ++j) {
+            for (int i = 0; i < 2; ++i) {
+              EXPECT_EQ(file->volume.At(i, j, k), values[(k * 3 + j) * 2 + i]);
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(IoNiftiTest, AppliesSlopeAndIntercept) {
+  ScratchDir dir;
+  NiftiSpec spec;
+  spec.datatype = 4;  // int16
+  spec.slope = 2.0;
+  spec.inter = -1.5;
+  const std::vector<int16_t> raw{-3, 0, 1, 2, 100, -100, 7, 8};
+  const std::string path = dir.File("scaled.nii");
+  WriteBytes(path, NiftiHeaderBytes(spec) + Int16Samples(raw, false));
+  absl::StatusOr<VolumeFile> file = ReadNifti(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->volume.type(), VoxelType::kFloat32);
+  EXPECT_EQ(file->volume.At(0, 0, 0), -7.5);
+  EXPECT_EQ(file->volume.At(0, 0, 1), 198.5);
+
+  spec.slope = 1.0;  // identity scaling keeps the stored type
+  spec.inter = 0.0;
+  WriteBytes(path, NiftiHeaderBytes(spec) + Int16Samples(raw, false));
+  file = ReadNifti(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->volume.type(), VoxelType::kInt16);
+  EXPECT_EQ(file->volume.At(0, 0, 1), 100);
+}
+
+TEST(IoNiftiTest, WriterRoundTripsEveryTypeAndVersion) {
+  ScratchDir dir;
+  std::mt19937_64 rng(7);
+  for (VoxelType type : {VoxelType::kUint8, VoxelType::kInt16, VoxelType::kUint16,
+                         VoxelType::kInt32, VoxelType::kFloat32, VoxelType::kFloat64}) {
+    for (int version : {1, 2}) {
+      for (const char* name : {"v.nii", "v.nii.gz"}) {
+        SCOPED_TRACE(::testing::Message() << VoxelTypeName(type) << " v" << version << " " << name);
+        GridGeometry grid;
+        grid.dims = {5, 3, 4};
+        // float-exact geometry for NIfTI-1, arbitrary doubles for NIfTI-2.
+        grid.origin = version == 1 ? Vec3{-12.5, 3.25, 100} : Vec3{-12.1, 3.3, 0.1};
+        grid.spacing = version == 1 ? Vec3{0.5, 2, 1.25} : Vec3{0.3, 2.7, 1.1};
+        std::vector<std::byte> data(60 * VoxelSize(type));
+        for (std::byte& b : data) b = static_cast<std::byte>(rng());
+        if (type == VoxelType::kFloat32 || type == VoxelType::kFloat64) {
+          // Random bytes could be NaN; write finite ramps instead.
+          for (int i = 0; i < 60; ++i) {
+            if (type == VoxelType::kFloat32) {
+              const float f = 0.1f * i - 3;
+              std::memcpy(data.data() + 4 * i, &f, 4);
+            } else {
+              const double d = 0.1 * i - 3;
+              std::memcpy(data.data() + 8 * i, &d, 8);
+            }
+          }
+        }
+        absl::StatusOr<Volume> volume = Volume::CreateWhole(grid, type, data);
+        ASSERT_TRUE(volume.ok()) << volume.status();
+        const std::string path = dir.File(name);
+        ASSERT_TRUE(WriteNifti(path, *volume, {.version = version}).ok());
+        absl::StatusOr<VolumeFile> back = ReadVolume(path);
+        ASSERT_TRUE(back.ok()) << back.status();
+        EXPECT_TRUE(back->warnings.empty());
+        EXPECT_EQ(back->volume.type(), type);
+        EXPECT_EQ(back->volume.data(), data);
+        EXPECT_EQ(back->volume.grid().dims, grid.dims);
+        EXPECT_EQ(back->volume.grid().origin, grid.origin);
+        EXPECT_EQ(back->volume.grid().spacing, grid.spacing);
+      }
+    }
+  }
+}
+
+TEST(IoNiftiTest, WriterRejectsOtherExtensions) {
+  ScratchDir dir;
+  absl::StatusOr<Volume> volume =
+      Volume::FromDoubles({{2, 2, 2}, {0, 0, 0}, {1, 1, 1}}, std::vector<double>(8, 1.0));
+  ASSERT_TRUE(volume.ok());
+  const absl::Status status = WriteNifti(dir.File("v.nrrd"), *volume);
+  EXPECT_FALSE(status.ok());
+  EXPECT_THAT(std::string(status.message()), HasSubstr("v.nrrd"));
+}
+
+TEST(IoNiftiErrorTest, TruncatedDataNamesPathAndSizes) {
+  ScratchDir dir;
+  NiftiSpec spec;
+  spec.dim = {3, 10, 10, 10, 1, 1, 1, 1};
+  const std::string path = dir.File("brain.nii");
+  WriteBytes(path, NiftiHeaderBytes(spec) + std::string(1000, '\0'));
+  const absl::Status status = ReadNifti(path).status();
+  EXPECT_THAT(std::string(status.message()),
+              HasSubstr("brain.nii: truncated: header says 4000 voxel bytes"));
+  EXPECT_THAT(std::string(status.message()), HasSubstr("file has 1000"));
+}
+
+TEST(IoNiftiErrorTest, UnsupportedDatatypeAnd4DAreClearErrors) {
+  ScratchDir dir;
+  NiftiSpec spec;
+  spec.datatype = 256;  // int8
+  const std::string path = dir.File("int8.nii");
+  WriteBytes(path, NiftiHeaderBytes(spec) + std::string(8, '\0'));
+  absl::Status status = ReadNifti(path).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kUnimplemented);
+  EXPECT_THAT(std::string(status.message()), HasSubstr("int8"));
+  EXPECT_THAT(std::string(status.message()), HasSubstr(path));
+
+  spec.datatype = 16;
+  spec.dim = {4, 2, 2, 2, 3, 1, 1, 1};
+  WriteBytes(path, NiftiHeaderBytes(spec) + std::string(96, '\0'));
+  status = ReadNifti(path).status();
+  EXPECT_THAT(std::string(status.message()), HasSubstr("dim[4] = 3"));
+}
+
+TEST(IoNiftiErrorTest, EveryTruncationAndGarbageFailsCleanly) {
+  ScratchDir dir;
+  NiftiSpec spec;
+  const std::string bytes = NiftiHeaderBytes(spec) + FloatSamples(Ramp(8), false);
+  const std::string path = dir.File("cut.nii");
+  for (size_t size = 0; size < bytes.size(); ++size) {
+    WriteBytes(path, bytes.substr(0, size));
+    const absl::Status status = ReadNifti(path).status();
+    EXPECT_FALSE(status.ok()) << "size " << size;
+    EXPECT_THAT(std::string(status.message()), HasSubstr(path));
+  }
+  std::mt19937_64 rng(3);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::string garbage = bytes;
+    for (int flips = 0; flips < 8; ++flips) garbage[rng() % 352] = static_cast<char>(rng());
+    WriteBytes(path, garbage);
+    (void)ReadNifti(path);  // any result but a crash
+  }
+  WriteBytes(path, std::string("\x1f\x8b garbage that is not gzip"));
+  EXPECT_FALSE(ReadNifti(path).ok());
+  EXPECT_EQ(ReadNifti(dir.File("missing.nii")).status().code(), absl::StatusCode::kNotFound);
+}
+
+}  // namespace
+}  // namespace tetrefine::io

@@ -1,0 +1,162 @@
+// NRRD and MetaImage (LPS files converted to RAS) and ReadVolume's dispatch.
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "client/io/read_volume.h"
+#include "client/io/zlib_codec.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "tests/io/io_test_util.h"
+#include "tests/io/nifti_builder.h"
+
+namespace tetrefine::io {
+namespace {
+
+using iotest::FloatSamples;
+using iotest::Int16Samples;
+using iotest::ScratchDir;
+using iotest::WriteBytes;
+using ::testing::HasSubstr;
+
+constexpr int kNx = 3, kNy = 4, kNz = 2;
+
+std::vector<int16_t> Ramp() {
+  std::vector<int16_t> values(kNx * kNy * kNz);
+  for (size_t i = 0; i < values.size(); ++i) values[i] = static_cast<int16_t>(i * 7 - 20);
+  return values;
+}
+
+// Checks that the file voxel (i, j, k) sits at the RAS point -lps_x, -lps_y, lps_z of its LPS
+// position origin + (2i, 3j, 4k): the LPS-to-RAS conversion the readers document.
+void ExpectLpsVoxelsAtRasPoints(const VolumeFile& file, const Vec3& lps_origin) {
+  EXPECT_TRUE(file.warnings.empty());
+  EXPECT_EQ(file.volume.grid().spacing, (Vec3{2, 3, 4}));
+  const std::vector<int16_t> values = Ramp();
+  for (int k = 0; k < kNz; ++k) {
+    for (int j = 0; j < kNy; ++j) {
+      for (int i = 0; i < kNx; ++i) {
+        const Vec3 lps{lps_origin[0] + 2 * i, lps_origin[1] + 3 * j, lps_origin[2] + 4 * k};
+        EXPECT_EQ(file.volume.Sample({-lps[0], -lps[1], lps[2]}), values[(k * kNy + j) * kNx + i])
+            << i << " " << j << " " << k;
+      }
+    }
+  }
+}
+
+std::string NrrdHeader(const std::string& type, const std::string& encoding,
+                       const std::string& endian, const std::string& extra = "") {
+  return absl::StrCat("NRRD0004\n# a comment\ntype: ", type, "\ndimension: 3\nsizes: ", kNx, " ",
+                      kNy, " ", kNz, "\nspace: left-posterior-superior\n",
+                      "space directions: (2,0,0) (0,3,0) (0,0,4)\n",
+                      "space origin: (10,-20,30)\nkinds: domain domain domain\nendian: ", endian,
+                      "\nencoding: ", encoding, "\nunits:=mm\n", extra);
+}
+
+TEST(IoNrrdTest, RawLittleEndianLpsIsRas) {
+  ScratchDir dir;
+  const std::string path = dir.File("v.nrrd");
+  WriteBytes(path, NrrdHeader("short", "raw", "little") + "\n" + Int16Samples(Ramp(), false));
+  absl::StatusOr<VolumeFile> file = ReadVolume(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->volume.type(), VoxelType::kInt16);
+  ExpectLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+  EXPECT_DOUBLE_EQ(file->affine[0][0], -2.0);
+  EXPECT_DOUBLE_EQ(file->affine[1][3], 20.0);
+}
+
+TEST(IoNrrdTest, GzipBigEndianAsciiAndDetached) {
+  ScratchDir dir;
+  absl::StatusOr<std::string> gz = GzipCompress(Int16Samples(Ramp(), true));
+  ASSERT_TRUE(gz.ok());
+  WriteBytes(dir.File("gz.nrrd"), NrrdHeader("int16", "gzip", "big") + "\n" + *gz);
+  std::string ascii;
+  for (int16_t v : Ramp()) absl::StrAppend(&ascii, v, "\n");
+  WriteBytes(dir.File("ascii.nrrd"), NrrdHeader("short", "ascii", "big") + "\n" + ascii);
+  WriteBytes(dir.File("d.nhdr"), NrrdHeader("short", "raw", "little", "data file: d.raw\n"));
+  WriteBytes(dir.File("d.raw"), Int16Samples(Ramp(), false));
+  for (const char* name : {"gz.nrrd", "ascii.nrrd", "d.nhdr"}) {
+    SCOPED_TRACE(name);
+    absl::StatusOr<VolumeFile> file = ReadVolume(dir.File(name));
+    ASSERT_TRUE(file.ok()) << file.status();
+    ExpectLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+  }
+}
+
+TEST(IoNrrdTest, ErrorsNameTheFile) {
+  ScratchDir dir;
+  const std::string path = dir.File("bad.nrrd");
+  const std::string good =
+      NrrdHeader("short", "raw", "little") + "\n" + Int16Samples(Ramp(), false);
+  for (size_t size = 0; size < good.size(); size += 3) {
+    WriteBytes(path, good.substr(0, size));
+    const absl::Status status = ReadVolume(path).status();
+    EXPECT_FALSE(status.ok()) << size;
+    EXPECT_THAT(std::string(status.message()), HasSubstr(path));
+  }
+  WriteBytes(path, NrrdHeader("long", "raw", "little") + "\n");
+  EXPECT_EQ(ReadVolume(path).status().code(), absl::StatusCode::kUnimplemented);
+  WriteBytes(path, NrrdHeader("short", "bzip2", "little") + "\n");
+  EXPECT_THAT(std::string(ReadVolume(path).status().message()), HasSubstr("bzip2"));
+}
+
+std::string MetaHeader(const std::string& extra, const std::string& data_file) {
+  return absl::StrCat("ObjectType = Image\nNDims = 3\nBinaryData = True\n", extra,
+                      "TransformMatrix = 1 0 0 0 1 0 0 0 1\nOffset = 10 -20 30\n",
+                      "AnatomicalOrientation = RAI\nElementSpacing = 2 3 4\nDimSize = ", kNx, " ",
+                      kNy, " ", kNz, "\nElementType = MET_SHORT\nElementDataFile = ", data_file,
+                      "\n");
+}
+
+TEST(IoMetaImageTest, MhaMhdAndCompressedAreRas) {
+  ScratchDir dir;
+  WriteBytes(dir.File("v.mha"),
+             MetaHeader("BinaryDataByteOrderMSB = False\n", "LOCAL") + Int16Samples(Ramp(), false));
+  WriteBytes(dir.File("v.mhd"), MetaHeader("ElementByteOrderMSB = True\n", "v.raw"));
+  WriteBytes(dir.File("v.raw"), Int16Samples(Ramp(), true));
+  absl::StatusOr<std::string> gz = GzipCompress(Int16Samples(Ramp(), false));
+  ASSERT_TRUE(gz.ok());
+  WriteBytes(dir.File("c.mha"), MetaHeader("CompressedData = True\n", "LOCAL") + *gz);
+  for (const char* name : {"v.mha", "v.mhd", "c.mha"}) {
+    SCOPED_TRACE(name);
+    absl::StatusOr<VolumeFile> file = ReadVolume(dir.File(name));
+    ASSERT_TRUE(file.ok()) << file.status();
+    ExpectLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+  }
+}
+
+TEST(IoMetaImageTest, ErrorsNameTheFile) {
+  ScratchDir dir;
+  const std::string path = dir.File("bad.mha");
+  const std::string good = MetaHeader("", "LOCAL") + Int16Samples(Ramp(), false);
+  for (size_t size = 0; size < good.size(); size += 3) {
+    WriteBytes(path, good.substr(0, size));
+    const absl::Status status = ReadVolume(path).status();
+    EXPECT_FALSE(status.ok()) << size;
+    EXPECT_THAT(std::string(status.message()), HasSubstr(path));
+  }
+  WriteBytes(dir.File("missing.mhd"), MetaHeader("", "nowhere.raw"));
+  EXPECT_THAT(std::string(ReadVolume(dir.File("missing.mhd")).status().message()),
+              HasSubstr("nowhere.raw"));
+}
+
+TEST(IoReadVolumeTest, UnknownExtensionNamesTheFile) {
+  for (const char* name : {"scan.dcm", "volume.tif", "noextension"}) {
+    const absl::Status status = ReadVolume(name).status();
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_THAT(std::string(status.message()), HasSubstr(name));
+    EXPECT_THAT(std::string(status.message()), HasSubstr("unknown extension"));
+  }
+}
+
+TEST(IoReadVolumeTest, ExtensionsAreCaseInsensitive) {
+  ScratchDir dir;
+  iotest::NiftiSpec spec;
+  const std::string path = dir.File("UPPER.NII");
+  WriteBytes(path,
+             iotest::NiftiHeaderBytes(spec) + FloatSamples(std::vector<float>(8, 1.f), false));
+  EXPECT_TRUE(ReadVolume(path).ok());
+}
+
+}  // namespace
+}  // namespace tetrefine::io

@@ -1,0 +1,360 @@
+#include "wire/conversion.h"
+
+#include <cmath>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+
+namespace tetrefine::wire {
+namespace {
+
+absl::Status Invalid(absl::string_view field, absl::string_view what) {
+  return absl::InvalidArgumentError(absl::StrCat("options.", field, ": ", what));
+}
+
+void QualityToWire(const QualityStats& q, v1::QualityStats* out) {
+  out->set_min(q.min);
+  out->set_mean(q.mean);
+  out->set_count(q.count);
+}
+
+QualityStats QualityFromWire(const v1::QualityStats& q) {
+  return QualityStats{.min = q.min(), .mean = q.mean(), .count = q.count()};
+}
+
+v1::StopReason StopReasonToWire(StopReason r) {
+  switch (r) {
+    case StopReason::kConverged:
+      return v1::STOP_REASON_CONVERGED;
+    case StopReason::kMaxIterations:
+      return v1::STOP_REASON_MAX_ITERATIONS;
+    case StopReason::kTetBudget:
+      return v1::STOP_REASON_TET_BUDGET;
+    case StopReason::kCancelled:
+      return v1::STOP_REASON_CANCELLED;
+    case StopReason::kQualityFloor:
+      return v1::STOP_REASON_QUALITY_FLOOR;
+  }
+  return v1::STOP_REASON_UNSPECIFIED;
+}
+
+absl::StatusOr<StopReason> StopReasonFromWire(int r) {
+  switch (r) {
+    case v1::STOP_REASON_CONVERGED:
+      return StopReason::kConverged;
+    case v1::STOP_REASON_MAX_ITERATIONS:
+      return StopReason::kMaxIterations;
+    case v1::STOP_REASON_TET_BUDGET:
+      return StopReason::kTetBudget;
+    case v1::STOP_REASON_CANCELLED:
+      return StopReason::kCancelled;
+    case v1::STOP_REASON_QUALITY_FLOOR:
+      return StopReason::kQualityFloor;
+    default:
+      return absl::DataLossError(absl::StrCat("summary.stop_reason: unknown value ", r));
+  }
+}
+
+}  // namespace
+
+RequestOptions RequestOptionsFromCore(const RefineOptions& options) {
+  RequestOptions out;
+  out.epsilon = options.epsilon;
+  out.max_iterations = options.max_iterations;
+  out.max_tets = options.max_tets;
+  out.norm_coeff = options.norm_coeff;
+  out.outside = options.outside;
+  out.orientation = options.orientation;
+  out.lattice_n = options.lattice_n;
+  out.lattice_max_tets = options.lattice_max_tets;
+  out.lattice_seed = options.lattice_seed;
+  out.min_edge_length = options.min_edge_length;
+  out.min_quality = options.min_quality;
+  return out;
+}
+
+v1::VoxelType VoxelTypeToWire(VoxelType type) {
+  switch (type) {
+    case VoxelType::kUint8:
+      return v1::VOXEL_TYPE_UINT8;
+    case VoxelType::kInt16:
+      return v1::VOXEL_TYPE_INT16;
+    case VoxelType::kUint16:
+      return v1::VOXEL_TYPE_UINT16;
+    case VoxelType::kInt32:
+      return v1::VOXEL_TYPE_INT32;
+    case VoxelType::kFloat32:
+      return v1::VOXEL_TYPE_FLOAT32;
+    case VoxelType::kFloat64:
+      return v1::VOXEL_TYPE_FLOAT64;
+  }
+  return v1::VOXEL_TYPE_UNSPECIFIED;
+}
+
+absl::StatusOr<VoxelType> VoxelTypeFromWire(int type, absl::string_view field) {
+  switch (type) {
+    case v1::VOXEL_TYPE_UINT8:
+      return VoxelType::kUint8;
+    case v1::VOXEL_TYPE_INT16:
+      return VoxelType::kInt16;
+    case v1::VOXEL_TYPE_UINT16:
+      return VoxelType::kUint16;
+    case v1::VOXEL_TYPE_INT32:
+      return VoxelType::kInt32;
+    case v1::VOXEL_TYPE_FLOAT32:
+      return VoxelType::kFloat32;
+    case v1::VOXEL_TYPE_FLOAT64:
+      return VoxelType::kFloat64;
+    default:
+      return absl::InvalidArgumentError(
+          absl::StrCat(field, ": unknown or unspecified voxel type ", type));
+  }
+}
+
+void RequestOptionsToWire(const RequestOptions& o, v1::RefineOptions* out) {
+  out->set_epsilon(o.epsilon);
+  out->set_max_iterations(o.max_iterations);
+  if (o.max_tets.has_value()) out->set_max_tets(*o.max_tets);
+  if (o.norm_coeff.has_value()) out->set_norm_coeff(*o.norm_coeff);
+  out->set_outside_policy(o.outside == OutsidePolicy::kClamp ? v1::OUTSIDE_POLICY_CLAMP
+                                                             : v1::OUTSIDE_POLICY_REJECT);
+  out->set_orientation_policy(o.orientation == OrientationPolicy::kNormalize
+                                  ? v1::ORIENTATION_POLICY_NORMALIZE
+                                  : v1::ORIENTATION_POLICY_REJECT);
+  out->set_lattice_n(o.lattice_n);
+  out->set_lattice_max_tets(o.lattice_max_tets);
+  out->set_lattice_seed(o.lattice_seed);
+  if (o.min_edge_length.has_value()) out->set_min_edge_length(*o.min_edge_length);
+  out->set_min_quality(o.min_quality);
+  out->set_stream_every_iteration(o.stream_every_iteration);
+  out->set_skip_final_mesh(o.skip_final_mesh);
+  out->set_response_chunk_bytes(o.response_chunk_bytes);
+}
+
+absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& in,
+                                                      const ServiceLimits& limits) {
+  RequestOptions o;
+  if (in.has_epsilon()) {
+    // Written so that NaN fails too.
+    if (!(in.epsilon() > 0.0) || !std::isfinite(in.epsilon())) {
+      return Invalid("epsilon", absl::StrCat("must be finite and > 0, got ", in.epsilon()));
+    }
+    o.epsilon = in.epsilon();
+  }
+  if (in.has_max_iterations()) {
+    if (in.max_iterations() < 0) {
+      return Invalid("max_iterations", absl::StrCat("must be >= 0, got ", in.max_iterations()));
+    }
+    o.max_iterations = in.max_iterations();
+  }
+  if (in.has_max_tets()) {
+    if (in.max_tets() <= 0) {
+      return Invalid("max_tets", absl::StrCat("must be > 0, got ", in.max_tets()));
+    }
+    if (in.max_tets() > limits.max_output_tets) {
+      return absl::ResourceExhaustedError(absl::StrCat("options.max_tets: ", in.max_tets(),
+                                                       " exceeds this server's limit of ",
+                                                       limits.max_output_tets, " output tets"));
+    }
+    o.max_tets = in.max_tets();
+  }
+  if (in.has_norm_coeff()) {
+    if (!(in.norm_coeff() > 0.0) || !std::isfinite(in.norm_coeff())) {
+      return Invalid("norm_coeff", absl::StrCat("must be finite and > 0, got ", in.norm_coeff()));
+    }
+    o.norm_coeff = in.norm_coeff();
+  }
+  switch (in.outside_policy()) {
+    case v1::OUTSIDE_POLICY_UNSPECIFIED:
+    case v1::OUTSIDE_POLICY_REJECT:
+      o.outside = OutsidePolicy::kReject;
+      break;
+    case v1::OUTSIDE_POLICY_CLAMP:
+      o.outside = OutsidePolicy::kClamp;
+      break;
+    default:
+      return Invalid("outside_policy", absl::StrCat("unknown value ", in.outside_policy()));
+  }
+  switch (in.orientation_policy()) {
+    case v1::ORIENTATION_POLICY_UNSPECIFIED:
+    case v1::ORIENTATION_POLICY_REJECT:
+      o.orientation = OrientationPolicy::kReject;
+      break;
+    case v1::ORIENTATION_POLICY_NORMALIZE:
+      o.orientation = OrientationPolicy::kNormalize;
+      break;
+    default:
+      return Invalid("orientation_policy", absl::StrCat("unknown value ", in.orientation_policy()));
+  }
+  if (in.has_lattice_n()) {
+    if (in.lattice_n() < 0) {
+      return Invalid("lattice_n", absl::StrCat("must be >= 0, got ", in.lattice_n()));
+    }
+    o.lattice_n = in.lattice_n();
+  }
+  if (in.has_lattice_max_tets()) {
+    if (in.lattice_max_tets() < 0) {
+      return Invalid("lattice_max_tets", absl::StrCat("must be >= 0, got ", in.lattice_max_tets()));
+    }
+    o.lattice_max_tets = in.lattice_max_tets();
+  }
+  if (in.has_lattice_seed()) o.lattice_seed = in.lattice_seed();
+  if (in.has_min_edge_length()) {
+    if (!(in.min_edge_length() >= 0.0) || !std::isfinite(in.min_edge_length())) {
+      return Invalid("min_edge_length",
+                     absl::StrCat("must be finite and >= 0, got ", in.min_edge_length()));
+    }
+    o.min_edge_length = in.min_edge_length();
+  }
+  if (in.has_min_quality()) {
+    if (!(in.min_quality() >= 0.0 && in.min_quality() < 1.0)) {
+      return Invalid("min_quality", absl::StrCat("must be in [0, 1), got ", in.min_quality()));
+    }
+    o.min_quality = in.min_quality();
+  }
+  o.stream_every_iteration = in.stream_every_iteration();
+  o.skip_final_mesh = in.skip_final_mesh();
+  o.response_chunk_bytes = in.response_chunk_bytes();
+  return o;
+}
+
+RefineOptions ToCoreOptions(const RequestOptions& o, const ServiceLimits& limits) {
+  RefineOptions core;
+  core.epsilon = o.epsilon;
+  core.max_iterations = o.max_iterations;
+  core.max_tets = o.max_tets.value_or(limits.max_output_tets);
+  core.norm_coeff = o.norm_coeff;
+  core.outside = o.outside;
+  core.orientation = o.orientation;
+  core.lattice_n = o.lattice_n;
+  core.lattice_max_tets = o.lattice_max_tets;
+  core.lattice_seed = o.lattice_seed;
+  core.min_edge_length = o.min_edge_length;
+  core.min_quality = o.min_quality;
+  return core;
+}
+
+void IterationStatsToWire(const IterationStats& s, v1::IterationStats* out) {
+  out->set_iteration(s.iteration);
+  out->set_initial_tets(s.initial_tets);
+  out->set_final_tets(s.final_tets);
+  out->set_tets_with_error(s.tets_with_error);
+  out->set_edges(s.edges);
+  out->set_split_edges(s.split_edges);
+  out->set_short_edges_kept(s.short_edges_kept);
+  out->set_max_error(s.max_error);
+  out->set_mean_error(s.mean_error);
+  out->mutable_configuration_counts()->Assign(s.configurations.begin(), s.configurations.end());
+  out->set_schonhardt_prisms(s.schonhardt_prisms);
+  QualityToWire(s.quality, out->mutable_quality());
+  out->set_seconds(s.seconds);
+}
+
+absl::StatusOr<IterationStats> IterationStatsFromWire(const v1::IterationStats& in) {
+  if (in.configuration_counts_size() != kNumConfigurations) {
+    return absl::DataLossError(absl::StrCat("iteration_stats.configuration_counts: expected ",
+                                            kNumConfigurations, " entries, got ",
+                                            in.configuration_counts_size()));
+  }
+  IterationStats s;
+  s.iteration = in.iteration();
+  s.initial_tets = in.initial_tets();
+  s.final_tets = in.final_tets();
+  s.tets_with_error = in.tets_with_error();
+  s.edges = in.edges();
+  s.split_edges = in.split_edges();
+  s.short_edges_kept = in.short_edges_kept();
+  s.max_error = in.max_error();
+  s.mean_error = in.mean_error();
+  for (int i = 0; i < kNumConfigurations; ++i) s.configurations[i] = in.configuration_counts(i);
+  s.schonhardt_prisms = in.schonhardt_prisms();
+  s.quality = QualityFromWire(in.quality());
+  s.seconds = in.seconds();
+  return s;
+}
+
+void SummaryToWire(const RefineResult& r, const ServiceSummary& service, int64_t input_tets,
+                   v1::Summary* out) {
+  out->set_stop_reason(StopReasonToWire(r.stop_reason));
+  out->set_iterations(static_cast<int32_t>(r.iterations.size()));
+  out->set_input_tets(input_tets);
+  out->set_output_tets(static_cast<int64_t>(r.mesh.tets.size()));
+  out->set_output_vertices(static_cast<int64_t>(r.mesh.points.size()));
+  out->set_norm_coeff(r.norm_coeff);
+  QualityToWire(r.initial_quality, out->mutable_initial_quality());
+  QualityToWire(r.final_quality, out->mutable_final_quality());
+  v1::LatticeStats* lattice = out->mutable_lattice();
+  lattice->set_n(r.lattice.n);
+  lattice->set_tets_sampled(r.lattice.tets_sampled);
+  lattice->set_points_sampled(r.lattice.points_sampled);
+  lattice->set_max_error(r.lattice.max_error);
+  lattice->set_mean_error(r.lattice.mean_error);
+  lattice->set_share_above_epsilon(r.lattice.share_above_epsilon);
+  lattice->set_volume_mean_error(r.lattice.volume_mean_error);
+  lattice->set_volume_share_above_epsilon(r.lattice.volume_share_above_epsilon);
+  out->set_tets_reoriented(r.tets_reoriented);
+  out->set_next_iteration_tets(r.next_iteration_tets);
+  out->set_next_iteration_min_quality(r.next_iteration_min_quality);
+  out->set_final_max_error(r.final_max_error);
+  out->set_final_mean_error(r.final_mean_error);
+  out->set_max_tets(service.max_tets);
+  out->set_refine_seconds(r.seconds);
+  out->set_input_seconds(service.input_seconds);
+  out->set_total_seconds(service.total_seconds);
+}
+
+absl::Status SummaryFromWire(const v1::Summary& in, RefineResult* r, ServiceSummary* service) {
+  absl::StatusOr<StopReason> reason = StopReasonFromWire(in.stop_reason());
+  if (!reason.ok()) return reason.status();
+  r->stop_reason = *reason;
+  r->next_iteration_tets = in.next_iteration_tets();
+  r->next_iteration_min_quality = in.next_iteration_min_quality();
+  r->final_max_error = in.final_max_error();
+  r->final_mean_error = in.final_mean_error();
+  r->norm_coeff = in.norm_coeff();
+  r->initial_quality = QualityFromWire(in.initial_quality());
+  r->final_quality = QualityFromWire(in.final_quality());
+  const v1::LatticeStats& lattice = in.lattice();
+  r->lattice = LatticeStats{.n = lattice.n(),
+                            .tets_sampled = lattice.tets_sampled(),
+                            .points_sampled = lattice.points_sampled(),
+                            .max_error = lattice.max_error(),
+                            .mean_error = lattice.mean_error(),
+                            .share_above_epsilon = lattice.share_above_epsilon(),
+                            .volume_mean_error = lattice.volume_mean_error(),
+                            .volume_share_above_epsilon = lattice.volume_share_above_epsilon()};
+  r->tets_reoriented = in.tets_reoriented();
+  r->seconds = in.refine_seconds();
+  service->max_tets = in.max_tets();
+  service->input_seconds = in.input_seconds();
+  service->total_seconds = in.total_seconds();
+  return absl::OkStatus();
+}
+
+void LimitsToWire(const ServiceLimits& limits, v1::ServerLimits* out) {
+  out->set_max_voxels(limits.max_voxels);
+  out->set_max_input_tets(limits.max_input_tets);
+  out->set_max_output_tets(limits.max_output_tets);
+  out->set_max_concurrent_refinements(limits.max_concurrent_refinements);
+  out->set_max_message_bytes(limits.max_message_bytes);
+}
+
+ServiceLimits LimitsFromWire(const v1::ServerLimits& in) {
+  return ServiceLimits{.max_voxels = in.max_voxels(),
+                       .max_input_tets = in.max_input_tets(),
+                       .max_output_tets = in.max_output_tets(),
+                       .max_concurrent_refinements = in.max_concurrent_refinements(),
+                       .max_message_bytes = in.max_message_bytes()};
+}
+
+grpc::Status ToGrpcStatus(const absl::Status& status) {
+  if (status.ok()) return grpc::Status::OK;
+  return grpc::Status(static_cast<grpc::StatusCode>(status.code()), std::string(status.message()));
+}
+
+absl::Status FromGrpcStatus(const grpc::Status& status) {
+  if (status.ok()) return absl::OkStatus();
+  return absl::Status(static_cast<absl::StatusCode>(status.error_code()), status.error_message());
+}
+
+}  // namespace tetrefine::wire

@@ -1,0 +1,392 @@
+#include "wire/request_reader.h"
+
+#include <cmath>
+#include <cstring>
+#include <new>
+#include <string>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+
+namespace tetrefine::wire {
+namespace {
+
+// Beyond this, per-axis arithmetic on indices could overflow; no real grid comes close.
+constexpr int64_t kMaxDim = int64_t{1} << 31;
+
+std::string KindName(const v1::RefineRequest& request) {
+  const google::protobuf::FieldDescriptor* field =
+      v1::RefineRequest::descriptor()->FindFieldByNumber(request.kind_case());
+  return field != nullptr ? field->name() : "nothing (no known kind set)";
+}
+
+absl::Status Invalid(std::string message) { return absl::InvalidArgumentError(message); }
+
+constexpr const char* kAxis[3] = {"x", "y", "z"};
+
+Index3 IndexFromWire(const v1::GridIndex& i) { return {i.x(), i.y(), i.z()}; }
+Vec3 VectorFromWire(const v1::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+absl::Status RequestReader::Add(const v1::RefineRequest& request) {
+  bytes_received_ += static_cast<int64_t>(request.ByteSizeLong());
+  absl::Status status;
+  using R = v1::RefineRequest;
+  switch (stage_) {
+    case Stage::kOptions:
+      status =
+          request.kind_case() == R::kOptions ? AddOptions(request.options()) : Unexpected(request);
+      break;
+    case Stage::kVolumeHeader:
+      status = request.kind_case() == R::kVolumeHeader ? AddVolumeHeader(request.volume_header())
+                                                       : Unexpected(request);
+      break;
+    case Stage::kVolumeData:
+      status = request.kind_case() == R::kVolumeChunk ? AddVolumeChunk(request.volume_chunk())
+                                                      : Unexpected(request);
+      break;
+    case Stage::kMeshHeader:
+      status = request.kind_case() == R::kMeshHeader ? AddMeshHeader(request.mesh_header())
+                                                     : Unexpected(request);
+      break;
+    case Stage::kMeshData:
+      switch (request.kind_case()) {
+        case R::kVertexChunk:
+          status = AddVertexChunk(request.vertex_chunk());
+          break;
+        case R::kValueChunk:
+          status = AddValueChunk(request.value_chunk());
+          break;
+        case R::kTetChunk:
+          status = AddTetChunk(request.tet_chunk());
+          break;
+        case R::kEndOfInput:
+          status = AddEndOfInput();
+          break;
+        default:
+          status = Unexpected(request);
+      }
+      break;
+    case Stage::kDone:
+      status = Unexpected(request);
+      break;
+  }
+  ++message_index_;
+  return status;
+}
+
+absl::Status RequestReader::Unexpected(const v1::RefineRequest& request) const {
+  std::string expected;
+  switch (stage_) {
+    case Stage::kOptions:
+      expected = "options (it must come first)";
+      break;
+    case Stage::kVolumeHeader:
+      expected = "volume_header";
+      break;
+    case Stage::kVolumeData:
+      expected = absl::StrCat("volume_chunk (", total_bytes_ - volume_data_.size(),
+                              " of volume_header.total_bytes = ", total_bytes_, " still missing)");
+      break;
+    case Stage::kMeshHeader:
+      expected = "mesh_header";
+      break;
+    case Stage::kMeshData:
+      expected = "vertex_chunk, value_chunk, tet_chunk or end_of_input";
+      break;
+    case Stage::kDone:
+      expected = "nothing after end_of_input";
+      break;
+  }
+  return Invalid(absl::StrCat("request message ", message_index_, ": expected ", expected, ", got ",
+                              KindName(request)));
+}
+
+absl::Status RequestReader::IncompleteError() const {
+  // gRPC reports a message that does not parse as a RefineRequest exactly like the end of the
+  // stream, so the error names both causes.
+  const std::string or_garbage =
+      absl::StrCat("or request message ", message_index_, " did not parse as a RefineRequest)");
+  switch (stage_) {
+    case Stage::kOptions:
+      return Invalid(
+          absl::StrCat("options: missing (the stream ended before any options, ", or_garbage));
+    case Stage::kVolumeHeader:
+      return Invalid(
+          absl::StrCat("volume_header: missing (the stream ended after options, ", or_garbage));
+    case Stage::kVolumeData:
+      return Invalid(absl::StrCat("volume_chunk: stream ended after ", volume_data_.size(),
+                                  " of volume_header.total_bytes = ", total_bytes_, " bytes (",
+                                  or_garbage));
+    case Stage::kMeshHeader:
+      return Invalid(
+          absl::StrCat("mesh_header: missing (the stream ended after the volume, ", or_garbage));
+    case Stage::kMeshData:
+      return Invalid(
+          absl::StrCat("end_of_input: missing (the stream ended inside the mesh, ", or_garbage));
+    case Stage::kDone:
+      break;
+  }
+  return absl::OkStatus();
+}
+
+absl::Status RequestReader::AddOptions(const v1::RefineOptions& options) {
+  absl::StatusOr<RequestOptions> parsed = RequestOptionsFromWire(options, limits_);
+  if (!parsed.ok()) return parsed.status();
+  options_ = *std::move(parsed);
+  stage_ = Stage::kVolumeHeader;
+  return absl::OkStatus();
+}
+
+absl::Status RequestReader::AddVolumeHeader(const v1::VolumeHeader& header) {
+  if (!header.has_dims()) return Invalid("volume_header.dims: missing");
+  grid_.dims = IndexFromWire(header.dims());
+  grid_.origin = VectorFromWire(header.origin());
+  grid_.spacing = header.has_spacing() ? VectorFromWire(header.spacing()) : Vec3{1.0, 1.0, 1.0};
+  lo_ = header.has_slab_lo() ? IndexFromWire(header.slab_lo()) : Index3{0, 0, 0};
+  hi_ = header.has_slab_hi() ? IndexFromWire(header.slab_hi()) : grid_.dims;
+  for (int a = 0; a < 3; ++a) {
+    if (grid_.dims[a] < 2 || grid_.dims[a] > kMaxDim) {
+      return Invalid(absl::StrCat("volume_header.dims.", kAxis[a], ": must be in [2, ", kMaxDim,
+                                  "], got ", grid_.dims[a]));
+    }
+    if (!std::isfinite(grid_.origin[a])) {
+      return Invalid(absl::StrCat("volume_header.origin.", kAxis[a], ": must be finite, got ",
+                                  grid_.origin[a]));
+    }
+    if (!(grid_.spacing[a] > 0.0) || !std::isfinite(grid_.spacing[a])) {
+      return Invalid(absl::StrCat("volume_header.spacing.", kAxis[a],
+                                  ": must be finite and > 0, got ", grid_.spacing[a]));
+    }
+    if (lo_[a] < 0 || lo_[a] >= grid_.dims[a]) {
+      return Invalid(absl::StrCat("volume_header.slab_lo.", kAxis[a], ": must be in [0, ",
+                                  grid_.dims[a], "), got ", lo_[a]));
+    }
+    if (hi_[a] <= lo_[a] || hi_[a] > grid_.dims[a]) {
+      return Invalid(absl::StrCat("volume_header.slab_hi.", kAxis[a], ": must be in (", lo_[a],
+                                  ", ", grid_.dims[a], "], got ", hi_[a]));
+    }
+  }
+  absl::StatusOr<VoxelType> type =
+      VoxelTypeFromWire(header.voxel_type(), "volume_header.voxel_type");
+  if (!type.ok()) return type.status();
+  voxel_type_ = *type;
+
+  // Extents are <= 2^31 each, so each partial product below stays far from overflow as long as
+  // it is checked against the limit before the next multiplication.
+  int64_t voxels = 1;
+  for (int a = 0; a < 3; ++a) {
+    voxels *= hi_[a] - lo_[a];
+    if (voxels > limits_.max_voxels) {
+      return absl::ResourceExhaustedError(
+          absl::StrCat("volume_header: the slab [", lo_[0], ",", lo_[1], ",", lo_[2], ") - [",
+                       hi_[0], ",", hi_[1], ",", hi_[2], ") has more than this server's limit of ",
+                       limits_.max_voxels, " voxels"));
+    }
+  }
+  const uint64_t expected = static_cast<uint64_t>(voxels) * VoxelSize(voxel_type_);
+  if (header.total_bytes() != expected) {
+    return Invalid(absl::StrCat("volume_header.total_bytes: expected ", expected, " (", voxels,
+                                " voxels of ", std::string(VoxelTypeName(voxel_type_)), "), got ",
+                                header.total_bytes()));
+  }
+  total_bytes_ = expected;
+  // Reserved up front so that a large volume is not copied as it grows. A declared size within
+  // the limits that this process still cannot hold (a memory-limited container) is refused here,
+  // not thrown out of the handler as an UNKNOWN error.
+  try {
+    volume_data_.reserve(total_bytes_);
+  } catch (const std::bad_alloc&) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "volume_header: this server cannot allocate the ", total_bytes_, " bytes declared"));
+  }
+  stage_ = Stage::kVolumeData;
+  return absl::OkStatus();
+}
+
+absl::Status RequestReader::AddVolumeChunk(const v1::VolumeChunk& chunk) {
+  const uint64_t received = volume_data_.size();
+  if (chunk.offset() != received) {
+    return Invalid(absl::StrCat("volume_chunk.offset: expected ", received,
+                                " (the bytes received so far), got ", chunk.offset()));
+  }
+  if (chunk.data().empty()) {
+    return Invalid(absl::StrCat("volume_chunk.data: empty at offset ", chunk.offset()));
+  }
+  if (chunk.data().size() > total_bytes_ - received) {
+    return Invalid(absl::StrCat("volume_chunk.data: ", chunk.data().size(), " bytes at offset ",
+                                chunk.offset(),
+                                " run past volume_header.total_bytes = ", total_bytes_));
+  }
+  const auto* bytes = reinterpret_cast<const std::byte*>(chunk.data().data());
+  volume_data_.insert(volume_data_.end(), bytes, bytes + chunk.data().size());
+  if (volume_data_.size() < total_bytes_) return absl::OkStatus();
+
+  absl::StatusOr<Volume> volume =
+      Volume::Create(grid_, lo_, hi_, voxel_type_, std::move(volume_data_));
+  volume_data_ = {};
+  if (!volume.ok()) return volume.status();
+  volume_ = *std::move(volume);
+  stage_ = Stage::kMeshHeader;
+  return absl::OkStatus();
+}
+
+absl::Status RequestReader::AddMeshHeader(const v1::MeshHeader& header) {
+  vertex_count_ = header.vertex_count();
+  tet_count_ = header.tet_count();
+  if (tet_count_ < 0) {
+    return Invalid(absl::StrCat("mesh_header.tet_count: must be >= 0, got ", tet_count_));
+  }
+  if (vertex_count_ < 0) {
+    return Invalid(absl::StrCat("mesh_header.vertex_count: must be >= 0, got ", vertex_count_));
+  }
+  if (tet_count_ > limits_.max_input_tets) {
+    return absl::ResourceExhaustedError(absl::StrCat("mesh_header.tet_count: ", tet_count_,
+                                                     " exceeds this server's limit of ",
+                                                     limits_.max_input_tets, " input tets"));
+  }
+  // Checked here, before the tets are received, rather than left to the core.
+  if (tet_count_ > options_.max_tets.value_or(limits_.max_output_tets)) {
+    if (options_.max_tets.has_value()) {
+      return Invalid(absl::StrCat("mesh_header.tet_count: ", tet_count_,
+                                  " exceeds options.max_tets = ", *options_.max_tets));
+    }
+    return absl::ResourceExhaustedError(absl::StrCat("mesh_header.tet_count: ", tet_count_,
+                                                     " exceeds this server's limit of ",
+                                                     limits_.max_output_tets, " output tets"));
+  }
+  // A mesh needs at most 4 vertices a tet; more would be memory spent on nothing.
+  const int64_t max_vertices = 4 * limits_.max_input_tets;
+  if (vertex_count_ > max_vertices) {
+    return absl::ResourceExhaustedError(absl::StrCat("mesh_header.vertex_count: ", vertex_count_,
+                                                     " exceeds this server's limit of ",
+                                                     max_vertices, " input vertices"));
+  }
+  has_values_ = header.has_values();
+  try {  // as for the volume
+    mesh_.points.reserve(static_cast<size_t>(vertex_count_));
+    mesh_.tets.reserve(static_cast<size_t>(tet_count_));
+    if (has_values_) mesh_.values.reserve(static_cast<size_t>(vertex_count_));
+  } catch (const std::bad_alloc&) {
+    mesh_ = Mesh{};
+    return absl::ResourceExhaustedError(absl::StrCat("mesh_header: this server cannot allocate ",
+                                                     vertex_count_, " vertices and ", tet_count_,
+                                                     " tets"));
+  }
+  stage_ = Stage::kMeshData;
+  return absl::OkStatus();
+}
+
+absl::Status RequestReader::AddVertexChunk(const v1::VertexChunk& chunk) {
+  const int64_t received = static_cast<int64_t>(mesh_.points.size());
+  if (chunk.start_index() != received) {
+    return Invalid(absl::StrCat("vertex_chunk.start_index: expected ", received,
+                                " (the vertices received so far), got ", chunk.start_index()));
+  }
+  const int size = chunk.coordinates_size();
+  if (size == 0 || size % 3 != 0) {
+    return Invalid(
+        absl::StrCat("vertex_chunk.coordinates: length must be a positive multiple "
+                     "of 3, got ",
+                     size, " at start_index ", chunk.start_index()));
+  }
+  if (size / 3 > vertex_count_ - received) {
+    return Invalid(absl::StrCat("vertex_chunk.coordinates: ", size / 3, " vertices at start_index ",
+                                chunk.start_index(),
+                                " run past mesh_header.vertex_count = ", vertex_count_));
+  }
+  for (int i = 0; i < size; i += 3) {
+    const Vec3 p{chunk.coordinates(i), chunk.coordinates(i + 1), chunk.coordinates(i + 2)};
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite(p[a])) {
+        return Invalid(absl::StrCat("vertex_chunk.coordinates: vertex ", received + i / 3,
+                                    " has a non-finite ", kAxis[a], " coordinate (", p[a], ")"));
+      }
+    }
+    mesh_.points.push_back(p);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status RequestReader::AddValueChunk(const v1::ValueChunk& chunk) {
+  if (!has_values_) {
+    return Invalid("value_chunk: not expected, mesh_header.has_values is false");
+  }
+  const int64_t received = static_cast<int64_t>(mesh_.values.size());
+  if (chunk.start_index() != received) {
+    return Invalid(absl::StrCat("value_chunk.start_index: expected ", received,
+                                " (the values received so far), got ", chunk.start_index()));
+  }
+  const int size = chunk.values_size();
+  if (size == 0 || size > vertex_count_ - received) {
+    return Invalid(absl::StrCat("value_chunk.values: ", size, " values at start_index ",
+                                chunk.start_index(), " are none or run past ",
+                                "mesh_header.vertex_count = ", vertex_count_));
+  }
+  for (int i = 0; i < size; ++i) {
+    if (!std::isfinite(chunk.values(i))) {
+      return Invalid(absl::StrCat("value_chunk.values: vertex ", received + i,
+                                  " has a non-finite value (", chunk.values(i), ")"));
+    }
+    mesh_.values.push_back(chunk.values(i));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status RequestReader::AddTetChunk(const v1::TetChunk& chunk) {
+  const int64_t received = static_cast<int64_t>(mesh_.tets.size());
+  if (chunk.start_index() != received) {
+    return Invalid(absl::StrCat("tet_chunk.start_index: expected ", received,
+                                " (the tets received so far), got ", chunk.start_index()));
+  }
+  const int size = chunk.indices_size();
+  if (size == 0 || size % 4 != 0) {
+    return Invalid(
+        absl::StrCat("tet_chunk.indices: length must be a positive multiple of 4, "
+                     "got ",
+                     size, " at start_index ", chunk.start_index()));
+  }
+  if (size / 4 > tet_count_ - received) {
+    return Invalid(absl::StrCat("tet_chunk.indices: ", size / 4, " tets at start_index ",
+                                chunk.start_index(),
+                                " run past mesh_header.tet_count = ", tet_count_));
+  }
+  for (int i = 0; i < size; i += 4) {
+    Tet tet;
+    for (int c = 0; c < 4; ++c) {
+      tet[c] = chunk.indices(i + c);
+      if (static_cast<int64_t>(tet[c]) >= vertex_count_) {
+        return Invalid(absl::StrCat("tet_chunk.indices: tet ", received + i / 4, " corner ", c,
+                                    " is vertex ", tet[c], ", out of range for ",
+                                    "mesh_header.vertex_count = ", vertex_count_));
+      }
+    }
+    mesh_.tets.push_back(tet);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status RequestReader::AddEndOfInput() {
+  if (static_cast<int64_t>(mesh_.points.size()) != vertex_count_) {
+    return Invalid(absl::StrCat("vertex_chunk: received ", mesh_.points.size(),
+                                " vertices, mesh_header.vertex_count = ", vertex_count_));
+  }
+  if (has_values_ && static_cast<int64_t>(mesh_.values.size()) != vertex_count_) {
+    return Invalid(absl::StrCat("value_chunk: received ", mesh_.values.size(),
+                                " values, mesh_header.vertex_count = ", vertex_count_));
+  }
+  if (static_cast<int64_t>(mesh_.tets.size()) != tet_count_) {
+    return Invalid(absl::StrCat("tet_chunk: received ", mesh_.tets.size(),
+                                " tets, mesh_header.tet_count = ", tet_count_));
+  }
+  stage_ = Stage::kDone;
+  return absl::OkStatus();
+}
+
+RefineInput RequestReader::Take() {
+  return RefineInput{.options = options_, .volume = *std::move(volume_), .mesh = std::move(mesh_)};
+}
+
+}  // namespace tetrefine::wire
