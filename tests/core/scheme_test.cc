@@ -125,6 +125,7 @@ TEST(LongestEdgeScheme, ConvergesWithBoundedQualityOnEveryPinnedCase) {
     for (double epsilon : {0.1, 0.05}) {
       SCOPED_TRACE(::testing::Message() << c.name << " epsilon " << epsilon);
       RefineOptions o;
+      o.scheme = RefineScheme::kLongestEdge;
       o.epsilon = epsilon;
       o.max_iterations = 32;
       auto r = Refine(c.volume, c.mesh, o);
