@@ -65,6 +65,17 @@ void Paint(cairo_t* cr, cairo_surface_t* image, const PixelRect& at) {
   cairo_restore(cr);
 }
 
+// A one-pixel grey frame just outside the panel, so its extent shows where no tet covers it
+// (white on white); the panel's own pixels are untouched.
+void Frame(cairo_t* cr, const PixelRect& at) {
+  cairo_save(cr);
+  cairo_set_source_rgb(cr, 0.75, 0.75, 0.75);
+  cairo_set_line_width(cr, 1.0);
+  cairo_rectangle(cr, at.x - 0.5, at.y - 0.5, at.width + 1.0, at.height + 1.0);
+  cairo_stroke(cr);
+  cairo_restore(cr);
+}
+
 void Text(cairo_t* cr, double x, double y, const std::string& text) {
   cairo_move_to(cr, x, y);
   cairo_show_text(cr, text.c_str());
@@ -190,6 +201,7 @@ absl::StatusOr<std::string> RenderSliceFigurePng(const std::vector<FigureRow>& r
     Text(cr.get(), at.discrepancy.x, at.discrepancy.y - 4,
          absl::StrFormat("|trilinear - linear| / range: max %.3g", s.max_discrepancy));
 
+    for (const PixelRect& panel : {at.volume, at.mesh, at.discrepancy}) Frame(cr.get(), panel);
     Surface volume = PanelImage(s.trilinear, plane.width, plane.height, value_colour);
     Paint(cr.get(), volume.get(), at.volume);
     Surface mesh = PanelImage(s.linear, plane.width, plane.height, value_colour);
