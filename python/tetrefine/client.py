@@ -1,6 +1,7 @@
 """tetrefine.Client: refine numpy arrays on a tetrefine_server."""
 
 import os
+import time
 from collections.abc import Mapping
 
 import grpc
@@ -169,10 +170,13 @@ class Client:
             pb, self._protocol, epsilon, max_iterations=max_iterations, max_tets=max_tets,
             scheme=scheme, certify=certify, norm_coeff=norm_coeff, clamp=clamp,
             fix_orientation=fix_orientation)
+        # One deadline for the whole call, the server-info round trip included.
+        deadline = None if timeout is None else time.monotonic() + timeout
         chunk_bytes = self._request_chunk_bytes(timeout)
+        remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
         stream = _requests.requests(pb, self._protocol, options, inputs, chunk_bytes)
         reader = ResponseReader(self._protocol, on_iteration)
-        call = self._stub.Refine(stream, timeout=timeout, metadata=self._metadata)
+        call = self._stub.Refine(stream, timeout=remaining, metadata=self._metadata)
         try:
             for response in call:
                 reader.add(response)
