@@ -18,7 +18,7 @@ from tetrefine.v1 import tetrefine_pb2_grpc as pb_grpc
 # default, advertised by GetServerInfo); 1 MiB keeps every message far below that and matches
 # the C++ client (client/refine_client.h), so both send the same stream.
 DEFAULT_CHUNK_BYTES = 1 << 20
-# Response chunks are at most 3 MiB of payload (server/wire_conversion.h, kMaxChunkBytes): room
+# Response chunks are at most 3 MiB of payload (wire/conversion.h, kMaxChunkBytes): room
 # for that plus framing.
 _MAX_RECEIVE_BYTES = 16 << 20
 

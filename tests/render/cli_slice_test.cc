@@ -15,10 +15,10 @@
 #include "client/render/slice_figure.h"
 #include "client/render/slice_plane.h"
 #include "gtest/gtest.h"
-#include "tests/client/cli_test_util.h"
-#include "tests/client/io_test_util.h"
-#include "tests/core/test_geometry.h"
+#include "tests/cli/cli_test_util.h"
+#include "tests/io/io_test_util.h"
 #include "tests/render/png_image.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::clitest {
 namespace {
@@ -160,7 +160,7 @@ TEST_P(CliSliceBadInput, OneLineNamingTheProblemExitTwoNothingWritten) {
   const std::set<std::string> before = Listing(dir_->path());
   const ProcessResult run = RunTetrefine(args, "", /*timeout_seconds=*/60);
   EXPECT_EQ(run.exit_code, 2) << run.err;
-  const std::vector<std::string> lines = Lines(run.err);
+  const std::vector<std::string> lines = SplitLines(run.err);
   ASSERT_EQ(lines.size(), 1u) << "stderr:\n" << run.err;
   const std::string expected = Expand(c.expected, dir_->path());
   EXPECT_TRUE(absl::StartsWith(lines[0], "tetrefine: ")) << lines[0];

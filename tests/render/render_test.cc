@@ -16,8 +16,8 @@
 #include "client/render/slice_sampling.h"
 #include "client/render/tet_locator.h"
 #include "gtest/gtest.h"
-#include "tests/core/test_geometry.h"
 #include "tests/render/png_image.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::render {
 namespace {
