@@ -42,7 +42,7 @@ struct FigureLayout {
 FigureLayout LayoutFigure(int rows, int panel_width, int panel_height);
 
 // The colour bar's top for a largest discrepancy of `max_discrepancy`: rounded up to 1, 1.5, 2,
-// 2.5, 3, 4, 5, 6 or 8 times a power of ten (round numbers, at most a third above the maximum, so
+// 2.5, 3, 4, 5, 6 or 8 times a power of ten (round numbers, at most half again the maximum, so
 // the brightest pixels stay bright), and at least 0.01. The floor keeps a mesh that is exact to
 // rounding (1e-16) black instead of stretching its noise over the whole map; 1% of the value range
 // is where the eye starts to see a difference.
