@@ -20,6 +20,8 @@ RUN cmake -S . -B /build -G Ninja -DCMAKE_BUILD_TYPE=Release \
  && strip /out/tetrefine_server /out/tetrefine
 
 # --- runtime: the two binaries and the shared libraries they load, nothing else ---
+# (libcairo2 and the libraries from libpixman-1-0 on are for `tetrefine slice`, which draws PNG
+# figures with Cairo; Debian's Cairo links X11 even when only image surfaces are used.)
 # The package list is checked against `ldd` of the built binaries by
 # tests/deploy/check_runtime_packages.py (ctest DockerRuntimePackages).
 FROM debian:bookworm
@@ -29,6 +31,9 @@ RUN apt-get update \
       libtbb12 libspdlog1.10 libfmt9 zlib1g \
       libprometheus-cpp-core1.0 libprometheus-cpp-pull1.0 libcivetweb1 \
       libstdc++6 libgcc-s1 ca-certificates \
+      libcairo2 libpixman-1-0 libfontconfig1 libfreetype6 libpng16-16 libexpat1 libbrotli1 \
+      libxcb1 libxcb-render0 libxcb-shm0 libxrender1 libx11-6 libxext6 libxau6 libxdmcp6 \
+      libbsd0 libmd0 \
  && rm -rf /var/lib/apt/lists/* \
  && useradd --system --uid 10001 --user-group --no-create-home --shell /usr/sbin/nologin tetrefine
 COPY --from=build /out/tetrefine_server /out/tetrefine /usr/local/bin/

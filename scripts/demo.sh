@@ -35,5 +35,12 @@ echo "== tetrefine verify of the result"
   --mesh out/anatomical_cube.refined.vtu --epsilon 0.1
 
 echo
+echo "== tetrefine slice: the plane z = 8 mm before and after (the README's picture)"
+"$tetrefine" slice --volume examples/anatomical_33x41x25.nii \
+  --mesh examples/unit_cube_1782tets.mesh --fit-mesh-to-volume \
+  --mesh-after out/anatomical_cube.refined.vtu --axis z --position 8 \
+  --output out/anatomical_cube.slice_z8.png
+
+echo
 echo "Done: out/anatomical_cube.refined.vtu (open it in ParaView: point data 'value', cell data"
-echo "'iteration' and 'quality') and out/anatomical_cube.stats.json."
+echo "'iteration' and 'quality'), out/anatomical_cube.stats.json and out/anatomical_cube.slice_z8.png."

@@ -12,6 +12,11 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   prometheus-cpp-dev openssl
   python3 python3-grpcio python3-numpy python3-meshio python3-yaml
+  # The Python package (python/) and its tests: pip install --no-build-isolation in a venv
+  # over these needs setuptools and wheel from Debian, nothing from PyPI.
+  python3-protobuf python3-venv python3-setuptools python3-wheel python3-pytest python3-nibabel
+  # tetrefine slice draws its figures with Cairo and writes them as PNG through it.
+  libcairo2-dev
 )
 # Fuzzing and sanitizer runs (clang's libFuzzer) only when asked: TETREFINE_WITH_FUZZ=1.
 if [ "${TETREFINE_WITH_FUZZ:-0}" = "1" ]; then

@@ -26,6 +26,8 @@ std::string ProgramHelp() {
                   "liver.vtu\n"
                   "  tetrefine verify --volume head.nii.gz --mesh head.refined.vtu\n"
                   "  tetrefine health --server localhost:50051\n"
+                  "  tetrefine slice --volume head.nii.gz --mesh head.vtu --mesh-after "
+                  "head.refined.vtu --axis z --output slice.png\n"
                   "\nExit codes: 0 success, 1 failed (invalid mesh, not serving, service error),\n"
                   "2 bad flags or unusable input/output file (one line on stderr names it).\n"
                   "The gRPC server is a separate program: tetrefine_server --help.\n");
@@ -37,7 +39,7 @@ std::string ProgramHelp() {
 const std::vector<Subcommand>& Subcommands() {
   static const std::vector<Subcommand> commands = {
       {RefineSpec, RunRefine}, {MeshSpec, RunMesh},     {VerifySpec, RunVerify},
-      {InfoSpec, RunInfo},     {HealthSpec, RunHealth},
+      {InfoSpec, RunInfo},     {HealthSpec, RunHealth}, {SliceSpec, RunSlice},
   };
   return commands;
 }
@@ -45,7 +47,7 @@ const std::vector<Subcommand>& Subcommands() {
 int RunTetrefine(const std::vector<std::string>& argv) {
   if (argv.size() < 2) {
     return Fail(
-        "missing command: expected refine, mesh, verify, info or health (see tetrefine "
+        "missing command: expected refine, mesh, verify, info, health or slice (see tetrefine "
         "--help)",
         kExitUsage);
   }
@@ -69,10 +71,10 @@ int RunTetrefine(const std::vector<std::string>& argv) {
       return command.run(std::vector<std::string>(argv.begin() + 2, argv.end()));
     }
   }
-  return Fail(
-      absl::StrCat("unknown command '", name,
-                   "': expected refine, mesh, verify, info or health (see tetrefine --help)"),
-      kExitUsage);
+  return Fail(absl::StrCat(
+                  "unknown command '", name,
+                  "': expected refine, mesh, verify, info, health or slice (see tetrefine --help)"),
+              kExitUsage);
 }
 
 }  // namespace tetrefine::cli

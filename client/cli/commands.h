@@ -29,6 +29,9 @@ int RunInfo(const std::vector<std::string>& args);
 const CommandSpec& HealthSpec();
 int RunHealth(const std::vector<std::string>& args);
 
+const CommandSpec& SliceSpec();
+int RunSlice(const std::vector<std::string>& args);
+
 // All of the above, in the order `tetrefine --help` lists them.
 const std::vector<Subcommand>& Subcommands();
 

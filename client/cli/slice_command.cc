@@ -1,0 +1,212 @@
+// tetrefine slice: a picture of one plane through a volume and a mesh (before and after
+// refinement): the volume's trilinear values, the mesh's linear interpolation and their
+// discrepancy side by side, as in the paper's Figures 15-16.
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/cli/command_support.h"
+#include "client/cli/commands.h"
+#include "client/cli/exit_codes.h"
+#include "client/cli/file_kind.h"
+#include "client/cli/mesh_placement.h"
+#include "client/io/file_bytes.h"
+#include "client/render/display_range.h"
+#include "client/render/plane_section.h"
+#include "client/render/slice_figure.h"
+#include "client/render/slice_plane.h"
+#include "client/render/slice_sampling.h"
+
+namespace tetrefine::cli {
+namespace {
+
+constexpr int kDefaultPanelSize = 320;
+
+struct SliceSettings {
+  std::string volume_path;
+  std::vector<std::string> mesh_paths;  // before, and after when given
+  std::string output_path;
+  int axis = 2;
+  std::optional<double> position;  // unset: the middle of the volume along the axis
+  int panel_size = kDefaultPanelSize;
+  std::optional<double> discrepancy_max;
+  bool draw_edges = true;
+  bool fit_mesh_to_volume = false;  // --mesh only: the input of the refinement shown after it
+};
+
+absl::Status SettingsFromArgs(const ParsedArgs& args, SliceSettings* s) {
+  s->volume_path = *args.Get("volume");
+  s->mesh_paths.push_back(*args.Get("mesh"));
+  if (auto after = args.Get("mesh-after")) s->mesh_paths.push_back(*after);
+  if (auto text = args.Get("axis")) {
+    const std::string axis = absl::AsciiStrToLower(*text);
+    if (axis != "x" && axis != "y" && axis != "z") {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--axis: expected x, y or z, got '", *text, "'"));
+    }
+    s->axis = axis[0] - 'x';
+  }
+  if (auto text = args.Get("position")) {
+    absl::StatusOr<double> p = ParseFiniteDouble("position", *text);
+    if (!p.ok()) return p.status();
+    s->position = *p;
+  }
+  if (auto text = args.Get("panel-size")) {
+    absl::StatusOr<int64_t> n = ParseInteger("panel-size", *text, 8, 4096);
+    if (!n.ok()) return n.status();
+    s->panel_size = static_cast<int>(*n);
+  }
+  if (auto text = args.Get("discrepancy-max")) {
+    absl::StatusOr<double> d = ParseFiniteDouble("discrepancy-max", *text);
+    if (!d.ok()) return d.status();
+    if (*d <= 0.0) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--discrepancy-max: must be > 0, got '", *text, "'"));
+    }
+    s->discrepancy_max = *d;
+  }
+  s->draw_edges = !args.Has("no-edges");
+  s->fit_mesh_to_volume = args.Has("fit-mesh-to-volume");
+  s->output_path = *args.Get("output");
+  if (absl::AsciiStrToLower(PathExtension(s->output_path)) != ".png") {
+    return absl::InvalidArgumentError(absl::StrCat(s->output_path, ": --output takes a .png file"));
+  }
+  return CheckOutputPath(s->output_path, "--output", /*mesh=*/false);
+}
+
+}  // namespace
+
+const CommandSpec& SliceSpec() {
+  static const CommandSpec spec{
+      .name = "slice",
+      .summary = "Picture of a plane: volume, mesh interpolation and discrepancy (PNG)",
+      .usage =
+          "tetrefine slice --volume V --mesh M [--mesh-after M2] [--axis x|y|z] [--position P]\n"
+          "                       --output FIG.png [--panel-size N] [--discrepancy-max D] "
+          "[--no-edges]\n"
+          "                       [--fit-mesh-to-volume]",
+      .description =
+          "Draws, on the plane at --position mm along --axis, side by side as in the paper's\n"
+          "Figures 15-16: the volume's trilinear values, the mesh's linear interpolation of its\n"
+          "vertex values (the file's `value` array, else the volume sampled at the vertices),\n"
+          "and the discrepancy |trilinear - linear| / (volume max - min) with its colour bar.\n"
+          "The mesh's edges on the plane (the outlines of the tet sections) are drawn over the\n"
+          "mesh and discrepancy panels. With --mesh-after, a second row shows that mesh (e.g.\n"
+          "the refined one) on the same colour scales. Pixels no tet covers are white. The value\n"
+          "colours span the volume's 0.5th to 99.5th percentile (outliers take the end colours).\n"
+          "Prints the discrepancy on the plane per mesh (max, mean over covered pixels).",
+      .flags =
+          {
+              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
+              {"mesh", "FILE", "tet mesh: .vtu .vtk .msh .mesh (first row, e.g. before)", true},
+              {"mesh-after", "FILE", "a second mesh for a second row (e.g. after refinement)"},
+              {"axis", "x|y|z", "normal of the plane (default z)"},
+              {"position", "P",
+               "world coordinate of the plane along --axis, mm (default: the "
+               "middle of the volume)"},
+              {"output", "FILE", "the figure, .png", true},
+              {"panel-size", "N", "pixels along the longer side of each panel (default 320)"},
+              {"discrepancy-max", "D",
+               "discrepancy at the top of its colour bar (default: the largest on the plane, "
+               "rounded up to a round number, at least 0.01)"},
+              {"no-edges", "", "do not draw the mesh's edges"},
+              {"fit-mesh-to-volume", "",
+               "place --mesh as refine --fit-mesh-to-volume does (for a mesh in its own unit "
+               "frame); --mesh-after is drawn where it is"},
+          },
+      .positional = ""};
+  return spec;
+}
+
+int RunSlice(const std::vector<std::string>& args) {
+  int exit_code = kExitOk;
+  std::optional<ParsedArgs> parsed = ParseCommandLine(SliceSpec(), args, &exit_code);
+  if (!parsed.has_value()) return exit_code;
+  SliceSettings s;
+  if (absl::Status status = SettingsFromArgs(*parsed, &s); !status.ok()) {
+    return Fail(status, kExitUsage);
+  }
+  absl::StatusOr<io::VolumeFile> volume_file = LoadVolume(s.volume_path, "--volume");
+  if (!volume_file.ok()) return Fail(volume_file.status(), kExitUsage);
+  PrintVolumeWarnings(*volume_file);
+  const Volume& volume = volume_file->volume;
+  std::vector<io::MeshFile> meshes;
+  for (size_t i = 0; i < s.mesh_paths.size(); ++i) {
+    absl::StatusOr<io::MeshFile> mesh =
+        LoadMesh(s.mesh_paths[i], i == 0 ? "--mesh" : "--mesh-after");
+    if (!mesh.ok()) return Fail(mesh.status(), kExitUsage);
+    if (mesh->mesh.tets.empty()) {
+      return Fail(absl::StrCat(s.mesh_paths[i], ": no tets"), kExitUsage);
+    }
+    if (i == 0 && s.fit_mesh_to_volume) {
+      if (absl::Status fitted = FitMeshToVolume(volume, &mesh->mesh); !fitted.ok()) {
+        return Fail(absl::StrCat(s.mesh_paths[i], ": ", fitted.message()), kExitUsage);
+      }
+    }
+    meshes.push_back(*std::move(mesh));
+  }
+
+  const GridGeometry& g = volume.grid();
+  const double position = s.position.value_or(
+      g.origin[s.axis] + 0.5 * static_cast<double>(g.dims[s.axis] - 1) * g.spacing[s.axis]);
+  absl::StatusOr<render::SlicePlane> plane =
+      render::MakeSlicePlane(volume, s.axis, position, s.panel_size);
+  if (!plane.ok()) {
+    return Fail(absl::StrCat(plane.status().message(), " (", s.volume_path, ")"), kExitUsage);
+  }
+  const std::array<double, 2> range = volume.ValueRange();
+  const double norm_coeff = range[1] > range[0] ? range[1] - range[0] : 1.0;
+
+  std::vector<render::FigureRow> rows;
+  double largest = 0.0;
+  const char axis_name = static_cast<char>('x' + s.axis);
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    Mesh& mesh = meshes[i].mesh;
+    mesh.values = render::VertexValues(volume, mesh);
+    render::FigureRow row;
+    row.samples = render::SampleSlice(volume, mesh, *plane, norm_coeff);
+    const std::string which = meshes.size() == 1 ? "" : i == 0 ? "before: " : "after: ";
+    row.title = absl::StrCat(which, s.mesh_paths[i], ", ", mesh.tets.size(), " tets");
+    if (row.samples.sections.empty()) {
+      PrintWarning(absl::StrFormat("%s: the plane %c = %g mm cuts no tet", s.mesh_paths[i],
+                                   axis_name, position));
+    }
+    largest = std::max(largest, row.samples.max_discrepancy);
+    std::printf(
+        "%s%s: %zu tets, %zu cut by the plane; discrepancy on the plane max %.6f, mean "
+        "%.6f over %lld pixels\n",
+        which.c_str(), s.mesh_paths[i].c_str(), mesh.tets.size(), row.samples.sections.size(),
+        row.samples.max_discrepancy, row.samples.mean_discrepancy,
+        static_cast<long long>(row.samples.covered_pixels));
+    rows.push_back(std::move(row));
+  }
+
+  render::FigureOptions options;
+  options.title = absl::StrFormat("%s, plane %c = %g mm", s.volume_path, axis_name, position);
+  const std::array<double, 2> shown = render::DisplayRange(volume);
+  options.value_lo = shown[0];
+  options.value_hi = shown[1];
+  options.discrepancy_max = s.discrepancy_max.value_or(render::DiscrepancyScale(largest));
+  options.draw_edges = s.draw_edges;
+  absl::StatusOr<std::string> png = render::RenderSliceFigurePng(rows, options);
+  if (!png.ok())
+    return Fail(absl::StrCat(s.output_path, ": ", png.status().message()), kExitFailed);
+  if (absl::Status written = io::WriteFileAtomically(s.output_path, *png); !written.ok()) {
+    return Fail(written, kExitUsage);
+  }
+  const render::FigureLayout layout =
+      render::LayoutFigure(static_cast<int>(rows.size()), plane->width, plane->height);
+  std::printf("Wrote %s: %d x %d pixels, plane %c = %g mm, discrepancy colour bar 0 to %g\n",
+              s.output_path.c_str(), layout.width, layout.height, axis_name, position,
+              options.discrepancy_max);
+  return kExitOk;
+}
+
+}  // namespace tetrefine::cli

@@ -1,0 +1,66 @@
+#include "client/render/slice_plane.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+
+namespace tetrefine::render {
+namespace {
+
+constexpr const char* kAxisNames[] = {"x", "y", "z"};
+
+}  // namespace
+
+Vec3 SlicePlane::PixelCentre(int column, int row) const {
+  Vec3 p{};
+  p[axis] = position;
+  p[u_axis] = u_lo + (column + 0.5) * (u_hi - u_lo) / width;
+  p[v_axis] = v_hi - (row + 0.5) * (v_hi - v_lo) / height;
+  return p;
+}
+
+std::array<double, 2> SlicePlane::ToPixel(double u, double v) const {
+  return {(u - u_lo) / (u_hi - u_lo) * width, (v_hi - v) / (v_hi - v_lo) * height};
+}
+
+absl::StatusOr<SlicePlane> MakeSlicePlane(const Volume& volume, int axis, double position,
+                                          int panel_size) {
+  if (axis < 0 || axis > 2) {
+    return absl::InvalidArgumentError(absl::StrCat("--axis: expected x, y or z, got ", axis));
+  }
+  if (panel_size < 8) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--panel-size: must be at least 8 pixels, got ", panel_size));
+  }
+  const GridGeometry& g = volume.grid();
+  std::array<double, 3> lo{}, hi{};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = g.origin[a] + static_cast<double>(volume.lo()[a]) * g.spacing[a];
+    hi[a] = g.origin[a] + static_cast<double>(volume.hi()[a] - 1) * g.spacing[a];
+  }
+  if (!(position >= lo[axis] && position <= hi[axis])) {
+    return absl::InvalidArgumentError(absl::StrCat("--position: ", position,
+                                                   " mm is outside the volume's ", kAxisNames[axis],
+                                                   " range [", lo[axis], ", ", hi[axis], "] mm"));
+  }
+  SlicePlane plane;
+  plane.axis = axis;
+  plane.position = position;
+  plane.u_axis = axis == 0 ? 1 : 0;
+  plane.v_axis = axis == 2 ? 1 : 2;
+  plane.u_lo = lo[plane.u_axis];
+  plane.u_hi = hi[plane.u_axis];
+  plane.v_lo = lo[plane.v_axis];
+  plane.v_hi = hi[plane.v_axis];
+  const double u_extent = plane.u_hi - plane.u_lo;
+  const double v_extent = plane.v_hi - plane.v_lo;
+  // The longer side gets panel_size pixels; the other keeps the aspect ratio (square pixels),
+  // at least one pixel.
+  const double pixels_per_unit = panel_size / std::max(u_extent, v_extent);
+  plane.width = std::max(1, static_cast<int>(std::lround(u_extent * pixels_per_unit)));
+  plane.height = std::max(1, static_cast<int>(std::lround(v_extent * pixels_per_unit)));
+  return plane;
+}
+
+}  // namespace tetrefine::render

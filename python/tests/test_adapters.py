@@ -1,0 +1,132 @@
+"""nibabel and meshio in, meshio out: equal to what the CLI reads from the same files."""
+
+import subprocess
+
+import grpc
+import meshio
+import nibabel
+import numpy as np
+import pytest
+
+import tetrefine
+from conftest import EXAMPLE_MESH
+from meshes import box_mesh
+from test_refine import assert_same_as_cli_output, run_cli
+
+
+def _image(data, diagonal, translation, slope=None, inter=None, units=None):
+    affine = np.diag([*diagonal, 1.0])
+    affine[:3, 3] = translation
+    image = nibabel.Nifti1Image(data, affine)
+    if slope is not None:
+        image.header.set_slope_inter(slope, inter)
+    if units is not None:
+        image.header.set_xyzt_units(xyz=units)
+    return image
+
+
+_RNG = np.random.default_rng(11)
+_INT16 = _RNG.integers(-300, 900, size=(12, 10, 8)).astype(np.int16)
+
+CASES = {
+    "flipped x and z, int16 scaled": _image(_INT16, (-1.5, 2.0, -0.5), (30, -4, 7), 2.5, -3.0),
+    "flipped y, uint8": _image(_INT16.astype(np.uint8), (1.0, -1.0, 1.25), (0, 0, 0)),
+    "metres, float32": _image(_INT16.astype(np.float32), (0.001, 0.002, 0.0015), (0.1, 0, 0),
+                              units="meter"),
+    "float64 with an intercept": _image(_INT16.astype(np.float64), (1, 1, 1), (5, 5, 5), 1.0,
+                                        100.0),
+    "4-d with one volume": _image(_INT16[..., None], (2.0, 2.0, 2.0), (-10, -10, -10)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_nibabel_volume_refines_as_the_cli_reads_the_file(name, server, cli_binary, tmp_path):
+    image = CASES[name]
+    nibabel.save(image, tmp_path / "v.nii")
+    volume = tetrefine.volume_from_nibabel(nibabel.load(tmp_path / "v.nii"))
+    assert volume.direction is None and min(volume.spacing) > 0
+    lo, hi = volume.world_box()
+    margin = 0.1 * (hi - lo)
+    points, tets = box_mesh(lo + margin, hi - margin, (2, 3, 2))
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(points, [("tetra", tets)]))
+    run_cli(cli_binary, "refine", "--server", server.target, "--volume", str(tmp_path / "v.nii"),
+            "--mesh", str(tmp_path / "m.vtu"), "--epsilon", "0.05", "--max-iterations", "4",
+            "--quiet", "--output", str(tmp_path / "cli.vtu"))
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(volume.data, volume.spacing, volume.origin, points, tets, 0.05,
+                               max_iterations=4)
+    assert len(result.iterations) > 0
+    assert_same_as_cli_output(result, tmp_path / "cli.vtu")
+
+
+def test_flips_reverse_the_samples():
+    data = np.arange(24, dtype=np.int16).reshape(4, 3, 2)
+    volume = tetrefine.volume_from_nibabel(_image(data, (-2.0, 1.0, -3.0), (10, 20, 30)))
+    np.testing.assert_array_equal(volume.data, data[::-1, :, ::-1])
+    assert volume.origin == [10 - 2 * 3, 20, 30 - 3 * 1]
+    assert volume.spacing == [2.0, 1.0, 3.0]
+
+
+def test_an_oblique_affine_becomes_a_direction(server):
+    angle = np.radians(30)
+    rotation = np.array([[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0],
+                         [0, 0, 1]])
+    affine = np.eye(4)
+    affine[:3, :3] = rotation @ np.diag([1.0, 2.0, 3.0])
+    affine[:3, 3] = (4, 5, 6)
+    data = _INT16.astype(np.float32)
+    volume = tetrefine.volume_from_nibabel(nibabel.Nifti1Image(data, affine))
+    np.testing.assert_allclose(volume.direction, rotation, atol=1e-12)
+    np.testing.assert_allclose(volume.spacing, (1, 2, 3))
+    assert volume.origin == [4.0, 5.0, 6.0]
+    np.testing.assert_array_equal(volume.data, data)
+
+    from tetrefine._protocol import Protocol
+    from tetrefine.v1 import tetrefine_pb2
+    if Protocol(tetrefine_pb2).direction_field is not None:
+        return  # the protocol carries it: test_protocol covers what is sent
+    with tetrefine.Client(server.target) as client:
+        with pytest.raises(tetrefine.TetrefineError, match="direction: .*VolumeHeader.direction"
+                           ) as error:
+            client.refine(volume.data, volume.spacing, volume.origin,
+                          *box_mesh((5, 6, 7), (8, 9, 10), (1, 1, 1)), 0.1,
+                          direction=volume.direction)
+        assert error.value.code == grpc.StatusCode.UNIMPLEMENTED
+
+
+def test_a_meshio_mesh_in():
+    example = tetrefine.mesh_from_meshio(meshio.read(EXAMPLE_MESH))
+    assert example.points.shape == (448, 3) and example.tets.shape == (1782, 4)
+    assert example.labels is not None and example.labels.shape == (1782,)
+
+    points, tets = box_mesh((0, 0, 0), (1, 1, 1), (1, 1, 2))
+    triangles = np.array([[0, 1, 2]])
+    mesh = meshio.Mesh(points, [("tetra", tets[:4]), ("triangle", triangles), ("tetra", tets[4:])],
+                       cell_data={"gmsh:physical": [np.full(4, 7), np.array([99]),
+                                                    np.full(len(tets) - 4, 8)]})
+    converted = tetrefine.mesh_from_meshio(mesh)
+    np.testing.assert_array_equal(converted.tets, tets)
+    np.testing.assert_array_equal(converted.labels, [7] * 4 + [8] * (len(tets) - 4))
+    assert converted.labels.dtype == np.int32 and converted.values is None
+
+    with pytest.raises(tetrefine.TetrefineError, match="label_name: the mesh has no cell data"):
+        tetrefine.mesh_from_meshio(mesh, label_name="region")
+    with pytest.raises(tetrefine.TetrefineError, match="mesh: no tetra cells .*triangle"):
+        tetrefine.mesh_from_meshio(meshio.Mesh(points, [("triangle", triangles)]))
+
+
+def test_a_meshio_mesh_out_reads_back_in_the_cli(server, cli_binary, tmp_path):
+    volume = np.random.default_rng(5).uniform(0, 10, size=(10, 10, 10))
+    points, tets = box_mesh((1, 1, 1), (8, 8, 8), (2, 2, 2))
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.05,
+                               max_iterations=2)
+    out = result.to_meshio()
+    out.write(tmp_path / "out.vtu")
+    back = meshio.read(tmp_path / "out.vtu")
+    np.testing.assert_array_equal(back.points, result.points)
+    np.testing.assert_array_equal(back.cell_data["iteration"][0], result.iteration)
+    info = subprocess.run([cli_binary, "info", str(tmp_path / "out.vtu")], capture_output=True,
+                          text=True, check=True).stdout
+    assert f"tets                  {len(result.tets)}" in info
+    assert "value (per vertex), iteration (per tet), quality (per tet)" in info, info

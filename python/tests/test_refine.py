@@ -1,0 +1,284 @@
+"""tetrefine.Client against a real tetrefine_server: the CLI's result, cancellation, errors."""
+
+import json
+import os
+import subprocess
+
+import grpc
+import meshio
+import nibabel
+import numpy as np
+import pytest
+
+import tetrefine
+from conftest import EXAMPLE_MESH, EXAMPLE_VOLUME
+from meshes import box_mesh, noise_volume, smooth_volume
+
+
+def run_cli(cli, *args):
+    done = subprocess.run([cli, *args], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    return done
+
+
+def assert_same_as_cli_output(result, path):
+    """result equals the CLI's output mesh file bit for bit (the .vtu stores float64 binary)."""
+    cli = meshio.read(path)
+    np.testing.assert_array_equal(result.points, cli.points)
+    np.testing.assert_array_equal(result.tets, cli.cells_dict["tetra"])
+    np.testing.assert_array_equal(result.values, cli.point_data["value"])
+    np.testing.assert_array_equal(result.iteration, cli.cell_data["iteration"][0])
+    np.testing.assert_array_equal(result.quality, cli.cell_data["quality"][0])
+
+
+def test_the_example_matches_the_cli(server, cli_binary, tmp_path):
+    output, stats = tmp_path / "cli.vtu", tmp_path / "cli.json"
+    run_cli(cli_binary, "refine", "--server", server.target, "--volume", EXAMPLE_VOLUME,
+            "--mesh", EXAMPLE_MESH, "--fit-mesh-to-volume", "--epsilon", "0.1", "--quiet",
+            "--output", str(output), "--stats-json", str(stats))
+
+    volume = tetrefine.volume_from_nibabel(nibabel.load(EXAMPLE_VOLUME))
+    mesh = tetrefine.mesh_from_meshio(meshio.read(EXAMPLE_MESH))
+    points = tetrefine.fit_to_volume(mesh.points, volume)
+    seen = []
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(volume.data, volume.spacing, volume.origin, points, mesh.tets,
+                               0.1, on_iteration=seen.append)
+
+    assert_same_as_cli_output(result, output)
+    cli_stats = json.load(open(stats))
+    assert result.stop_reason == cli_stats["stop_reason"]
+    assert [s.iteration for s in result.iterations] == list(
+        range(1, len(cli_stats["iterations"]) + 1))
+    assert [s.final_tets for s in result.iterations] == [
+        s["final_tets"] for s in cli_stats["iterations"]]
+    assert seen == result.iterations
+    assert result.lattice.points_sampled > 0
+    assert len(result.tets) > len(mesh.tets)
+
+
+def test_a_numpy_mesh_in_a_float_volume_matches_the_cli(server, cli_binary, tmp_path):
+    """Arrays the caller made: written to files for the CLI, sent as arrays by the client."""
+    data = smooth_volume((17, 13, 11)).astype(np.float32)
+    spacing, origin = (1.5, 2.0, 0.75), (-10.0, 4.0, 2.5)
+    image = nibabel.Nifti1Image(data, np.diag([*spacing, 1.0]))
+    image.affine[:3, 3] = origin
+    image = nibabel.Nifti1Image(data, image.affine)
+    nibabel.save(image, tmp_path / "v.nii")
+    hi = np.asarray(origin) + (np.asarray(data.shape) - 1) * np.asarray(spacing)
+    points, tets = box_mesh(np.asarray(origin) + 0.5, hi - 0.5, (3, 4, 2))
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(points, [("tetra", tets)]))
+    run_cli(cli_binary, "refine", "--server", server.target, "--volume", str(tmp_path / "v.nii"),
+            "--mesh", str(tmp_path / "m.vtu"), "--epsilon", "0.02", "--max-iterations", "5",
+            "--quiet", "--output", str(tmp_path / "cli.vtu"))
+
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(data, spacing, origin, points, tets, 0.02, max_iterations=5)
+    assert_same_as_cli_output(result, tmp_path / "cli.vtu")
+
+
+def test_volume_axes_are_x_y_z(server):
+    """On a volume linear along one axis the vertex values are that coordinate: any axis or
+    memory-order mix-up would give another axis's coordinate."""
+    shape, spacing, origin = (9, 7, 5), (1.0, 2.0, 3.0), (10.0, 20.0, 30.0)
+    index = np.meshgrid(*(np.arange(n, dtype=np.float64) for n in shape), indexing="ij")
+    hi = np.asarray(origin) + (np.asarray(shape) - 1) * np.asarray(spacing)
+    points, tets = box_mesh(origin, hi, (2, 2, 2))
+    with tetrefine.Client(server.target) as client:
+        for axis in range(3):
+            world = origin[axis] + spacing[axis] * index[axis]
+            for layout in (world, np.asfortranarray(world), world.copy(order="C")):
+                result = client.refine(layout, spacing, origin, points, tets, 0.5,
+                                       max_iterations=0)
+                np.testing.assert_allclose(result.values, result.points[:, axis], rtol=1e-12)
+
+
+def _same(a, b):
+    np.testing.assert_array_equal(a.points, b.points)
+    np.testing.assert_array_equal(a.tets, b.tets)
+    np.testing.assert_array_equal(a.values, b.values)
+
+
+def test_every_dtype_and_layout_gives_the_result_of_its_values(server):
+    """A sample's value, not its dtype or memory layout, decides the result."""
+    base = np.random.default_rng(3).integers(0, 120, size=(12, 10, 8))
+    points, tets = box_mesh((0.5, 0.5, 0.5), (10.5, 8.5, 6.5), (2, 2, 2))
+    with tetrefine.Client(server.target) as client:
+        def refine(volume):
+            return client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.05,
+                                 max_iterations=3)
+        reference = refine(base.astype(np.float64))
+        assert len(reference.iterations) > 0
+        for dtype in ("u1", "i1", "<i2", ">i2", "u2", "i4", ">i4", "u4", "i8", "u8", "f2",
+                      "f4", ">f4", "f8", ">f8"):
+            _same(refine(base.astype(dtype)), reference)
+        bigger = np.zeros((24, 10, 16), dtype=np.int16)
+        bigger[::2, :, ::2] = base
+        _same(refine(bigger[::2, :, ::2]), reference)  # a strided view
+        _same(refine(np.asfortranarray(base)), reference)
+        _same(refine(base.T.copy().T), reference)  # C order of the reversed axes
+        _same(refine(base.astype(np.int64) + 2**40 - 2**40), reference)
+        huge = base.astype(np.int64) * 2**45
+        result = refine(huge)  # travels as float64: exact below 2**53
+        np.testing.assert_array_equal(result.points, reference.points)
+        too_big = base.astype(np.uint64) * 2**56
+        with pytest.raises(tetrefine.TetrefineError, match="volume: uint64 values"):
+            refine(too_big)
+
+
+def _heavy_input():
+    """Noise on a 40^3 grid meshed at one tet per voxel-ish: every iteration splits a lot, so a
+    cancelled call is still running when the cancellation arrives."""
+    volume = noise_volume((40, 40, 40))
+    points, tets = box_mesh((0, 0, 0), (39, 39, 39), (39, 39, 39))
+    return volume, points, tets
+
+
+class Stop(Exception):
+    pass
+
+
+def test_on_iteration_raising_cancels_the_call(own_server):
+    volume, points, tets = _heavy_input()
+    calls = []
+
+    def stop(stats):
+        calls.append(stats.iteration)
+        raise Stop()
+
+    with tetrefine.Client(own_server.target) as client:
+        with pytest.raises(Stop):
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01, max_iterations=16,
+                          on_iteration=stop)
+        assert calls == [1]
+        lines = own_server.wait_for_refine_lines(1)
+        assert len(lines) == 1 and "status=CANCELLED" in lines[0], lines
+        # The client and the server are fine afterwards.
+        small = client.refine(smooth_volume((8, 8, 8)), (1, 1, 1), (0, 0, 0),
+                              *box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1)), 0.1)
+        assert len(small.tets) >= 5
+
+
+def test_a_deadline_ends_the_call_with_deadline_exceeded(own_server):
+    volume, points, tets = _heavy_input()
+    with tetrefine.Client(own_server.target) as client:
+        client.server_info()  # connect first, so the deadline is spent on the call itself
+        with pytest.raises(tetrefine.TetrefineError) as error:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01, timeout=0.2)
+    assert error.value.code == grpc.StatusCode.DEADLINE_EXCEEDED
+    lines = own_server.wait_for_refine_lines(1)
+    assert "status=OK" not in lines[0], lines
+
+
+def test_the_servers_message_for_bad_input(server):
+    volume = smooth_volume((8, 8, 8))
+    points, tets = box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1))
+    outside = points.copy()
+    outside[3] = (1.0, 20.0, 1.0)
+    with tetrefine.Client(server.target) as client:
+        with pytest.raises(tetrefine.TetrefineError) as error:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), outside, tets, 0.1)
+        assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+        assert "mesh.points[3]" in error.value.details and "outside" in error.value.details
+        assert str(error.value).startswith("INVALID_ARGUMENT: mesh.points[3]")
+
+        with pytest.raises(tetrefine.TetrefineError) as error:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.0)
+        assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+        assert "epsilon" in error.value.details
+
+        inverted = tets.copy()
+        inverted[2] = inverted[2][[0, 1, 3, 2]]
+        with pytest.raises(tetrefine.TetrefineError, match=r"tets\[2\]|tet 2"):
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, inverted, 0.1)
+        assert len(client.refine(volume, (1, 1, 1), (0, 0, 0), points, inverted, 0.1,
+                                 fix_orientation=True).tets) >= 5
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (dict(tets=np.array([[0, 1, 2, 99]])), "tets: tet 0 corner 3 is vertex 99"),
+    (dict(tets=np.array([[0, 1, 2, -1]])), "tets: tet 0 corner 3 is vertex -1"),
+    (dict(tets=np.zeros((2, 3), dtype=int)), r"tets: expected shape \(m, 4\)"),
+    (dict(points=np.full((8, 3), np.nan)), "points: vertex 0 is not finite"),
+    (dict(volume=np.zeros((8, 8))), r"volume: expected a 3-d array indexed \[x, y, z\]"),
+    (dict(volume=np.zeros((8, 1, 8))), "volume: every axis needs at least 2 samples"),
+    (dict(volume=np.zeros((8, 8, 8), dtype=complex)), "volume: dtype complex128"),
+    (dict(spacing=(1, 0, 1)), "spacing: must be > 0 on every axis, got 0.0 on axis y"),
+    (dict(origin=(0, 0)), "origin: expected 3 numbers, got 2"),
+    (dict(direction=np.eye(2)), r"direction: expected a 3x3 matrix"),
+])
+def test_input_refused_before_sending(server, arguments, message):
+    points, tets = box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1))
+    call = dict(volume=smooth_volume((8, 8, 8)), spacing=(1, 1, 1), origin=(0, 0, 0),
+                points=points, tets=tets, epsilon=0.1)
+    call.update(arguments)
+    with tetrefine.Client(server.target) as client:
+        with pytest.raises(tetrefine.TetrefineError, match=message) as error:
+            client.refine(**call)
+    assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+
+
+def test_no_server_is_unavailable():
+    with tetrefine.Client("127.0.0.1:1") as client:
+        with pytest.raises(tetrefine.TetrefineError) as error:
+            client.refine(smooth_volume((8, 8, 8)), (1, 1, 1), (0, 0, 0),
+                          *box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1)), 0.1, timeout=10)
+    assert error.value.code == grpc.StatusCode.UNAVAILABLE
+
+
+def test_chunks_follow_the_servers_message_limit(server_binary):
+    """A server with a small message limit still gets every chunk under it."""
+    from conftest import Server
+    small = Server(server_binary, ["--max_message_bytes=65536"]).start()
+    try:
+        volume = noise_volume((40, 40, 40))  # 512 KB of float64: 16 chunks or more
+        points, tets = box_mesh((1, 1, 1), (38, 38, 38), (12, 12, 12))
+        with tetrefine.Client(small.target) as client:
+            assert client.server_info().limits.max_message_bytes == 65536
+            result = client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.05,
+                                   max_iterations=1)
+        assert len(result.tets) > len(tets)
+    finally:
+        small.stop()
+
+
+def test_tls_with_a_client_certificate(server_binary, tmp_path):
+    def openssl(*args):
+        subprocess.run(["openssl", *args], check=True, capture_output=True)
+
+    def key_and_cert(name, ca=None, extension=""):
+        key, cert = tmp_path / f"{name}.key", tmp_path / f"{name}.pem"
+        if ca is None:
+            openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2", "-subj",
+                    f"/CN={name}", "-keyout", str(key), "-out", str(cert))
+        else:
+            csr, ext = tmp_path / f"{name}.csr", tmp_path / f"{name}.ext"
+            ext.write_text(extension)
+            openssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", f"/CN={name}", "-keyout",
+                    str(key), "-out", str(csr))
+            openssl("x509", "-req", "-in", str(csr), "-CA", str(ca[1]), "-CAkey", str(ca[0]),
+                    "-CAcreateserial", "-days", "2", "-extfile", str(ext), "-out", str(cert))
+        return key, cert
+
+    ca = key_and_cert("ca")
+    server_key = key_and_cert("server", ca, "subjectAltName=DNS:localhost,IP:127.0.0.1\n"
+                              "extendedKeyUsage=serverAuth\n")
+    client_key = key_and_cert("client", ca, "extendedKeyUsage=clientAuth\n")
+    from conftest import Server
+    tls_server = Server(server_binary, [f"--tls_cert={server_key[1]}",
+                                        f"--tls_key={server_key[0]}",
+                                        f"--tls_client_ca={ca[1]}"]).start()
+    try:
+        volume = smooth_volume((8, 8, 8))
+        points, tets = box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1))
+        tls = {"ca": ca[1], "cert": client_key[1], "key": client_key[0]}
+        with tetrefine.Client(tls_server.target, tls=tls, token="not-checked-yet") as client:
+            assert len(client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.1).tets) >= 5
+        with tetrefine.Client(tls_server.target, tls={"ca": ca[1]}) as client:
+            with pytest.raises(tetrefine.TetrefineError) as error:
+                client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.1, timeout=10)
+            assert error.value.code == grpc.StatusCode.UNAVAILABLE
+    finally:
+        tls_server.stop()
+    with pytest.raises(tetrefine.TetrefineError, match="tls\\['ca'\\]: .*missing.pem"):
+        tetrefine.Client("127.0.0.1:1", tls={"ca": tmp_path / "missing.pem"})

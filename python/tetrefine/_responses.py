@@ -1,0 +1,120 @@
+"""Reassembles the Refine response stream into a RefineResult."""
+
+import grpc
+import numpy as np
+
+from tetrefine.errors import TetrefineError
+from tetrefine.results import IterationStats, Record, RefineResult
+
+# Response chunk kind -> (its repeated field, numpy dtype, values per element, mesh array name).
+_CHUNKS = {
+    "vertex_chunk": ("coordinates", np.float64, 3, "points"),
+    "value_chunk": ("values", np.float64, 1, "values"),
+    "tet_chunk": ("indices", np.uint32, 4, "tets"),
+    "tet_iteration_chunk": ("iterations", np.int32, 1, "iteration"),
+    "tet_quality_chunk": ("qualities", np.float32, 1, "quality"),
+}
+
+
+def _broken(message):
+    # The server broke its own protocol: not the caller's fault, and not retryable as is.
+    return TetrefineError(grpc.StatusCode.INTERNAL, f"malformed response from the server: "
+                          f"{message}")
+
+
+class _MeshParts:
+    """Arrays of one announced mesh, filled chunk by chunk in order."""
+
+    def __init__(self, header, label_kind):
+        self.final = header.final
+        self.sizes = {
+            "points": header.vertex_count, "values": header.value_count,
+            "tets": header.tet_count, "iteration": header.tet_iteration_count,
+            "quality": header.tet_quality_count,
+        }
+        self.arrays = {name: [] for name in self.sizes}
+        self.filled = {name: 0 for name in self.sizes}
+        self.label_kind = label_kind
+        self.labels, self.labels_filled = [], 0
+
+    def add(self, kind, chunk):
+        if self.label_kind is not None and kind == self.label_kind.name:
+            data = np.asarray(getattr(chunk, self.label_kind.values), dtype=np.int32)
+            if chunk.start_index != self.labels_filled:
+                raise _broken(f"{kind} start_index {chunk.start_index}, expected "
+                              f"{self.labels_filled}")
+            self.labels.append(data)
+            self.labels_filled += len(data)
+            return
+        field, dtype, width, name = _CHUNKS[kind]
+        data = np.asarray(getattr(chunk, field), dtype=dtype)
+        if chunk.start_index != self.filled[name]:
+            raise _broken(f"{kind} start_index {chunk.start_index}, expected {self.filled[name]}")
+        if len(data) % width:
+            raise _broken(f"{kind} of {len(data)} values, not a multiple of {width}")
+        self.arrays[name].append(data)
+        self.filled[name] += len(data) // width
+        if self.filled[name] > self.sizes[name]:
+            raise _broken(f"more {name} than the mesh header's {self.sizes[name]}")
+
+    def finish(self):
+        for name, size in self.sizes.items():
+            if self.filled[name] != size:
+                raise _broken(f"{self.filled[name]} {name} of the {size} announced")
+        out = {}
+        for _, dtype, width, name in _CHUNKS.values():
+            parts = self.arrays[name]
+            flat = np.concatenate(parts) if parts else np.zeros(0, dtype=dtype)
+            out[name] = flat.reshape(-1, width) if width > 1 else flat
+        out["labels"] = np.concatenate(self.labels) if self.labels else None
+        return out
+
+
+class ResponseReader:
+    """Feed responses in order with add(); result() once the stream has ended."""
+
+    def __init__(self, protocol, on_iteration=None):
+        self.protocol = protocol
+        self.on_iteration = on_iteration
+        self.iterations = []
+        self.mesh = None
+        self.final = None
+        self.summary = None
+
+    def add(self, response):
+        kind = response.WhichOneof("kind")
+        if kind == "iteration_stats":
+            stats = IterationStats.from_message(response.iteration_stats)
+            self.iterations.append(stats)
+            if self.on_iteration is not None:
+                self.on_iteration(stats)
+        elif kind == "mesh_header":
+            if self.mesh is not None and self.mesh.final:
+                raise _broken("a mesh header after the final mesh")
+            self.mesh = _MeshParts(response.mesh_header, self.protocol.response_labels)
+        elif kind == "summary":
+            self.summary = Record.from_message(response.summary)
+        elif kind is None:
+            raise _broken("a response with no kind set")
+        else:
+            if self.mesh is None:
+                raise _broken(f"{kind} before any mesh header")
+            self.mesh.add(kind, getattr(response, kind))
+
+    def result(self, labels_sent):
+        if self.summary is None:
+            raise _broken("the stream ended without a summary")
+        if self.mesh is None or not self.mesh.final:
+            raise _broken("the stream ended without the final mesh")
+        mesh = self.mesh.finish()
+        labels = mesh["labels"]
+        if labels_sent:
+            if labels is None or len(labels) != len(mesh["tets"]):
+                raise _broken(f"labels were sent, but {0 if labels is None else len(labels)} "
+                              f"came back for {len(mesh['tets'])} tets")
+        else:
+            labels = None
+        return RefineResult(
+            points=mesh["points"], tets=mesh["tets"].astype(np.int64), values=mesh["values"],
+            iteration=mesh["iteration"], quality=mesh["quality"], labels=labels,
+            iterations=self.iterations, summary=self.summary)

@@ -1,0 +1,191 @@
+"""What pipeline authors hold (nibabel images, meshio meshes) to and from refine()'s arrays.
+
+nibabel and meshio are imported only when these functions are called.
+"""
+
+import math
+
+import numpy as np
+
+from tetrefine.errors import invalid
+
+# Relative size below which an off-diagonal affine entry counts as zero; the same rule as the
+# C++ readers (client/io/grid_placement.h, kObliqueTolerance): float32 quaternion rounding is
+# about 1e-7 of a column's length, a 0.1 degree tilt 1.7e-3.
+OBLIQUE_TOLERANCE = 1e-5
+
+# NIfTI xyzt_units spatial unit -> millimetres, as the C++ NIfTI reader converts them.
+_MM_PER_UNIT = {"meter": 1000.0, "mm": 1.0, "micron": 0.001, "unknown": 1.0}
+
+
+class VolumeGrid:
+    """A volume ready for Client.refine: data indexed [x, y, z], spacing and origin in world
+    millimetres (RAS for NIfTI), direction None (axis-aligned) or a 3x3 matrix whose columns
+    are the world directions of the x, y, z index axes."""
+
+    def __init__(self, data, spacing, origin, direction=None):
+        self.data = data
+        self.spacing = spacing
+        self.origin = origin
+        self.direction = direction
+
+    def world_box(self):
+        """(lo, hi) corners of the sampled box for an axis-aligned grid, world mm."""
+        lo = np.asarray(self.origin, dtype=np.float64)
+        hi = lo + (np.asarray(self.data.shape) - 1) * np.asarray(self.spacing)
+        return lo, hi
+
+
+def _unit_scale(image):
+    header = getattr(image, "header", None)
+    get_units = getattr(header, "get_xyzt_units", None)
+    if get_units is None:
+        return 1.0
+    return _MM_PER_UNIT.get(get_units()[0], 1.0)
+
+
+def _samples(image):
+    """The image's samples, scaled as the C++ NIfTI reader scales them.
+
+    Unscaled data keeps its stored dtype (int16 stays int16 on the wire). With a slope or an
+    intercept, value = slope * stored + intercept is computed in float64 and stored as float32 for
+    8/16-bit and float32 data, float64 otherwise (client/io/voxel_decode.cc).
+    """
+    proxy = image.dataobj
+    slope = getattr(proxy, "slope", 1.0)
+    inter = getattr(proxy, "inter", 0.0)
+    raw = np.asanyarray(proxy.get_unscaled()) if hasattr(proxy, "get_unscaled") else None
+    if raw is None:
+        return np.asanyarray(proxy)
+    slope = 1.0 if slope is None or not math.isfinite(slope) or slope == 0 else float(slope)
+    inter = 0.0 if inter is None or not math.isfinite(inter) else float(inter)
+    if slope == 1.0 and inter == 0.0:
+        return raw
+    narrow = raw.dtype.itemsize <= 2 or raw.dtype == np.float32
+    scaled = slope * raw.astype(np.float64) + inter
+    return scaled.astype(np.float32 if narrow else np.float64)
+
+
+def volume_from_nibabel(image):
+    """A VolumeGrid from a nibabel image (NIfTI-1/2, MGH, ...), in its world frame.
+
+    The affine (image.affine; NIfTI: sform, else qform) is applied as tetrefine's own readers
+    apply it, so the result equals `tetrefine refine --volume file.nii` to the bit:
+      - diagonal up to signs (the usual case, including flipped axes): every axis with a negative
+        scale is reversed, so the grid is axis-aligned with positive spacing, direction None;
+      - rotated, sheared or permuted ("oblique"): the samples stay as stored, spacing = the
+        affine's column lengths, origin = its translation, direction = the unit columns (3x3).
+    NIfTI spatial units (metres, microns) are converted to millimetres. A 4-d image with one
+    volume is accepted; more volumes are refused.
+    """
+    data = _samples(image)
+    if data.ndim == 4 and data.shape[3] == 1:
+        data = data[..., 0]
+    if data.ndim != 3:
+        raise invalid("image", f"expected a 3-d volume, got shape {data.shape}")
+    affine = np.asarray(image.affine, dtype=np.float64) * _unit_scale(image)
+    if not np.all(np.isfinite(affine[:3, :4])):
+        raise invalid("image", "the affine has a non-finite entry")
+    lengths = [math.hypot(affine[0, c], affine[1, c], affine[2, c]) for c in range(3)]
+    if not all(length > 0 for length in lengths):
+        raise invalid("image", "the affine is singular")
+    diagonal = all(abs(affine[r, c]) <= OBLIQUE_TOLERANCE * lengths[c]
+                   for c in range(3) for r in range(3) if r != c)
+    if not diagonal:
+        direction = affine[:3, :3] / np.asarray(lengths)
+        return VolumeGrid(data, lengths, [float(x) for x in affine[:3, 3]], direction)
+    flip = [affine[a, a] < 0 for a in range(3)]
+    first = [data.shape[a] - 1 if flip[a] else 0 for a in range(3)]
+    # Summed in the C++ order (translation, then columns 0, 1, 2) for the same bits.
+    origin = []
+    for row in range(3):
+        value = float(affine[row, 3])
+        for column in range(3):
+            value += float(affine[row, column]) * float(first[column])
+        origin.append(value)
+    spacing = [abs(float(affine[a, a])) for a in range(3)]
+    if any(flip):
+        data = data[tuple(slice(None, None, -1) if f else slice(None) for f in flip)]
+    return VolumeGrid(data, spacing, origin, None)
+
+
+def fit_to_volume(points, grid):
+    """Points scaled per axis and moved so their bounding box becomes the volume's sampled box
+    less one voxel on every side (at most a quarter of the box): what `tetrefine refine
+    --fit-mesh-to-volume` does (client/cli/mesh_placement.cc), to the bit. For meshes made in
+    their own unit frame. `grid` is a VolumeGrid with direction None; returns (n, 3) float64.
+    """
+    if grid.direction is not None:
+        raise invalid("grid", "fit_to_volume needs an axis-aligned volume (direction None)")
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
+        raise invalid("points", f"expected shape (n, 3) with n > 0, got {points.shape}")
+    lo, hi = grid.world_box()
+    spacing = np.asarray(grid.spacing, dtype=np.float64)
+    margin = np.minimum(spacing, 0.25 * (hi - lo))
+    to_lo, to_hi = lo + margin, hi - margin
+    p_lo, p_hi = points.min(axis=0), points.max(axis=0)
+    flat = ~(p_hi > p_lo)
+    if flat.any():
+        raise invalid("points", f"the mesh is flat along axis {'xyz'[int(np.argmax(flat))]}, "
+                      "so it cannot be fitted to the volume")
+    t = (points - p_lo) / (p_hi - p_lo)
+    # The extremes map exactly onto the target box, whatever the rounding in between.
+    return np.where(t <= 0.0, to_lo, np.where(t >= 1.0, to_hi, to_lo + t * (to_hi - to_lo)))
+
+
+class TetMesh:
+    """A tet mesh ready for Client.refine: points (n, 3) float64, tets (m, 4) int64, labels
+    (m,) int32 or None, values (n,) float64 or None (a "value" point array)."""
+
+    def __init__(self, points, tets, labels=None, values=None):
+        self.points = points
+        self.tets = tets
+        self.labels = labels
+        self.values = values
+
+
+# Cell data names that carry region labels, in the order they are looked for.
+LABEL_NAMES = ("gmsh:physical", "medit:ref", "region", "labels", "label", "CellEntityIds")
+
+
+def mesh_from_meshio(mesh, label_name=None):
+    """A TetMesh from a meshio.Mesh: every "tetra" cell block in order (other cells, e.g.
+    boundary triangles, are skipped). labels from cell data `label_name`, or when None the first
+    of LABEL_NAMES the tetra blocks carry; None when there is none."""
+    points = np.asarray(mesh.points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise invalid("mesh", f"expected 3-d points, got shape {points.shape}")
+    blocks = [i for i, block in enumerate(mesh.cells) if block.type == "tetra"]
+    if not blocks:
+        found = sorted({block.type for block in mesh.cells})
+        raise invalid("mesh", f"no tetra cells (cell types: {', '.join(found) or 'none'})")
+    tets = np.concatenate([np.asarray(mesh.cells[i].data, dtype=np.int64) for i in blocks])
+    names = [label_name] if label_name is not None else list(LABEL_NAMES)
+    labels = None
+    for name in names:
+        arrays = mesh.cell_data.get(name)
+        if arrays is not None:
+            labels = np.concatenate([np.asarray(arrays[i]).reshape(-1) for i in blocks])
+            labels = labels.astype(np.int32)
+            break
+    else:
+        if label_name is not None:
+            raise invalid("label_name", f"the mesh has no cell data {label_name!r} (it has "
+                          f"{', '.join(sorted(mesh.cell_data)) or 'none'})")
+    values = mesh.point_data.get("value")
+    if values is not None:
+        values = np.asarray(values, dtype=np.float64).reshape(-1)
+    return TetMesh(points, tets, labels, values)
+
+
+def result_to_meshio(result, label_name="labels"):
+    """A meshio.Mesh of a RefineResult: one "tetra" block, point data "value", cell data
+    "iteration", "quality" and, when the result has labels, `label_name`."""
+    import meshio
+
+    cell_data = {"iteration": [result.iteration], "quality": [result.quality]}
+    if result.labels is not None:
+        cell_data[label_name] = [result.labels]
+    return meshio.Mesh(result.points, [("tetra", result.tets)],
+                       point_data={"value": result.values}, cell_data=cell_data)

@@ -1,0 +1,189 @@
+"""tetrefine.Client: refine numpy arrays on a tetrefine_server."""
+
+import os
+import time
+from collections.abc import Mapping
+
+import grpc
+
+from tetrefine import _requests
+from tetrefine._protocol import Protocol
+from tetrefine._responses import ResponseReader
+from tetrefine.errors import TetrefineError, invalid
+from tetrefine.results import Record
+from tetrefine.v1 import tetrefine_pb2 as pb
+from tetrefine.v1 import tetrefine_pb2_grpc as pb_grpc
+
+# Request chunk payload. The server refuses messages above its max_message_bytes (4 MiB by
+# default, advertised by GetServerInfo); 1 MiB keeps every message far below that and matches
+# the C++ client (client/refine_client.h), so both send the same stream.
+DEFAULT_CHUNK_BYTES = 1 << 20
+# Response chunks are at most 3 MiB of payload (wire/conversion.h, kMaxChunkBytes): room
+# for that plus framing.
+_MAX_RECEIVE_BYTES = 16 << 20
+
+
+def _read_bytes(name, value):
+    if value is None or isinstance(value, bytes):
+        return value
+    try:
+        with open(os.fspath(value), "rb") as f:
+            return f.read()
+    except OSError as error:
+        raise invalid(f"tls[{name!r}]", f"{value}: {error.strerror}") from None
+
+
+def _credentials(tls):
+    """(channel credentials or None, extra channel options) for the `tls` argument."""
+    if tls is None or tls is False:
+        return None, []
+    if tls is True:
+        return grpc.ssl_channel_credentials(), []
+    if isinstance(tls, grpc.ChannelCredentials):
+        return tls, []
+    if isinstance(tls, Mapping):
+        unknown = set(tls) - {"ca", "cert", "key", "server_name"}
+        if unknown:
+            raise invalid("tls", f"unknown keys {sorted(unknown)}; expected ca, cert, key, "
+                          "server_name")
+        if ("cert" in tls) != ("key" in tls):
+            raise invalid("tls", "a client certificate needs both 'cert' and 'key'")
+        credentials = grpc.ssl_channel_credentials(
+            root_certificates=_read_bytes("ca", tls.get("ca")),
+            private_key=_read_bytes("key", tls.get("key")),
+            certificate_chain=_read_bytes("cert", tls.get("cert")))
+        options = []
+        if tls.get("server_name"):
+            options.append(("grpc.ssl_target_name_override", tls["server_name"]))
+        return credentials, options
+    raise invalid("tls", f"expected None, True, a dict of ca/cert/key files or "
+                  f"grpc.ChannelCredentials, got {type(tls).__name__}")
+
+
+class Client:
+    """A connection to one tetrefine_server.
+
+    Args:
+      target: "host:port" (any gRPC target, e.g. "dns:///refiner.local:50051").
+      tls: None for plaintext; True for TLS against the system's root certificates; a dict with
+        "ca" (root certificate file or PEM bytes), optionally "cert" and "key" (client
+        certificate for mutual TLS) and "server_name" (the name the certificate is checked
+        against, when it differs from the host in `target`); or grpc.ChannelCredentials.
+      token: a bearer token sent as "authorization: Bearer <token>" call metadata with every
+        call, for servers that authenticate callers.
+
+    Use as a context manager, or call close(). Safe to share between threads.
+    """
+
+    def __init__(self, target, *, tls=None, token=None):
+        credentials, options = _credentials(tls)
+        options = options + [("grpc.max_receive_message_length", _MAX_RECEIVE_BYTES)]
+        if credentials is None:
+            self._channel = grpc.insecure_channel(target, options=options)
+        else:
+            self._channel = grpc.secure_channel(target, credentials, options=options)
+        self._stub = pb_grpc.RefinerStub(self._channel)
+        self._metadata = (("authorization", f"Bearer {token}"),) if token else None
+        self._protocol = Protocol(pb)
+        self._chunk_bytes = None
+        self.target = target
+
+    def close(self):
+        self._channel.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    def server_info(self, timeout=10.0):
+        """The server's version and limits: Record(version, limits=Record(max_voxels,
+        max_input_tets, max_output_tets, max_concurrent_refinements, max_message_bytes))."""
+        try:
+            info = self._stub.GetServerInfo(pb.GetServerInfoRequest(), timeout=timeout,
+                                            metadata=self._metadata)
+        except grpc.RpcError as error:
+            raise TetrefineError.from_rpc_error(error) from None
+        return Record.from_message(info)
+
+    def _request_chunk_bytes(self, timeout):
+        """Chunk payload that fits the server's advertised message limit (asked once)."""
+        if self._chunk_bytes is None:
+            try:
+                limit = self.server_info(timeout=timeout if timeout is not None else 30.0)
+                limit = limit.limits.max_message_bytes
+            except TetrefineError as error:
+                if error.code != grpc.StatusCode.UNIMPLEMENTED:
+                    raise
+                limit = 0
+            # Half the limit leaves room for the message's framing and fields.
+            chunk = DEFAULT_CHUNK_BYTES if limit <= 0 else min(DEFAULT_CHUNK_BYTES, limit // 2)
+            self._chunk_bytes = max(chunk, 256)
+        return self._chunk_bytes
+
+    def refine(self, volume, spacing, origin, points, tets, epsilon, *, direction=None,
+               labels=None, scheme=None, certify=False, max_iterations=None, max_tets=None,
+               on_iteration=None, timeout=None, norm_coeff=None, clamp=False,
+               fix_orientation=False):
+        """Refines the tet mesh (points, tets) immersed in a voxel volume.
+
+        Args:
+          volume: 3-d numpy array indexed [x, y, z] (any memory order). uint8, int16, uint16,
+            int32, float32 and float64 travel as they are; other integer and float dtypes as the
+            smallest of those that holds every value exactly (bool/int8 widen, float16 ->
+            float32, int64/uint32/uint64 -> int32 when the values fit, else float64).
+          spacing: 3 positive numbers, world distance between samples along x, y, z (mm).
+          origin: 3 numbers, world position of sample [0, 0, 0] (mm).
+          points: (n, 3) world coordinates of the mesh vertices (mm); must lie in the volume's
+            box [origin, origin + (shape - 1) * spacing] unless clamp=True.
+          tets: (m, 4) integer vertex indices, positively oriented unless fix_orientation=True:
+            dot(p1 - p0, cross(p2 - p0, p3 - p0)) > 0.
+          epsilon: relative tolerance of the edge-midpoint error (paper eq. 3), > 0.
+          direction: 3x3 matrix whose columns are the world directions of the volume's x, y, z
+            index axes (for an oblique volume); None or the identity for an axis-aligned one.
+          labels: (m,) integer label per tet, inherited by every child tet.
+          scheme: refinement scheme name (e.g. "paper"); None: the server's default.
+          certify: refine until the lattice error of every tet is at most epsilon.
+          max_iterations: iterations at most (server default 16).
+          max_tets: stop before an iteration that would exceed this many tets.
+          on_iteration: called with each IterationStats as soon as that iteration has finished
+            on the server. If it raises, the call is cancelled and the exception propagates.
+          timeout: seconds for the whole call (DEADLINE_EXCEEDED after that); None: no limit.
+          norm_coeff: normCoeff of eq. 3 (default: the volume's max - min).
+          clamp: sample vertices outside the volume at the nearest point of its box.
+          fix_orientation: flip inverted tets instead of refusing them.
+
+        direction, labels, scheme and certify need a protocol that has them: without it they
+        raise TetrefineError with code UNIMPLEMENTED naming the missing field.
+
+        Returns: a RefineResult (points, tets, values, iteration, quality, labels, iterations,
+          stop_reason, lattice, summary).
+        Raises: TetrefineError with the gRPC status code and the server's message (or ours, for
+          input refused before sending: INVALID_ARGUMENT naming the argument).
+        """
+        inputs = _requests.Inputs(volume, spacing, origin, points, tets, direction=direction,
+                                  labels=labels)
+        _requests.check_features(self._protocol, inputs)
+        options = _requests.build_options(
+            pb, self._protocol, epsilon, max_iterations=max_iterations, max_tets=max_tets,
+            scheme=scheme, certify=certify, norm_coeff=norm_coeff, clamp=clamp,
+            fix_orientation=fix_orientation)
+        # One deadline for the whole call, the server-info round trip included.
+        deadline = None if timeout is None else time.monotonic() + timeout
+        chunk_bytes = self._request_chunk_bytes(timeout)
+        remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
+        stream = _requests.requests(pb, self._protocol, options, inputs, chunk_bytes)
+        reader = ResponseReader(self._protocol, on_iteration)
+        call = self._stub.Refine(stream, timeout=remaining, metadata=self._metadata)
+        try:
+            for response in call:
+                reader.add(response)
+        except grpc.RpcError as error:
+            raise TetrefineError.from_rpc_error(error) from None
+        except BaseException:
+            # on_iteration raised, or KeyboardInterrupt: stop the server's work too.
+            call.cancel()
+            raise
+        return reader.result(labels_sent=inputs.labels is not None)
