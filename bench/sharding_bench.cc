@@ -69,9 +69,9 @@ const Cluster* StartCluster() {
 
 client::RefineRequestOptions Options() {
   client::RefineRequestOptions o;
-  o.epsilon = kEpsilon;
-  o.max_iterations = kIterations;
-  o.lattice_n = 0;
+  o.refine.epsilon = kEpsilon;
+  o.refine.max_iterations = kIterations;
+  o.refine.lattice_n = 0;
   return o;
 }
 

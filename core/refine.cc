@@ -36,53 +36,6 @@ double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-absl::Status CheckOptions(const RefineOptions& o) {
-  if (!(o.epsilon > 0.0) || !std::isfinite(o.epsilon)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("options.epsilon = ", o.epsilon, ": must be finite and > 0"));
-  }
-  if (o.max_iterations < 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("options.max_iterations = ", o.max_iterations, ": must be >= 0"));
-  }
-  // Edge and vertex ids are 32-bit; 500 million tets keeps both well inside that.
-  constexpr int64_t kTetCeiling = 500'000'000;
-  if (o.max_tets < 1 || o.max_tets > kTetCeiling) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("options.max_tets = ", o.max_tets, ": must be in [1, ", kTetCeiling, "]"));
-  }
-  if (o.norm_coeff.has_value() && (!(*o.norm_coeff > 0.0) || !std::isfinite(*o.norm_coeff))) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("options.norm_coeff = ", *o.norm_coeff, ": must be finite and > 0"));
-  }
-  if (o.lattice_n < 0 || o.lattice_n > 64) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("options.lattice_n = ", o.lattice_n, ": must be in [0, 64]"));
-  }
-  if (o.certify && o.lattice_n < 1) {
-    return absl::InvalidArgumentError(absl::StrCat("options.lattice_n = ", o.lattice_n,
-                                                   ": certify needs a lattice (lattice_n >= 1)"));
-  }
-  if (o.scheme != RefineScheme::kPaper && o.scheme != RefineScheme::kLongestEdge) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("options.scheme = ", static_cast<int>(o.scheme), ": not a scheme"));
-  }
-  if (o.min_edge_length.has_value() &&
-      (!(*o.min_edge_length >= 0.0) || !std::isfinite(*o.min_edge_length))) {
-    return absl::InvalidArgumentError(absl::StrCat("options.min_edge_length = ", *o.min_edge_length,
-                                                   ": must be finite and >= 0"));
-  }
-  if (!(o.min_quality >= 0.0 && o.min_quality < 1.0)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("options.min_quality = ", o.min_quality, ": must be in [0, 1)"));
-  }
-  if (o.threads < 0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("options.threads = ", o.threads, ": must be >= 0 (0: all cores)"));
-  }
-  return absl::OkStatus();
-}
-
 QualityStats SummarizeQuality(const std::vector<float>& q) {
   const int64_t n = static_cast<int64_t>(q.size());
   const int64_t blocks = BlockCount(n);
@@ -405,7 +358,7 @@ std::string_view StopReasonName(StopReason r) {
 
 absl::StatusOr<RefineResult> Refine(const Volume& volume, const Mesh& mesh,
                                     const RefineOptions& options) {
-  if (absl::Status s = CheckOptions(options); !s.ok()) return s;
+  if (absl::Status s = ValidateRefineOptions(options); !s.ok()) return s;
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   absl::StatusOr<RefineResult> result;
   arena.execute([&] { result = RefineInArena(volume, mesh, options); });

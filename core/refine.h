@@ -10,38 +10,10 @@
 #include "core/configuration.h"
 #include "core/mesh.h"
 #include "core/quality.h"
+#include "core/refine_options.h"
 #include "core/volume.h"
 
 namespace tetrefine {
-
-// What to do with a mesh vertex outside the volume's sampled box.
-enum class OutsidePolicy : uint8_t {
-  kReject,  // error naming the first offending vertex (default)
-  kClamp,   // sample at the nearest point of the whole grid's box
-};
-
-// What to do with a negatively oriented (inverted) input tet.
-enum class OrientationPolicy : uint8_t {
-  kReject,     // error naming the first inverted tet (default: an inverted tet is a broken mesh)
-  kNormalize,  // swap its last two vertices (for meshes written with the opposite convention)
-};
-
-// Which subdivision scheme Refine runs. Both split edges at their midpoints and subdivide every
-// tet by the paper's 64-case table, so both keep the mesh conformal with every face
-// triangulated from its own data; they differ in which edges they split.
-enum class RefineScheme : uint8_t {
-  // The paper exactly: an edge is split when the discrepancy at its midpoint exceeds epsilon.
-  kPaper,
-  // The paper's midpoint test, then every tet with a split edge also splits its
-  // longest edge (longest-edge closure, as in Rivara's and Plaza's schemes), and a tet whose
-  // split would make a much flatter child is refined regularly (1:8) instead. It reaches
-  // epsilon where the paper's scheme stops with needles. See SchemeRules in core/refine.cc for
-  // the measurements behind each rule.
-  kLongestEdge,
-};
-std::string_view RefineSchemeName(RefineScheme s);
-// The scheme named `name` ("paper", "longest-edge"); false when there is none.
-bool ParseRefineScheme(std::string_view name, RefineScheme* out);
 
 // Per-iteration statistics, as the paper reports them (Tables 3-7).
 struct IterationStats {
@@ -92,54 +64,6 @@ enum class StopReason : uint8_t {
   kQualityFloor,   // the next iteration would have made a tet of quality below min_quality
 };
 std::string_view StopReasonName(StopReason r);
-
-// Options of refine(), in the spirit of Omega_h's AdaptOpts.
-struct RefineOptions {
-  double epsilon = 0.1;           // relative tolerance of eq. 3, > 0
-  int max_iterations = 16;        // >= 0
-  int64_t max_tets = 50'000'000;  // stop before an iteration that would exceed this
-  // normCoeff of eq. 3. Unset: the value range (max - min) of the volume given. A caller that
-  // sends a slab passes the whole volume's range here. A range of 0 is treated as 1.
-  std::optional<double> norm_coeff;
-  OutsidePolicy outside = OutsidePolicy::kReject;
-  OrientationPolicy orientation = OrientationPolicy::kReject;
-  int threads = 0;  // 0: all cores. The output does not depend on it.
-  // Edges shorter than this (world units) are never split. Unset: 1/64 of the smallest voxel
-  // spacing. Why: the paper's scheme splits only marked edges, so the edges joining a new
-  // midpoint to far corners stay long; near a feature much sharper than the mesh, those are split
-  // again and again at halving distances, the tets become needles, and after ~30 iterations
-  // rounding inverts them. Below 1/64 voxel the trilinear field is linear along an edge to
-  // within about 1% of its range (a cell-face kink at worst), so splitting further buys little
-  // and this bound keeps every tet far from degenerate. The decision stays local to the edge.
-  // 0 disables the guard.
-  std::optional<double> min_edge_length;
-  // The scheme can still flatten tets step by step near such a feature (long edges split inside
-  // tets that are already slivers). An iteration that would create a tet whose mean-ratio
-  // quality is below this, or whose volume is not positive, is not applied: refinement stops
-  // before it (kQualityFloor) and the output keeps no degenerate tet. In [0, 1).
-  double min_quality = 1e-6;
-
-  RefineScheme scheme = RefineScheme::kPaper;
-  // Certified mode: refinement also goes on until the discrepancy at every point of the
-  // lattice of order lattice_n (the paper's 165 points for 8) of every tet is <= epsilon; each
-  // tet that fails has its longest edge split. The result's `certified_max_error` is then the
-  // largest lattice discrepancy over every tet of the output (not a sample).
-  bool certify = false;
-  // Fill RefineResult::tet_parent (4 bytes per output tet).
-  bool track_parents = false;
-
-  // Final lattice verification: lattice_n = 0 skips it. Meshes with more tets than
-  // lattice_max_tets are verified on a sample of that many tets drawn with lattice_seed.
-  int lattice_n = 8;
-  int64_t lattice_max_tets = 200'000;
-  uint64_t lattice_seed = 1;
-
-  // Called after each completed iteration with its statistics and the mesh it produced.
-  std::function<void(const IterationStats&, const Mesh&)> on_iteration;
-  // Polled inside iterations (every few thousand tets) and between them, from worker threads:
-  // it must be thread-safe.
-  std::function<bool()> should_cancel;
-};
 
 struct RefineResult {
   Mesh mesh;                           // refined mesh, values sampled from the volume

@@ -109,9 +109,9 @@ std::string Framed(const wire::RequestOptions& options, const Volume& volume, co
 void RequestSeeds() {
   const Mesh mesh = CubeMesh();
   wire::RequestOptions options;
-  options.epsilon = 0.05;
-  options.max_iterations = 2;
-  options.lattice_n = 2;
+  options.refine.epsilon = 0.05;
+  options.refine.max_iterations = 2;
+  options.refine.lattice_n = 2;
   Write(
       "request", "float64-whole",
       Framed(options, SmallVolume(VoxelType::kFloat64, {5, 5, 5}, {0, 0, 0}, {5, 5, 5}), mesh, 64));
@@ -122,11 +122,11 @@ void RequestSeeds() {
       Framed(options, SmallVolume(VoxelType::kInt16, {6, 6, 6}, {1, 0, 1}, {5, 5, 5}), mesh, 100));
   options = {};
   options.skip_final_mesh = true;
-  options.orientation = OrientationPolicy::kNormalize;
-  options.outside = OutsidePolicy::kClamp;
-  options.min_edge_length = 0.0;
-  options.norm_coeff = 10.0;
-  options.max_tets = 200;
+  options.refine.orientation = OrientationPolicy::kNormalize;
+  options.refine.outside = OutsidePolicy::kClamp;
+  options.refine.min_edge_length = 0.0;
+  options.refine.norm_coeff = 10.0;
+  options.SetMaxTets(200);
   Mesh with_values = mesh;
   for (size_t i = 0; i < mesh.points.size(); ++i) with_values.values.push_back(0.5 * i);
   std::swap(with_values.tets[0][2], with_values.tets[0][3]);

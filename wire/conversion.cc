@@ -1,6 +1,5 @@
 #include "wire/conversion.h"
 
-#include <cmath>
 #include <string>
 
 #include "absl/strings/str_cat.h"
@@ -59,17 +58,11 @@ absl::StatusOr<StopReason> StopReasonFromWire(int r) {
 
 RequestOptions RequestOptionsFromCore(const RefineOptions& options) {
   RequestOptions out;
-  out.epsilon = options.epsilon;
-  out.max_iterations = options.max_iterations;
-  out.max_tets = options.max_tets;
-  out.norm_coeff = options.norm_coeff;
-  out.outside = options.outside;
-  out.orientation = options.orientation;
-  out.lattice_n = options.lattice_n;
-  out.lattice_max_tets = options.lattice_max_tets;
-  out.lattice_seed = options.lattice_seed;
-  out.min_edge_length = options.min_edge_length;
-  out.min_quality = options.min_quality;
+  out.refine = options;
+  out.refine.threads = 0;
+  out.refine.on_iteration = nullptr;
+  out.refine.should_cancel = nullptr;
+  out.send_max_tets = true;
   return out;
 }
 
@@ -112,20 +105,21 @@ absl::StatusOr<VoxelType> VoxelTypeFromWire(int type, absl::string_view field) {
 }
 
 void RequestOptionsToWire(const RequestOptions& o, v1::RefineOptions* out) {
-  out->set_epsilon(o.epsilon);
-  out->set_max_iterations(o.max_iterations);
-  if (o.max_tets.has_value()) out->set_max_tets(*o.max_tets);
-  if (o.norm_coeff.has_value()) out->set_norm_coeff(*o.norm_coeff);
-  out->set_outside_policy(o.outside == OutsidePolicy::kClamp ? v1::OUTSIDE_POLICY_CLAMP
+  const RefineOptions& r = o.refine;
+  out->set_epsilon(r.epsilon);
+  out->set_max_iterations(r.max_iterations);
+  if (o.send_max_tets) out->set_max_tets(r.max_tets);
+  if (r.norm_coeff.has_value()) out->set_norm_coeff(*r.norm_coeff);
+  out->set_outside_policy(r.outside == OutsidePolicy::kClamp ? v1::OUTSIDE_POLICY_CLAMP
                                                              : v1::OUTSIDE_POLICY_REJECT);
-  out->set_orientation_policy(o.orientation == OrientationPolicy::kNormalize
+  out->set_orientation_policy(r.orientation == OrientationPolicy::kNormalize
                                   ? v1::ORIENTATION_POLICY_NORMALIZE
                                   : v1::ORIENTATION_POLICY_REJECT);
-  out->set_lattice_n(o.lattice_n);
-  out->set_lattice_max_tets(o.lattice_max_tets);
-  out->set_lattice_seed(o.lattice_seed);
-  if (o.min_edge_length.has_value()) out->set_min_edge_length(*o.min_edge_length);
-  out->set_min_quality(o.min_quality);
+  out->set_lattice_n(r.lattice_n);
+  out->set_lattice_max_tets(r.lattice_max_tets);
+  out->set_lattice_seed(r.lattice_seed);
+  if (r.min_edge_length.has_value()) out->set_min_edge_length(*r.min_edge_length);
+  out->set_min_quality(r.min_quality);
   out->set_stream_every_iteration(o.stream_every_iteration);
   out->set_skip_final_mesh(o.skip_final_mesh);
   out->set_response_chunk_bytes(o.response_chunk_bytes);
@@ -134,43 +128,27 @@ void RequestOptionsToWire(const RequestOptions& o, v1::RefineOptions* out) {
 absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& in,
                                                       const ServiceLimits& limits) {
   RequestOptions o;
-  if (in.has_epsilon()) {
-    // Written so that NaN fails too.
-    if (!(in.epsilon() > 0.0) || !std::isfinite(in.epsilon())) {
-      return Invalid("epsilon", absl::StrCat("must be finite and > 0, got ", in.epsilon()));
-    }
-    o.epsilon = in.epsilon();
-  }
-  if (in.has_max_iterations()) {
-    if (in.max_iterations() < 0) {
-      return Invalid("max_iterations", absl::StrCat("must be >= 0, got ", in.max_iterations()));
-    }
-    o.max_iterations = in.max_iterations();
-  }
+  RefineOptions& r = o.refine;
+  // Values are checked once, below, by the core's own validation: one set of limits.
+  if (in.has_epsilon()) r.epsilon = in.epsilon();
+  if (in.has_max_iterations()) r.max_iterations = in.max_iterations();
   if (in.has_max_tets()) {
-    if (in.max_tets() <= 0) {
-      return Invalid("max_tets", absl::StrCat("must be > 0, got ", in.max_tets()));
-    }
     if (in.max_tets() > limits.max_output_tets) {
       return absl::ResourceExhaustedError(absl::StrCat("options.max_tets: ", in.max_tets(),
                                                        " exceeds this server's limit of ",
                                                        limits.max_output_tets, " output tets"));
     }
-    o.max_tets = in.max_tets();
+    r.max_tets = in.max_tets();
+    o.send_max_tets = true;
   }
-  if (in.has_norm_coeff()) {
-    if (!(in.norm_coeff() > 0.0) || !std::isfinite(in.norm_coeff())) {
-      return Invalid("norm_coeff", absl::StrCat("must be finite and > 0, got ", in.norm_coeff()));
-    }
-    o.norm_coeff = in.norm_coeff();
-  }
+  if (in.has_norm_coeff()) r.norm_coeff = in.norm_coeff();
   switch (in.outside_policy()) {
     case v1::OUTSIDE_POLICY_UNSPECIFIED:
     case v1::OUTSIDE_POLICY_REJECT:
-      o.outside = OutsidePolicy::kReject;
+      r.outside = OutsidePolicy::kReject;
       break;
     case v1::OUTSIDE_POLICY_CLAMP:
-      o.outside = OutsidePolicy::kClamp;
+      r.outside = OutsidePolicy::kClamp;
       break;
     default:
       return Invalid("outside_policy", absl::StrCat("unknown value ", in.outside_policy()));
@@ -178,40 +156,20 @@ absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& i
   switch (in.orientation_policy()) {
     case v1::ORIENTATION_POLICY_UNSPECIFIED:
     case v1::ORIENTATION_POLICY_REJECT:
-      o.orientation = OrientationPolicy::kReject;
+      r.orientation = OrientationPolicy::kReject;
       break;
     case v1::ORIENTATION_POLICY_NORMALIZE:
-      o.orientation = OrientationPolicy::kNormalize;
+      r.orientation = OrientationPolicy::kNormalize;
       break;
     default:
       return Invalid("orientation_policy", absl::StrCat("unknown value ", in.orientation_policy()));
   }
-  if (in.has_lattice_n()) {
-    if (in.lattice_n() < 0) {
-      return Invalid("lattice_n", absl::StrCat("must be >= 0, got ", in.lattice_n()));
-    }
-    o.lattice_n = in.lattice_n();
-  }
-  if (in.has_lattice_max_tets()) {
-    if (in.lattice_max_tets() < 0) {
-      return Invalid("lattice_max_tets", absl::StrCat("must be >= 0, got ", in.lattice_max_tets()));
-    }
-    o.lattice_max_tets = in.lattice_max_tets();
-  }
-  if (in.has_lattice_seed()) o.lattice_seed = in.lattice_seed();
-  if (in.has_min_edge_length()) {
-    if (!(in.min_edge_length() >= 0.0) || !std::isfinite(in.min_edge_length())) {
-      return Invalid("min_edge_length",
-                     absl::StrCat("must be finite and >= 0, got ", in.min_edge_length()));
-    }
-    o.min_edge_length = in.min_edge_length();
-  }
-  if (in.has_min_quality()) {
-    if (!(in.min_quality() >= 0.0 && in.min_quality() < 1.0)) {
-      return Invalid("min_quality", absl::StrCat("must be in [0, 1), got ", in.min_quality()));
-    }
-    o.min_quality = in.min_quality();
-  }
+  if (in.has_lattice_n()) r.lattice_n = in.lattice_n();
+  if (in.has_lattice_max_tets()) r.lattice_max_tets = in.lattice_max_tets();
+  if (in.has_lattice_seed()) r.lattice_seed = in.lattice_seed();
+  if (in.has_min_edge_length()) r.min_edge_length = in.min_edge_length();
+  if (in.has_min_quality()) r.min_quality = in.min_quality();
+  if (absl::Status valid = ValidateRefineOptions(r); !valid.ok()) return valid;
   o.stream_every_iteration = in.stream_every_iteration();
   o.skip_final_mesh = in.skip_final_mesh();
   o.response_chunk_bytes = in.response_chunk_bytes();
@@ -219,18 +177,8 @@ absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& i
 }
 
 RefineOptions ToCoreOptions(const RequestOptions& o, const ServiceLimits& limits) {
-  RefineOptions core;
-  core.epsilon = o.epsilon;
-  core.max_iterations = o.max_iterations;
-  core.max_tets = o.max_tets.value_or(limits.max_output_tets);
-  core.norm_coeff = o.norm_coeff;
-  core.outside = o.outside;
-  core.orientation = o.orientation;
-  core.lattice_n = o.lattice_n;
-  core.lattice_max_tets = o.lattice_max_tets;
-  core.lattice_seed = o.lattice_seed;
-  core.min_edge_length = o.min_edge_length;
-  core.min_quality = o.min_quality;
+  RefineOptions core = o.refine;
+  if (!o.send_max_tets) core.max_tets = limits.max_output_tets;
   return core;
 }
 

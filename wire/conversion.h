@@ -5,11 +5,11 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <optional>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "core/refine.h"
+#include "core/refine_options.h"
 #include "core/voxel_type.h"
 #include "grpcpp/support/status.h"
 #include "tetrefine/v1/tetrefine.pb.h"
@@ -17,26 +17,27 @@
 
 namespace tetrefine::wire {
 
-// What a Refine call asks for besides the volume and mesh: the core options the protocol
-// carries (no callbacks, no thread count: those are the server's) plus the response shape.
+// What a Refine call asks for besides the volume and mesh: the core options (all of them but
+// `threads`, the server's business, and the callbacks, which are not sent) plus the tet budget's
+// origin and the response shape. Defaults are the core's.
 struct RequestOptions {
-  double epsilon = 0.1;
-  int max_iterations = 16;
-  std::optional<int64_t> max_tets;  // unset: the server's max_output_tets
-  std::optional<double> norm_coeff;
-  OutsidePolicy outside = OutsidePolicy::kReject;
-  OrientationPolicy orientation = OrientationPolicy::kReject;
-  int lattice_n = 8;
-  int64_t lattice_max_tets = 200'000;
-  uint64_t lattice_seed = 1;
-  std::optional<double> min_edge_length;  // unset: the core's default
-  double min_quality = RefineOptions{}.min_quality;
+  RefineOptions refine;
+  // Whether refine.max_tets is sent. When it is not, the server applies its own limit (its
+  // max_output_tets, see ToCoreOptions): a caller that does not choose a budget gets the largest
+  // the server allows.
+  bool send_max_tets = false;
   bool stream_every_iteration = false;  // also send each iteration's mesh
   bool skip_final_mesh = false;         // only statistics and the summary
   uint32_t response_chunk_bytes = 0;    // 0: the server's default
+
+  // Sets the tet budget and sends it.
+  void SetMaxTets(int64_t max_tets) {
+    refine.max_tets = max_tets;
+    send_max_tets = true;
+  }
 };
 
-// The request options of core `options` (callbacks and threads dropped, max_tets kept).
+// The request options of core `options`: its max_tets is sent; callbacks and threads are not.
 RequestOptions RequestOptionsFromCore(const RefineOptions& options);
 
 // What only the service knows about a call, besides the core result.
@@ -55,11 +56,13 @@ v1::VoxelType VoxelTypeToWire(VoxelType type);
 absl::StatusOr<VoxelType> VoxelTypeFromWire(int type, absl::string_view field);
 
 void RequestOptionsToWire(const RequestOptions& options, v1::RefineOptions* out);
-// Checks every field: INVALID_ARGUMENT naming it for a bad value or unknown enum,
-// RESOURCE_EXHAUSTED for a max_tets above the server's limit.
+// RESOURCE_EXHAUSTED for a max_tets above the server's limit; INVALID_ARGUMENT naming the field
+// for an unknown enum value or for whatever ValidateRefineOptions (core/refine_options.h, the
+// one set of limits) refuses. Unset fields keep the core's defaults.
 absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& options,
                                                       const ServiceLimits& limits);
-// The core options for `options`, with max_tets defaulted to the server's limit.
+// The core options for `options`: options.refine, with max_tets the server's limit unless it was
+// sent.
 RefineOptions ToCoreOptions(const RequestOptions& options, const ServiceLimits& limits);
 
 void IterationStatsToWire(const IterationStats& stats, v1::IterationStats* out);

@@ -248,10 +248,10 @@ absl::Status RequestReader::AddMeshHeader(const v1::MeshHeader& header) {
                                                      limits_.max_input_tets, " input tets"));
   }
   // Checked here, before the tets are received, rather than left to the core.
-  if (tet_count_ > options_.max_tets.value_or(limits_.max_output_tets)) {
-    if (options_.max_tets.has_value()) {
+  if (tet_count_ > ToCoreOptions(options_, limits_).max_tets) {
+    if (options_.send_max_tets) {
       return Invalid(absl::StrCat("mesh_header.tet_count: ", tet_count_,
-                                  " exceeds options.max_tets = ", *options_.max_tets));
+                                  " exceeds options.max_tets = ", options_.refine.max_tets));
     }
     return absl::ResourceExhaustedError(absl::StrCat("mesh_header.tet_count: ", tet_count_,
                                                      " exceeds this server's limit of ",

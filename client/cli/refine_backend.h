@@ -15,9 +15,10 @@
 
 namespace tetrefine::cli {
 
-// Where `tetrefine refine` sends its work. The refine command talks only to this interface, so
-// another way of running a refinement (e.g. splitting the volume into slabs over several servers,
-// a future --shards) slots in as one more implementation without touching the command.
+// Where `tetrefine refine` sends its work: the embedded service, one server, or the mesh sharded
+// over several servers (--shards, client/sharding). The refine command talks only to this
+// interface, so another way of running a refinement slots in as one more implementation without
+// touching the command.
 class RefineBackend {
  public:
   virtual ~RefineBackend() = default;

@@ -7,10 +7,13 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/string_view.h"
 #include "client/cli/command_support.h"
 #include "client/cli/commands.h"
 #include "client/cli/exit_codes.h"
@@ -23,6 +26,8 @@
 #include "client/io/file_bytes.h"
 #include "client/io/mesh_io.h"
 #include "core/quality.h"
+#include "core/refine_options.h"
+#include "wire/service_limits.h"
 
 namespace tetrefine::cli {
 namespace {
@@ -42,43 +47,60 @@ struct RefineSettings {
   bool quiet = false;
 };
 
+// The flag of each RefineOptions field the command line sets, so that the core's message
+// ("options.max_iterations: must be >= 0, got -1") names the flag the user typed.
+constexpr std::pair<absl::string_view, absl::string_view> kFlagOfField[] = {
+    {"epsilon", "epsilon"},
+    {"max_iterations", "max-iterations"},
+    {"max_tets", "max-tets"},
+    {"norm_coeff", "norm-coeff"},
+};
+
+absl::Status AsFlagError(const absl::Status& status) {
+  for (const auto& [field, flag] : kFlagOfField) {
+    const std::string prefix = absl::StrCat("options.", field, ":");
+    if (absl::StartsWith(status.message(), prefix)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--", flag, ":", status.message().substr(prefix.size())));
+    }
+  }
+  return status;
+}
+
 absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   s->volume_path = *args.Get("volume");
   s->mesh_path = *args.Get("mesh");
+  // The refinement options: parsed here, bounded by the core (ValidateRefineOptions below).
   absl::StatusOr<double> epsilon = ParseFiniteDouble("epsilon", *args.Get("epsilon"));
   if (!epsilon.ok()) return epsilon.status();
-  if (*epsilon <= 0.0) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--epsilon: must be > 0, got '", *args.Get("epsilon"), "'"));
-  }
-  s->options.epsilon = *epsilon;
+  s->options.refine.epsilon = *epsilon;
   if (auto text = args.Get("max-iterations")) {
-    absl::StatusOr<int64_t> n = ParseInteger("max-iterations", *text, 0, 1000);
+    absl::StatusOr<int64_t> n = ParseInteger(
+        "max-iterations", *text, std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
     if (!n.ok()) return n.status();
-    s->options.max_iterations = static_cast<int>(*n);
+    s->options.refine.max_iterations = static_cast<int>(*n);
   }
   if (auto text = args.Get("max-tets")) {
-    absl::StatusOr<int64_t> n =
-        ParseInteger("max-tets", *text, 1, std::numeric_limits<int64_t>::max());
+    absl::StatusOr<int64_t> n = ParseInteger("max-tets", *text, std::numeric_limits<int64_t>::min(),
+                                             std::numeric_limits<int64_t>::max());
     if (!n.ok()) return n.status();
-    s->options.max_tets = *n;
+    s->options.SetMaxTets(*n);
   }
   if (auto text = args.Get("norm-coeff")) {
     absl::StatusOr<double> x = ParseFiniteDouble("norm-coeff", *text);
     if (!x.ok()) return x.status();
-    if (*x <= 0.0) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("--norm-coeff: must be > 0, got '", *text, "'"));
-    }
-    s->options.norm_coeff = *x;
+    s->options.refine.norm_coeff = *x;
   }
   if (auto text = args.Get("threads")) {
     absl::StatusOr<int64_t> n = ParseInteger("threads", *text, 0, 4096);
     if (!n.ok()) return n.status();
     s->threads = static_cast<int>(*n);
   }
-  if (args.Has("clamp")) s->options.outside = OutsidePolicy::kClamp;
-  if (args.Has("fix-orientation")) s->options.orientation = OrientationPolicy::kNormalize;
+  if (args.Has("clamp")) s->options.refine.outside = OutsidePolicy::kClamp;
+  if (args.Has("fix-orientation")) s->options.refine.orientation = OrientationPolicy::kNormalize;
+  if (absl::Status valid = ValidateRefineOptions(s->options.refine); !valid.ok()) {
+    return AsFlagError(valid);
+  }
   s->every_iteration = args.Has("every-iteration");
   s->fit_mesh_to_volume = args.Has("fit-mesh-to-volume");
   s->quiet = args.Has("quiet");
@@ -128,7 +150,7 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
 // the flag that helps, before anything is sent.
 absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const Mesh& mesh) {
   if (mesh.tets.empty()) return absl::InvalidArgumentError(absl::StrCat(s.mesh_path, ": no tets"));
-  if (s.options.outside != OutsidePolicy::kClamp) {
+  if (s.options.refine.outside != OutsidePolicy::kClamp) {
     const int64_t out = FirstVertexOutside(volume, mesh);
     if (out >= 0) {
       const Vec3& p = mesh.points[static_cast<size_t>(out)];
@@ -139,7 +161,7 @@ absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const
                        "); use --fit-mesh-to-volume to place the mesh inside it, or --clamp"));
     }
   }
-  if (s.options.orientation != OrientationPolicy::kNormalize) {
+  if (s.options.refine.orientation != OrientationPolicy::kNormalize) {
     for (size_t t = 0; t < mesh.tets.size(); ++t) {
       const Tet& k = mesh.tets[t];
       if (SignedVolume6(mesh.points[k[0]], mesh.points[k[1]], mesh.points[k[2]],
@@ -204,15 +226,16 @@ int RunRefinement(const RefineSettings& s) {
   absl::Status placement = CheckPlacement(s, volume->volume, mesh);
   if (!placement.ok()) return Fail(placement, kExitUsage);
 
-  absl::StatusOr<std::unique_ptr<RefineBackend>> backend =
-      ChooseBackend({.server = s.server,
-                     .shards = s.shards,
-                     .tls = s.tls,
-                     .threads = s.threads,
-                     .voxels = volume->volume.voxel_count(),
-                     .vertices = static_cast<int64_t>(mesh.points.size()),
-                     .tets = static_cast<int64_t>(mesh.tets.size()),
-                     .max_tets = s.options.max_tets});
+  absl::StatusOr<std::unique_ptr<RefineBackend>> backend = ChooseBackend(
+      {.server = s.server,
+       .shards = s.shards,
+       .tls = s.tls,
+       .threads = s.threads,
+       .voxels = volume->volume.voxel_count(),
+       .vertices = static_cast<int64_t>(mesh.points.size()),
+       .tets = static_cast<int64_t>(mesh.tets.size()),
+       .max_tets = s.options.send_max_tets ? std::optional<int64_t>(s.options.refine.max_tets)
+                                           : std::nullopt});
   if (!backend.ok()) {
     // A TLS file that cannot be used is the user's input; an embedded service that does not start
     // is not.
@@ -230,8 +253,8 @@ int RunRefinement(const RefineSettings& s) {
                  s.mesh_path.c_str(), mesh.points.size(), mesh.tets.size(), s.volume_path.c_str(),
                  static_cast<long long>(dims[0]), static_cast<long long>(dims[1]),
                  static_cast<long long>(dims[2]),
-                 std::string(VoxelTypeName(volume->volume.type())).c_str(), s.options.epsilon,
-                 (*backend)->Name().c_str());
+                 std::string(VoxelTypeName(volume->volume.type())).c_str(),
+                 s.options.refine.epsilon, (*backend)->Name().c_str());
   }
 
   absl::Status iteration_write;
@@ -263,7 +286,7 @@ int RunRefinement(const RefineSettings& s) {
   }
   RefineResult& result = reply->result;
   // Everything that reads the result's mesh is done before the mesh moves into the file.
-  const std::string report = FormatRefineReport(result, s.options.epsilon);
+  const std::string report = FormatRefineReport(result, s.options.refine.epsilon);
   std::string stats_json;
   if (!s.stats_json_path.empty()) {
     RunDescription run{.volume_path = s.volume_path,
@@ -318,10 +341,13 @@ const CommandSpec& RefineSpec() {
                 {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
                 {"mesh", "FILE", "input tet mesh: .vtu .vtk .msh .mesh", true},
                 {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},
-                {"max-iterations", "N", "stop after N iterations (default 16)"},
+                {"max-iterations", "N",
+                 absl::StrCat("stop after N iterations (default ", RefineOptions{}.max_iterations,
+                              ")")},
                 {"max-tets", "N",
-                 "stop before an iteration that would exceed N tets (default: the "
-                 "service's limit, 50000000)"},
+                 absl::StrCat("stop before an iteration that would exceed N tets (default: the "
+                              "service's limit, ",
+                              wire::ServiceLimits{}.max_output_tets, ")")},
                 {"output", "FILE",
                  "refined mesh, .vtu .vtk .msh .mesh (default <mesh name>.refined.vtu "
                  "in the working directory)"},

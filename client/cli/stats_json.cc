@@ -59,25 +59,25 @@ void WriteOptions(JsonWriter& json, const RunDescription& run) {
   const client::RefineRequestOptions& o = run.options;
   json.BeginObject();
   json.Key("epsilon");
-  json.Number(o.epsilon);
+  json.Number(o.refine.epsilon);
   json.Key("max_iterations");
-  json.Int(o.max_iterations);
+  json.Int(o.refine.max_iterations);
   json.Key("max_tets");
-  if (o.max_tets.has_value()) {
-    json.Int(*o.max_tets);
+  if (o.send_max_tets) {
+    json.Int(o.refine.max_tets);
   } else {
     json.Null();
   }
   json.Key("norm_coeff");
-  if (o.norm_coeff.has_value()) {
-    json.Number(*o.norm_coeff);
+  if (o.refine.norm_coeff.has_value()) {
+    json.Number(*o.refine.norm_coeff);
   } else {
     json.Null();
   }
   json.Key("clamp");
-  json.Bool(o.outside == OutsidePolicy::kClamp);
+  json.Bool(o.refine.outside == OutsidePolicy::kClamp);
   json.Key("fix_orientation");
-  json.Bool(o.orientation == OrientationPolicy::kNormalize);
+  json.Bool(o.refine.orientation == OrientationPolicy::kNormalize);
   json.Key("fit_mesh_to_volume");
   json.Bool(run.fit_mesh_to_volume);
   json.EndObject();

@@ -64,7 +64,7 @@ absl::Status CheckInput(const std::vector<std::shared_ptr<grpc::Channel>>& targe
       }
     }
   }
-  const bool clamp = options.outside == OutsidePolicy::kClamp;
+  const bool clamp = options.refine.outside == OutsidePolicy::kClamp;
   for (size_t i = 0; i < nv; ++i) {
     const Vec3& p = mesh.points[i];
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
@@ -227,14 +227,14 @@ absl::StatusOr<ShardedResult> ShardedRefine(
     return s;
   }
   client::RefineRequestOptions sent = options;
-  sent.norm_coeff = options.norm_coeff.value_or(WholeRange(volume));
+  sent.refine.norm_coeff = options.refine.norm_coeff.value_or(WholeRange(volume));
   sent.stream_every_iteration = false;
   sent.skip_final_mesh = false;  // the parts' meshes are the result
 
   const std::vector<MeshPart> parts = ExtractParts(mesh, PartitionTets(mesh, shard_options.shards));
   const double split_seconds = SecondsSince(start);
   const int num_parts = static_cast<int>(parts.size());
-  const bool clamp = options.outside == OutsidePolicy::kClamp;
+  const bool clamp = options.refine.outside == OutsidePolicy::kClamp;
   PartRunner runner(targets, volume, parts, clamp, shard_options, callbacks);
   std::vector<std::optional<client::ClientResult>> replies(parts.size());
   std::vector<ShardReport> reports(parts.size());
@@ -247,10 +247,10 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   for (const auto& reply : replies) {
     budget = budget == 0 ? reply->service.max_tets : std::min(budget, reply->service.max_tets);
   }
-  if (options.max_tets.has_value()) budget = *options.max_tets;
+  if (options.send_max_tets) budget = options.refine.max_tets;
   std::vector<const RefineResult*> results;
   for (const auto& reply : replies) results.push_back(&reply->result);
-  const WholeStop stop = CombineStops(results, options.max_iterations, budget);
+  const WholeStop stop = CombineStops(results, options.refine.max_iterations, budget);
 
   std::vector<int> again;
   for (int p = 0; p < num_parts; ++p) {
@@ -258,14 +258,15 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   }
   if (!again.empty()) {
     client::RefineRequestOptions shorter = sent;
-    shorter.max_iterations = stop.iterations;
+    shorter.refine.max_iterations = stop.iterations;
     if (absl::Status s = runner.Run(again, shorter, replies, reports); !s.ok()) return s;
     for (int p : again) reports[p].rounds = 2;
     for (int p : again) results[p] = &replies[p]->result;
   }
 
   const Clock::time_point merge_start = Clock::now();
-  absl::StatusOr<MergedMesh> merged = MergeParts(mesh, volume, options.outside, parts, results);
+  absl::StatusOr<MergedMesh> merged =
+      MergeParts(mesh, volume, options.refine.outside, parts, results);
   if (!merged.ok()) return merged.status();
 
   ShardedResult out;
@@ -274,7 +275,7 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   result.stop_reason = stop.reason;
   result.next_iteration_tets = stop.next_iteration_tets;
   result.next_iteration_min_quality = stop.next_iteration_min_quality;
-  result.norm_coeff = *sent.norm_coeff;
+  result.norm_coeff = *sent.refine.norm_coeff;
   std::vector<double> volumes;
   for (const MeshPart& part : parts) volumes.push_back(MeshVolume(part.mesh));
   CombineSummary(results, volumes, &result);

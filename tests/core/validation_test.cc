@@ -83,6 +83,48 @@ TEST(Validation, EveryBadInputIsNamed) {
   }
 }
 
+// The one set of option limits (core/refine_options.h): each bound, just inside and just
+// outside, and the message names the field and the value.
+TEST(Validation, OptionLimitsNameTheFieldAndTheValue) {
+  struct Bound {
+    void (*set)(RefineOptions&, bool outside);
+    const char* message;
+  };
+  const Bound bounds[] = {
+      {[](RefineOptions& o, bool out) { o.epsilon = out ? 0.0 : 1e-300; },
+       "options.epsilon: must be finite and > 0, got 0"},
+      {[](RefineOptions& o, bool out) { o.max_iterations = out ? -1 : 0; },
+       "options.max_iterations: must be >= 0, got -1"},
+      {[](RefineOptions& o, bool out) { o.max_tets = out ? kMaxTetsCeiling + 1 : kMaxTetsCeiling; },
+       "options.max_tets: must be in [1, 500000000], got 500000001"},
+      {[](RefineOptions& o, bool out) { o.max_tets = out ? 0 : 1; },
+       "options.max_tets: must be in [1, 500000000], got 0"},
+      {[](RefineOptions& o, bool out) { o.norm_coeff = out ? -2.0 : 1e-300; },
+       "options.norm_coeff: must be finite and > 0, got -2"},
+      {[](RefineOptions& o, bool out) { o.threads = out ? -1 : 0; },
+       "options.threads: must be >= 0 (0: all cores), got -1"},
+      {[](RefineOptions& o, bool out) { o.min_edge_length = out ? -0.5 : 0.0; },
+       "options.min_edge_length: must be finite and >= 0, got -0.5"},
+      {[](RefineOptions& o, bool out) { o.min_quality = out ? 1.0 : 0.999; },
+       "options.min_quality: must be in [0, 1), got 1"},
+      {[](RefineOptions& o, bool out) { o.lattice_n = out ? 65 : 64; },
+       "options.lattice_n: must be in [0, 64], got 65"},
+      {[](RefineOptions& o, bool out) { o.lattice_max_tets = out ? -1 : 0; },
+       "options.lattice_max_tets: must be >= 0, got -1"},
+  };
+  EXPECT_TRUE(ValidateRefineOptions(RefineOptions{}).ok());
+  for (const Bound& b : bounds) {
+    RefineOptions inside;
+    b.set(inside, false);
+    EXPECT_TRUE(ValidateRefineOptions(inside).ok()) << b.message;
+    RefineOptions outside;
+    b.set(outside, true);
+    const absl::Status status = ValidateRefineOptions(outside);
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_EQ(status.message(), b.message);
+  }
+}
+
 TEST(Validation, FaceInThreeTetsIsRefused) {
   Mesh m = TwoTets();
   m.points.push_back({1.2, 1.2, 0.5});

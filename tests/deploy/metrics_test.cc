@@ -60,13 +60,13 @@ TEST(MetricsTest, CountersFollowRefineCalls) {
   const Volume volume = TestVolume({12, 12, 12});
   const Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {10.0, 10.0, 10.0}, {3, 3, 3});
   client::RefineRequestOptions options;
-  options.epsilon = 0.02;
-  options.max_iterations = 3;
+  options.refine.epsilon = 0.02;
+  options.refine.max_iterations = 3;
   auto channel = grpc::CreateChannel(server->target(), grpc::InsecureChannelCredentials());
   absl::StatusOr<client::ClientResult> ok =
       client::RefineViaService(channel, volume, mesh, options);
   ASSERT_TRUE(ok.ok()) << ok.status();
-  options.epsilon = -1.0;  // refused by the server: INVALID_ARGUMENT
+  options.refine.epsilon = -1.0;  // refused by the server: INVALID_ARGUMENT
   absl::StatusOr<client::ClientResult> refused =
       client::RefineViaService(channel, volume, mesh, options);
   ASSERT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument) << refused.status();

@@ -169,9 +169,9 @@ TEST(HardeningFaultTest, CancelDuringTheLatticeVerification) {
   // No iteration, so the work is all in the final lattice check: 135k tets at order 64 is
   // 6.5e9 samples, minutes of CPU unless cancellation reaches it.
   Workload w = HeavyWorkload();
-  w.options.max_iterations = 0;
-  w.options.lattice_n = 64;
-  w.options.lattice_max_tets = 10'000'000;
+  w.options.refine.max_iterations = 0;
+  w.options.refine.lattice_n = 64;
+  w.options.refine.lattice_max_tets = 10'000'000;
   std::atomic<bool> cancel{false};
   client::RefineCallbacks callbacks;
   callbacks.should_cancel = [&] { return cancel.load(); };
@@ -197,8 +197,8 @@ TEST(HardeningFaultTest, CancelDuringTheLatticeVerification) {
 Workload MediumWorkload() {
   Workload w = HeavyWorkload();
   w.name = "medium";
-  w.options.max_iterations = 1;
-  w.options.lattice_n = 0;
+  w.options.refine.max_iterations = 1;
+  w.options.refine.lattice_n = 0;
   w.options.skip_final_mesh = false;
   return w;
 }

@@ -80,9 +80,9 @@ Workload BigResult(uint32_t response_chunk_bytes) {
              .volume = TestVolume({24, 24, 24}),
              .mesh = FiveTetMesh({1.0, 1.0, 1.0}, {22.0, 22.0, 22.0}, {20, 20, 20}),
              .options = {}};
-  w.options.epsilon = 1e-6;
-  w.options.max_iterations = 1;
-  w.options.lattice_n = 0;
+  w.options.refine.epsilon = 1e-6;
+  w.options.refine.max_iterations = 1;
+  w.options.refine.lattice_n = 0;
   w.options.response_chunk_bytes = response_chunk_bytes;
   return w;
 }
@@ -105,10 +105,10 @@ TEST_F(HardeningLimitsTest, TinyResponseChunkHintIsRaisedTo256Bytes) {
 
 TEST_F(HardeningLimitsTest, AbsurdIterationCountStaysBoundedByTheTetBudget) {
   Workload w = SmallWorkloads()[0];
-  w.options.epsilon = 1e-9;
-  w.options.max_iterations = std::numeric_limits<int32_t>::max();
-  w.options.max_tets = 20'000;
-  w.options.min_edge_length = 0.0;
+  w.options.refine.epsilon = 1e-9;
+  w.options.refine.max_iterations = std::numeric_limits<int32_t>::max();
+  w.options.SetMaxTets(20'000);
+  w.options.refine.min_edge_length = 0.0;
   const Responses r = Call(server_->NewChannel(), w);
   ASSERT_TRUE(r.status.ok()) << r.status.error_message();
   const RefineResult expected = CoreResult(w);

@@ -21,9 +21,9 @@ bool SameBits(const std::vector<T>& a, const std::vector<T>& b) {
 Workload Make(std::string name, Volume volume, Mesh mesh, double epsilon, int max_iterations) {
   Workload w{
       .name = std::move(name), .volume = std::move(volume), .mesh = std::move(mesh), .options = {}};
-  w.options.epsilon = epsilon;
-  w.options.max_iterations = max_iterations;
-  w.options.lattice_n = 4;
+  w.options.refine.epsilon = epsilon;
+  w.options.refine.max_iterations = max_iterations;
+  w.options.refine.lattice_n = 4;
   return w;
 }
 
@@ -39,7 +39,7 @@ const std::vector<Workload>& SmallWorkloads() {
     Workload slab =
         Make("float32-slab", TestSlab({20, 20, 20}, {2, 2, 2}, {13, 13, 13}, VoxelType::kFloat32),
              FiveTetMesh({3.0, 3.0, 3.0}, {11.0, 11.0, 11.0}, {2, 2, 2}), 0.05, 4);
-    slab.options.norm_coeff = 3.0;  // the whole volume's range, as a slab's sender passes it
+    slab.options.refine.norm_coeff = 3.0;  // the whole volume's range, as a slab's sender passes it
     out->push_back(std::move(slab));
     Workload values = Make("uint8-values-normalize", TestVolume({12, 12, 12}, VoxelType::kUint8),
                            FiveTetMesh({1.0, 1.0, 1.0}, {10.0, 10.0, 10.0}, {2, 1, 2}), 0.04, 3);
@@ -49,7 +49,7 @@ const std::vector<Workload>& SmallWorkloads() {
     for (size_t t = 0; t < values.mesh.tets.size(); t += 3) {
       std::swap(values.mesh.tets[t][2], values.mesh.tets[t][3]);
     }
-    values.options.orientation = OrientationPolicy::kNormalize;
+    values.options.refine.orientation = OrientationPolicy::kNormalize;
     out->push_back(std::move(values));
     return out;
   }();
@@ -62,12 +62,12 @@ const Workload& HeavyWorkload() {
                            .volume = TestVolume({64, 64, 64}),
                            .mesh = FiveTetMesh({1.0, 1.0, 1.0}, {61.0, 61.0, 61.0}, {30, 30, 30}),
                            .options = {}};
-    w->options.epsilon = 1e-6;
-    w->options.max_iterations = 4;
-    w->options.max_tets = 20'000'000;
+    w->options.refine.epsilon = 1e-6;
+    w->options.refine.max_iterations = 4;
+    w->options.SetMaxTets(20'000'000);
     // Then a lattice check of every output tet at order 12: ~2e9 samples, a minute of CPU.
-    w->options.lattice_n = 12;
-    w->options.lattice_max_tets = 0;
+    w->options.refine.lattice_n = 12;
+    w->options.refine.lattice_max_tets = 0;
     w->options.skip_final_mesh = true;
     return w;
   }();

@@ -22,10 +22,10 @@ struct HeavyCase {
   Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {61.0, 61.0, 61.0}, {30, 30, 30});
   client::RefineRequestOptions options = [] {
     client::RefineRequestOptions o;
-    o.epsilon = 1e-6;
-    o.max_iterations = 4;
-    o.max_tets = 20'000'000;
-    o.lattice_n = 0;
+    o.refine.epsilon = 1e-6;
+    o.refine.max_iterations = 4;
+    o.SetMaxTets(20'000'000);
+    o.refine.lattice_n = 0;
     o.skip_final_mesh = true;
     return o;
   }();
@@ -93,7 +93,7 @@ TEST(ServiceCancellationTest, ServerStillServesAfterCancellations) {
   const Volume volume = TestVolume({10, 10, 10});
   const Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {8.0, 8.0, 8.0}, {2, 2, 2});
   client::RefineRequestOptions options;
-  options.epsilon = 0.05;
+  options.refine.epsilon = 0.05;
   absl::StatusOr<client::ClientResult> result =
       client::RefineViaService(server.NewChannel(), volume, mesh, options);
   EXPECT_TRUE(result.ok()) << result.status();

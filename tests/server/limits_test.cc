@@ -35,7 +35,7 @@ Requests GoodRequests(size_t chunk_bytes = 1000) {
   options.epsilon = 0.05;
   options.max_iterations = 2;
   wire::RequestOptions request = wire::RequestOptionsFromCore(options);
-  request.max_tets.reset();
+  request.send_max_tets = false;
   Requests requests;
   wire::WriteRequest(request, volume, mesh, chunk_bytes, [&](const v1::RefineRequest& r) {
     requests.push_back(r);

@@ -201,7 +201,7 @@ TEST_F(ServiceRefineTest, TetBudgetDefaultsToTheServersLimit) {
   ASSERT_GE(expected.iterations.size(), 1u);
 
   client::RefineRequestOptions request = wire::RequestOptionsFromCore(options);
-  request.max_tets.reset();
+  request.send_max_tets = false;
   const client::ClientResult actual = ServiceRefine(small.NewChannel(), c.volume, c.mesh, request);
   ExpectSameResult(expected, actual.result);
   EXPECT_EQ(actual.service.max_tets, 1500);

@@ -102,10 +102,10 @@ sharding::ShardOptions Shards(int k) {
 
 client::RefineRequestOptions Options(double epsilon, int max_iterations) {
   client::RefineRequestOptions o;
-  o.epsilon = epsilon;
-  o.max_iterations = max_iterations;
-  o.lattice_max_tets = 100'000'000;  // every tet: the lattice maxima are then exact too
-  o.lattice_n = 4;
+  o.refine.epsilon = epsilon;
+  o.refine.max_iterations = max_iterations;
+  o.refine.lattice_max_tets = 100'000'000;  // every tet: the lattice maxima are then exact too
+  o.refine.lattice_n = 4;
   return o;
 }
 
@@ -161,7 +161,7 @@ TEST_F(ShardedRefineTest, UnitCubeInAnalyticVolumeEqualsUnsharded) {
   const UnitCubeCase c;
   ASSERT_EQ(c.mesh.tets.size(), 1782u);
   client::RefineRequestOptions options = Options(0.01, 6);
-  options.orientation = OrientationPolicy::kNormalize;
+  options.refine.orientation = OrientationPolicy::kNormalize;
   ExpectShardedEqualsUnsharded(c.volume, c.mesh, options, {1, 2, 3, 4});
 }
 
@@ -172,7 +172,7 @@ TEST_F(ShardedRefineTest, TetBudgetStopsWhereTheWholeStops) {
   const client::ClientResult free_run = Unsharded(c.volume, c.mesh, options);
   ASSERT_GE(free_run.result.iterations.size(), 3u);
   // Room for iteration 2 but not for iteration 3.
-  options.max_tets = free_run.result.iterations[1].final_tets + 1;
+  options.SetMaxTets(free_run.result.iterations[1].final_tets + 1);
   const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
   ASSERT_EQ(whole.result.stop_reason, StopReason::kTetBudget);
   for (int k : {2, 4}) {
@@ -186,8 +186,8 @@ TEST_F(ShardedRefineTest, TetBudgetStopsWhereTheWholeStops) {
 TEST_F(ShardedRefineTest, QualityFloorStopsWhereTheWholeStops) {
   const UnitCubeCase c;
   client::RefineRequestOptions options = Options(0.01, 6);
-  options.orientation = OrientationPolicy::kNormalize;
-  options.min_quality = 0.08;
+  options.refine.orientation = OrientationPolicy::kNormalize;
+  options.refine.min_quality = 0.08;
   const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
   ASSERT_EQ(whole.result.stop_reason, StopReason::kQualityFloor)
       << "pick a min_quality the whole run meets after an iteration or more";
@@ -228,7 +228,7 @@ TEST_F(ShardedRefineTest, ReplicaKilledMidRunStillGivesTheSameResult) {
 TEST_F(ShardedRefineTest, DeadReplicaBeforeTheRun) {
   const UnitCubeCase c;
   client::RefineRequestOptions options = Options(0.01, 6);
-  options.orientation = OrientationPolicy::kNormalize;
+  options.refine.orientation = OrientationPolicy::kNormalize;
   const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
   servers_[2]->Kill();
   const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, 4);
@@ -242,7 +242,7 @@ TEST_F(ShardedRefineTest, DeadReplicaBeforeTheRun) {
 TEST_F(ShardedRefineTest, RefineShardedOverOneTarget) {
   const UnitCubeCase c;
   client::RefineRequestOptions options = Options(0.01, 6);
-  options.orientation = OrientationPolicy::kNormalize;
+  options.refine.orientation = OrientationPolicy::kNormalize;
   const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
   int iterations_seen = 0;
   client::RefineCallbacks callbacks;
@@ -264,7 +264,7 @@ TEST_F(ShardedRefineTest, RefineShardedOverOneTarget) {
 TEST_F(ShardedRefineTest, ServerErrorNamesThePart) {
   const StructuredCase c;
   client::RefineRequestOptions options = Options(0.004, 5);
-  options.epsilon = -1.0;
+  options.refine.epsilon = -1.0;
   absl::StatusOr<sharding::ShardedResult> r =
       sharding::ShardedRefine(channels_, c.volume, c.mesh, options, Shards(2));
   ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << r.status();

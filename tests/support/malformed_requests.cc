@@ -22,8 +22,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 Requests Write(const Volume& volume, const Mesh& mesh, wire::RequestOptions options = {}) {
   const RefineOptions good = SmallRefineOptions();
-  options.epsilon = good.epsilon;
-  options.max_iterations = good.max_iterations;
+  options.refine.epsilon = good.epsilon;
+  options.refine.max_iterations = good.max_iterations;
   Requests requests;
   wire::WriteRequest(options, volume, mesh, 200, [&](const v1::RefineRequest& r) {
     requests.push_back(r);
@@ -569,7 +569,7 @@ std::vector<MalformedRequest> MalformedRequests() {
       {"MeshOutsideItsSlabWhenClamping",
        [] {
          wire::RequestOptions options;
-         options.outside = OutsidePolicy::kClamp;
+         options.refine.outside = OutsidePolicy::kClamp;
          return Write(TestSlab({10, 10, 10}, {0, 0, 3}, {10, 10, 10}), SmallMesh(), options);
        },
        {"lies outside the volume slab it was sent with"}},

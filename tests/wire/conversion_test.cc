@@ -40,27 +40,33 @@ RequestOptions RandomOptions(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   auto coin = [&] { return (rng() & 1) != 0; };
   RequestOptions o;
-  o.epsilon = 1e-4 + unit(rng);
-  o.max_iterations = static_cast<int>(rng() % 100);
-  if (coin()) o.max_tets = 1 + static_cast<int64_t>(rng() % 1'000'000);
-  if (coin()) o.norm_coeff = 0.5 + 1000.0 * unit(rng);
-  o.outside = coin() ? OutsidePolicy::kClamp : OutsidePolicy::kReject;
-  o.orientation = coin() ? OrientationPolicy::kNormalize : OrientationPolicy::kReject;
-  o.lattice_n = static_cast<int>(rng() % 65);
-  o.lattice_max_tets = static_cast<int64_t>(rng() % 1'000'000);
-  o.lattice_seed = rng();
-  if (coin()) o.min_edge_length = unit(rng);
-  o.min_quality = 0.5 * unit(rng);
+  RefineOptions& r = o.refine;
+  r.epsilon = 1e-4 + unit(rng);
+  r.max_iterations = static_cast<int>(rng() % 100);
+  if (coin()) o.SetMaxTets(1 + static_cast<int64_t>(rng() % 1'000'000));
+  if (coin()) r.norm_coeff = 0.5 + 1000.0 * unit(rng);
+  r.outside = coin() ? OutsidePolicy::kClamp : OutsidePolicy::kReject;
+  r.orientation = coin() ? OrientationPolicy::kNormalize : OrientationPolicy::kReject;
+  r.lattice_n = static_cast<int>(rng() % 65);
+  r.lattice_max_tets = static_cast<int64_t>(rng() % 1'000'000);
+  r.lattice_seed = rng();
+  if (coin()) r.min_edge_length = unit(rng);
+  r.min_quality = 0.5 * unit(rng);
   o.stream_every_iteration = coin();
   o.skip_final_mesh = coin();
   o.response_chunk_bytes = static_cast<uint32_t>(rng());
   return o;
 }
 
-void ExpectSameOptions(const RequestOptions& e, const RequestOptions& a) {
+void ExpectSameOptions(const RequestOptions& expected, const RequestOptions& actual) {
+  const RefineOptions& e = expected.refine;
+  const RefineOptions& a = actual.refine;
   EXPECT_EQ(std::bit_cast<uint64_t>(e.epsilon), std::bit_cast<uint64_t>(a.epsilon));
   EXPECT_EQ(e.max_iterations, a.max_iterations);
-  EXPECT_EQ(e.max_tets, a.max_tets);
+  EXPECT_EQ(expected.send_max_tets, actual.send_max_tets);
+  if (expected.send_max_tets) {
+    EXPECT_EQ(e.max_tets, a.max_tets);
+  }
   EXPECT_EQ(e.norm_coeff, a.norm_coeff);
   EXPECT_EQ(e.outside, a.outside);
   EXPECT_EQ(e.orientation, a.orientation);
@@ -69,9 +75,9 @@ void ExpectSameOptions(const RequestOptions& e, const RequestOptions& a) {
   EXPECT_EQ(e.lattice_seed, a.lattice_seed);
   EXPECT_EQ(e.min_edge_length, a.min_edge_length);
   EXPECT_EQ(std::bit_cast<uint64_t>(e.min_quality), std::bit_cast<uint64_t>(a.min_quality));
-  EXPECT_EQ(e.stream_every_iteration, a.stream_every_iteration);
-  EXPECT_EQ(e.skip_final_mesh, a.skip_final_mesh);
-  EXPECT_EQ(e.response_chunk_bytes, a.response_chunk_bytes);
+  EXPECT_EQ(expected.stream_every_iteration, actual.stream_every_iteration);
+  EXPECT_EQ(expected.skip_final_mesh, actual.skip_final_mesh);
+  EXPECT_EQ(expected.response_chunk_bytes, actual.response_chunk_bytes);
 }
 
 TEST(WireConversion, RequestOptionsRoundTrip) {
@@ -90,10 +96,47 @@ TEST(WireConversion, RequestOptionsRoundTrip) {
   }
 }
 
-TEST(WireConversion, EmptyOptionsMessageGivesTheDefaults) {
+TEST(WireConversion, EmptyOptionsMessageGivesTheCoreDefaults) {
   absl::StatusOr<RequestOptions> back = RequestOptionsFromWire(v1::RefineOptions{}, {});
   ASSERT_TRUE(back.ok()) << back.status();
   ExpectSameOptions(RequestOptions{}, *back);
+  RequestOptions core_defaults;
+  core_defaults.refine = RefineOptions{};
+  ExpectSameOptions(core_defaults, *back);
+}
+
+// The wire refuses what the core refuses, with the core's words: one set of limits.
+TEST(WireConversion, RefusesExactlyWhatTheCoreRefuses) {
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < 300; ++i) {
+    RequestOptions options = RandomOptions(rng);
+    RefineOptions& r = options.refine;
+    switch (rng() % 6) {  // one field pushed around its bound
+      case 0:
+        r.epsilon = static_cast<double>(static_cast<int>(rng() % 3) - 1);
+        break;
+      case 1:
+        r.lattice_n = 62 + static_cast<int>(rng() % 5);
+        break;
+      case 2:
+        r.min_quality = 0.5 * static_cast<double>(rng() % 4);
+        break;
+      case 3:
+        r.max_iterations = static_cast<int>(rng() % 3) - 1;
+        break;
+      case 4:
+        r.lattice_max_tets = static_cast<int64_t>(rng() % 3) - 1;
+        break;
+      case 5:
+        r.min_edge_length = static_cast<double>(rng() % 3) - 1.0;
+        break;
+    }
+    v1::RefineOptions message;
+    RequestOptionsToWire(options, &message);
+    const absl::Status core = ValidateRefineOptions(r);
+    const absl::Status wire = RequestOptionsFromWire(message, {}).status();
+    EXPECT_EQ(wire, core) << message.ShortDebugString();
+  }
 }
 
 TEST(WireConversion, CoreOptionsSurviveTheWire) {
@@ -111,7 +154,10 @@ TEST(WireConversion, CoreOptionsSurviveTheWire) {
   core.min_quality = 0.01;
   core.threads = 3;  // the server's business: not sent
   v1::RefineOptions message;
-  RequestOptionsToWire(RequestOptionsFromCore(core), &message);
+  const RequestOptions request = RequestOptionsFromCore(core);
+  EXPECT_TRUE(request.send_max_tets);
+  EXPECT_EQ(request.refine.threads, 0);
+  RequestOptionsToWire(request, &message);
   const ServiceLimits limits;
   absl::StatusOr<RequestOptions> parsed = RequestOptionsFromWire(message, limits);
   ASSERT_TRUE(parsed.ok()) << parsed.status();
@@ -161,6 +207,7 @@ const BadOption kBadOptions[] = {
        o->set_orientation_policy(static_cast<v1::OrientationPolicy>(42));
      }},
     {"lattice_n", [](v1::RefineOptions* o) { o->set_lattice_n(-1); }},
+    {"lattice_n", [](v1::RefineOptions* o) { o->set_lattice_n(65); }},
     {"lattice_max_tets", [](v1::RefineOptions* o) { o->set_lattice_max_tets(-1); }},
     {"min_edge_length", [](v1::RefineOptions* o) { o->set_min_edge_length(-0.5); }},
     {"min_quality", [](v1::RefineOptions* o) { o->set_min_quality(1.0); }},

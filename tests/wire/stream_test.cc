@@ -56,8 +56,8 @@ Mesh TestMesh(bool with_values) {
 
 TEST(WireRequestStream, RoundTripsAtEveryChunkSizeAndVoxelType) {
   RequestOptions options;
-  options.epsilon = 0.07;
-  options.max_tets = 5000;
+  options.refine.epsilon = 0.07;
+  options.SetMaxTets(5000);
   for (VoxelType type : {VoxelType::kUint8, VoxelType::kInt16, VoxelType::kUint16,
                          VoxelType::kInt32, VoxelType::kFloat32, VoxelType::kFloat64}) {
     const Volume volume = TestSlab({10, 9, 8}, {0, 1, 0}, {10, 9, 7}, type);
@@ -69,8 +69,8 @@ TEST(WireRequestStream, RoundTripsAtEveryChunkSizeAndVoxelType) {
         ASSERT_TRUE(Read(Requests(options, volume, mesh, chunk_bytes), reader).ok());
         EXPECT_EQ(reader.tets_declared(), static_cast<int64_t>(mesh.tets.size()));
         const RefineInput input = reader.Take();
-        EXPECT_EQ(input.options.epsilon, 0.07);
-        EXPECT_EQ(input.options.max_tets, 5000);
+        EXPECT_EQ(input.options.refine.epsilon, 0.07);
+        EXPECT_EQ(input.options.refine.max_tets, 5000);
         EXPECT_EQ(input.volume.grid().dims, volume.grid().dims);
         EXPECT_EQ(input.volume.lo(), volume.lo());
         EXPECT_EQ(input.volume.hi(), volume.hi());

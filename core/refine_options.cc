@@ -1,0 +1,51 @@
+#include "core/refine_options.h"
+
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+
+namespace tetrefine {
+namespace {
+
+absl::Status Invalid(absl::string_view field, const auto& value, absl::string_view rule) {
+  return absl::InvalidArgumentError(absl::StrCat("options.", field, ": ", rule, ", got ", value));
+}
+
+// Written so that NaN fails too.
+bool FinitePositive(double x) { return x > 0.0 && std::isfinite(x); }
+bool FiniteNonNegative(double x) { return x >= 0.0 && std::isfinite(x); }
+
+}  // namespace
+
+absl::Status ValidateRefineOptions(const RefineOptions& o) {
+  if (!FinitePositive(o.epsilon)) return Invalid("epsilon", o.epsilon, "must be finite and > 0");
+  if (o.max_iterations < 0) return Invalid("max_iterations", o.max_iterations, "must be >= 0");
+  if (o.max_tets < 1 || o.max_tets > kMaxTetsCeiling) {
+    return Invalid("max_tets", o.max_tets, absl::StrCat("must be in [1, ", kMaxTetsCeiling, "]"));
+  }
+  if (o.norm_coeff.has_value() && !FinitePositive(*o.norm_coeff)) {
+    return Invalid("norm_coeff", *o.norm_coeff, "must be finite and > 0");
+  }
+  if (o.threads < 0) return Invalid("threads", o.threads, "must be >= 0 (0: all cores)");
+  if (o.min_edge_length.has_value() && !FiniteNonNegative(*o.min_edge_length)) {
+    return Invalid("min_edge_length", *o.min_edge_length, "must be finite and >= 0");
+  }
+  if (!(o.min_quality >= 0.0 && o.min_quality < 1.0)) {
+    return Invalid("min_quality", o.min_quality, "must be in [0, 1)");
+  }
+  if (o.lattice_n < 0 || o.lattice_n > 64) {
+    return Invalid("lattice_n", o.lattice_n, "must be in [0, 64]");
+  }
+  if (o.certify && o.lattice_n < 1) {
+    return Invalid("lattice_n", o.lattice_n, "certify needs a lattice (lattice_n >= 1)");
+  }
+  if (o.scheme != RefineScheme::kPaper && o.scheme != RefineScheme::kLongestEdge) {
+    return Invalid("scheme", static_cast<int>(o.scheme), "not a scheme");
+  }
+  if (o.lattice_max_tets < 0) {
+    return Invalid("lattice_max_tets", o.lattice_max_tets, "must be >= 0");
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace tetrefine
