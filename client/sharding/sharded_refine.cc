@@ -10,11 +10,11 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "client/sharding/mesh_partition.h"
-#include "client/sharding/part_merge.h"
-#include "client/sharding/result_combine.h"
-#include "client/sharding/volume_slab.h"
 #include "grpcpp/create_channel.h"
+#include "sharding/mesh_partition.h"
+#include "sharding/part_merge.h"
+#include "sharding/result_combine.h"
+#include "sharding/volume_slab.h"
 
 namespace tetrefine::sharding {
 namespace {

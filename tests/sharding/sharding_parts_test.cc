@@ -8,10 +8,10 @@
 #include <random>
 #include <set>
 
-#include "client/sharding/mesh_partition.h"
-#include "client/sharding/result_combine.h"
-#include "client/sharding/volume_slab.h"
 #include "gtest/gtest.h"
+#include "sharding/mesh_partition.h"
+#include "sharding/result_combine.h"
+#include "sharding/volume_slab.h"
 #include "tests/support/geometry.h"
 
 namespace tetrefine::testing {

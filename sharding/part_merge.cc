@@ -1,4 +1,4 @@
-#include "client/sharding/part_merge.h"
+#include "sharding/part_merge.h"
 
 #include <array>
 #include <bit>

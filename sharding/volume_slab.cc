@@ -1,4 +1,4 @@
-#include "client/sharding/volume_slab.h"
+#include "sharding/volume_slab.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "client/sharding/result_combine.h"
+#include "sharding/result_combine.h"
 
 #include <algorithm>
 

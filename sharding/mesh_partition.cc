@@ -1,4 +1,4 @@
-#include "client/sharding/mesh_partition.h"
+#include "sharding/mesh_partition.h"
 
 #include <algorithm>
 #include <limits>

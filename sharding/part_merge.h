@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "client/sharding/mesh_partition.h"
 #include "core/mesh.h"
 #include "core/refine.h"
 #include "core/volume.h"
+#include "sharding/mesh_partition.h"
 
 namespace tetrefine::sharding {
 
