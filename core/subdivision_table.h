@@ -22,12 +22,15 @@ const std::array<PatternEntry, 64>& PatternTable();
 uint32_t CanonicalPattern(Configuration c);
 
 // A subdivision key packs everything the children of a tet depend on:
-//   bits 0-5   split pattern (bit e set when edge kTetEdges[e] is split)
-//   bits 6-9   face diagonals: bit 6+f for face f with exactly two split edges (see
-//   FaceDiagonalBit) bits 10-11 preferred octahedron diagonal (index into kOppositeEdgePairs) for
-//   configurations
-//              4b, 5 and 6, whose interior quadrilateral or octahedron is free
-// Only the pattern is topology; the other bits are decided from geometry (ShorterDiagonal).
+// clang-format off
+//   bits 0-5    split pattern: bit e set when edge kTetEdges[e] is split
+//   bits 6-9    face diagonals: bit 6 + f for face f with exactly two split edges, the bit as
+//               FaceQuadOf defines it
+//   bits 10-11  interior diagonal (an index into kOppositeEdgePairs) of configurations 4b, 5
+//               and 6, whose interior quadrilateral or octahedron is free
+// clang-format on
+// Only the pattern is topology; the other bits are decided from geometry by SubdivisionKey (the
+// faces by ChooseFirstDiagonal).
 inline constexpr int kNumSubdivisionKeys = 1 << 12;
 
 // Children of one key, in local point indices (tet_topology.h), positively oriented whenever the
