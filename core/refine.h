@@ -96,6 +96,17 @@ struct RefineResult {
 // Validates the input first: an invalid mesh, volume or option is an InvalidArgument error whose
 // message names the offending field and index. Cancellation is not an error: the result says
 // kCancelled and holds the mesh as of the last completed iteration.
+//
+// Guarantees callers rely on (tested, and sharding/part_merge depends on the first two):
+// - Vertex order: result.mesh.points starts with mesh.points, same ids and same coordinates;
+//   the vertices refinement creates follow. Input tets may be replaced; input vertices never
+//   move or renumber.
+// - Determinism: the output bits (points, tets, values, per-tet arrays, statistics other than
+//   seconds) depend only on the inputs and options, not on options.threads or how the work is
+//   chunked.
+// - Locality: every split and diagonal decision depends only on its edge or face, never on
+//   vertex numbering or a global pass; only the stops (max_iterations, max_tets, min_quality)
+//   look at the whole mesh. That is what lets sharding refine parts independently.
 absl::StatusOr<RefineResult> Refine(const Volume& volume, const Mesh& mesh,
                                     const RefineOptions& options);
 
