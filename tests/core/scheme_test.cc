@@ -9,10 +9,10 @@
 
 #include "core/lattice.h"
 #include "core/refine.h"
+#include "tests/support/geometry.h"
 #include "tests/support/mesh_checks.h"
 #include "tests/support/pinned_cases.h"
 #include "tests/support/result_fingerprint.h"
-#include "tests/support/geometry.h"
 
 namespace tetrefine {
 namespace {

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <utility>
 
-#include "tests/support/mesh_checks.h"
 #include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
 
 namespace tetrefine::testing {
 namespace {
