@@ -97,15 +97,17 @@ struct RefineResult {
 // message names the offending field and index. Cancellation is not an error: the result says
 // kCancelled and holds the mesh as of the last completed iteration.
 //
-// Guarantees callers rely on (tested; sharding/part_merge depends on all three):
+// Guarantees callers rely on (tested):
 // - Vertex order: result.mesh.points starts with mesh.points, same ids and same coordinates;
 //   the vertices refinement creates follow. Input vertices never move or renumber.
 // - Determinism: the output bits (points, tets, values, per-tet arrays, statistics other than
 //   seconds) depend only on the inputs and options, not on options.threads or how the work is
 //   chunked.
-// - Locality: every decision depends only on a bounded neighbourhood (an edge's midpoint test,
-//   a face's diagonal, a tet's longest edge or lattice), never on vertex numbering or a global
-//   pass; only the stops (max_iterations, max_tets, min_quality) look at the whole mesh.
+// - Locality, under RefineScheme::kPaper: every split and diagonal decision depends only on its
+//   edge or face, never on vertex numbering; only the stops (max_iterations, max_tets,
+//   min_quality) look at the whole mesh. kLongestEdge's closure and certify read whole tets and
+//   their neighbours, so they do not have it.
+// Sharding (sharding/part_merge) relies on all three, hence on kPaper.
 absl::StatusOr<RefineResult> Refine(const Volume& volume, const Mesh& mesh,
                                     const RefineOptions& options);
 

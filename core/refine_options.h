@@ -39,7 +39,7 @@ enum class OrientationPolicy : uint8_t {
 enum class RefineScheme : uint8_t {
   // The paper exactly: an edge is split when the discrepancy at its midpoint exceeds epsilon.
   kPaper,
-  // The default: the paper's midpoint test, then every tet with a split edge also splits its
+  // The paper's midpoint test, then every tet with a split edge also splits its
   // longest edge (longest-edge closure, as in Rivara's and Plaza's schemes), and a tet whose
   // split would make a much flatter child is refined regularly (1:8) instead. It reaches
   // epsilon where the paper's scheme stops with needles. See SchemeRules in core/refine.cc for
@@ -80,7 +80,7 @@ struct RefineOptions {
   // before it (kQualityFloor) and the output keeps no degenerate tet. In [0, 1).
   double min_quality = 1e-6;
 
-  RefineScheme scheme = RefineScheme::kLongestEdge;
+  RefineScheme scheme = RefineScheme::kPaper;
   // Certified mode: refinement also goes on until the discrepancy at every point of the
   // lattice of order lattice_n (the paper's 165 points for 8) of every tet is <= epsilon; each
   // tet that fails has its longest edge split. The result's `certified_max_error` is then the
