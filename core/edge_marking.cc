@@ -24,6 +24,20 @@ void MarkSplit(FillLater<uint8_t>& split, uint32_t e) {
   std::atomic_ref<uint8_t>(split[e]).store(1, std::memory_order_relaxed);
 }
 
+// Edges marked in `after` but not in `before` (marks are only ever added).
+int64_t CountChanged(const FillLater<uint8_t>& before, const FillLater<uint8_t>& after) {
+  const int64_t n = static_cast<int64_t>(before.size());
+  std::vector<int64_t> changed(BlockCount(n), 0);
+  ForEachBlock(n, [&](int64_t b, int64_t begin, int64_t end) {
+    int64_t c = 0;
+    for (int64_t e = begin; e < end; ++e) c += after[e] != before[e];
+    changed[b] = c;
+  });
+  int64_t total = 0;
+  for (int64_t c : changed) total += c;
+  return total;
+}
+
 // Largest lattice discrepancy of one tet (order n), stopping early once above epsilon: the
 // caller only needs to know whether it passes.
 double TetLatticeMax(const Volume& volume, const std::array<Vec3, 4>& p,
@@ -178,16 +192,7 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
         if (split[te[longest]] == 0) MarkSplit(next, te[longest]);
       }
     });
-    const int64_t ne = edges.size();
-    const int64_t blocks = BlockCount(ne);
-    std::vector<int64_t> changed(blocks, 0);
-    ForEachBlock(ne, [&](int64_t b, int64_t begin, int64_t end) {
-      int64_t c = 0;
-      for (int64_t e = begin; e < end; ++e) c += next[e] != split[e];
-      changed[b] = c;
-    });
-    int64_t round_added = 0;
-    for (int64_t c : changed) round_added += c;
+    const int64_t round_added = CountChanged(split, next);
     split.swap(next);
     added += round_added;
     if (round_added == 0) break;
@@ -226,14 +231,13 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
       }
     }
   });
-  int64_t added = 0;
-  for (size_t e = 0; e < split.size(); ++e) added += next[e] != split[e];
+  const int64_t added = CountChanged(split, next);
   split.swap(next);
   return added;
 }
 
 int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,
-                        const EdgeTestParams& params, FillLater<uint8_t>& split, double* max_seen,
+                        const EdgeTestParams& params, FillLater<uint8_t>& split,
                         CancelFlag& cancel) {
   const std::vector<Vec3>& points = *state.points;
   const std::vector<Tet>& tets = *state.tets;
@@ -241,11 +245,9 @@ int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edg
   const int64_t nt = static_cast<int64_t>(tets.size());
   const int64_t blocks = BlockCount(nt);
   std::vector<int64_t> failing(blocks, 0);
-  std::vector<double> worst(blocks, 0.0);
   ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
     if (cancel.Check()) return;
     int64_t f = 0;
-    double w = 0.0;
     for (int64_t t = begin; t < end; ++t) {
       if (state.tet_lattice_error[t] >= 0.0) continue;
       const Tet& tet = tets[t];
@@ -254,21 +256,15 @@ int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edg
       const double max_error =
           TetLatticeMax(volume, p, {values[tet[0]], values[tet[1]], values[tet[2]], values[tet[3]]},
                         n, params.norm, params.epsilon, params.clamp);
-      w = std::max(w, max_error);
       state.tet_lattice_error[t] = max_error;
       if (max_error <= params.epsilon) continue;
       ++f;
       MarkSplit(split, edges.tet_edges[t][LongestEdge(p)]);
     }
     failing[b] = f;
-    worst[b] = w;
   });
   int64_t total = 0;
-  *max_seen = 0.0;
-  for (int64_t b = 0; b < blocks; ++b) {
-    total += failing[b];
-    *max_seen = std::max(*max_seen, worst[b]);
-  }
+  for (int64_t f : failing) total += f;
   return total;
 }
 

@@ -74,13 +74,11 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                          const EdgeTable& edges, double ratio, FillLater<uint8_t>& split);
 
-// Certified mode: samples every tet not yet certified on the lattice of order n (the paper's
-// 165 points for n = 8); a tet whose discrepancy exceeds epsilon gets its longest edge split, a
-// tet's discrepancy is kept in state.tet_lattice_error (it is final until the tet is split).
-// Returns the number of failing tets and the largest discrepancy seen among the tets sampled now
-// (max_failing) in *max_seen.
+// Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165
+// points for n = 8) and keeps its discrepancy in state.tet_lattice_error (final until the tet is
+// split); a tet above epsilon gets its longest edge split. Returns the number of failing tets.
 int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,
-                        const EdgeTestParams& params, FillLater<uint8_t>& split, double* max_seen,
+                        const EdgeTestParams& params, FillLater<uint8_t>& split,
                         CancelFlag& cancel);
 
 }  // namespace tetrefine::refine_internal

@@ -234,9 +234,8 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     int64_t failing_tets = 0;
     if (options.certify) {
       AddTetEdges(*state.tets, &edges);
-      double max_seen = 0.0;
       failing_tets = refine_internal::MarkFailingTets(volume, state, edges, options.lattice_n,
-                                                      params, errors.split, &max_seen, cancel);
+                                                      params, errors.split, cancel);
       if (cancel.IsSet()) {
         result.stop_reason = StopReason::kCancelled;
         break;
