@@ -1,5 +1,8 @@
 #include "wire/conversion.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <string>
 
 #include "absl/strings/str_cat.h"
@@ -170,6 +173,39 @@ absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& i
   if (in.has_min_edge_length()) r.min_edge_length = in.min_edge_length();
   if (in.has_min_quality()) r.min_quality = in.min_quality();
   if (absl::Status valid = ValidateRefineOptions(r); !valid.ok()) return valid;
+  // This server's own bounds, beyond the core's: a normal norm_coeff, and the work caps.
+  if (r.norm_coeff.has_value() && !std::isnormal(*r.norm_coeff)) {
+    // A subnormal normalisation turns every error into inf (5e-324 did); the bound that depends
+    // on the volume's range follows once the volume has arrived (wire/request_reader.cc).
+    return Invalid("norm_coeff", absl::StrCat("must be a normal number (>= ",
+                                              std::numeric_limits<double>::min(), "), got ",
+                                              *r.norm_coeff));
+  }
+  if (r.max_iterations > limits.max_iterations) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "options.max_iterations: ", r.max_iterations, " exceeds this server's limit of ",
+        limits.max_iterations, " iterations (--max_iterations)"));
+  }
+  if (r.lattice_n > limits.max_lattice_n) {
+    return absl::ResourceExhaustedError(absl::StrCat("options.lattice_n: ", r.lattice_n,
+                                                     " exceeds this server's limit of ",
+                                                     limits.max_lattice_n, " (--max_lattice_n)"));
+  }
+  // The lattice check's worst case, known from the options alone: every sampled tet of a result
+  // at its tet budget. Checked here so that a call that could never run is answered before its
+  // upload.
+  const int64_t budget = o.send_max_tets ? r.max_tets : limits.max_output_tets;
+  const int64_t sampled = r.lattice_max_tets == 0 ? budget : std::min(r.lattice_max_tets, budget);
+  const int64_t per_tet = LatticePointsPerTet(r.lattice_n);
+  if (r.lattice_n > 0 && sampled > limits.max_lattice_points / per_tet) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "options.lattice_n = ", r.lattice_n, " (", per_tet, " points a tet) on up to ", sampled,
+        " tets (lattice_max_tets = ", r.lattice_max_tets,
+        r.lattice_max_tets == 0 ? ": every tet, up to max_tets" : "", ") may sample ",
+        static_cast<double>(per_tet) * static_cast<double>(sampled),
+        " points, above this server's limit of ", limits.max_lattice_points,
+        " (--max_lattice_points); lower lattice_n, lattice_max_tets or max_tets"));
+  }
   o.stream_every_iteration = in.stream_every_iteration();
   o.skip_final_mesh = in.skip_final_mesh();
   o.response_chunk_bytes = in.response_chunk_bytes();
@@ -285,6 +321,17 @@ void LimitsToWire(const ServiceLimits& limits, v1::ServerLimits* out) {
   out->set_max_output_tets(limits.max_output_tets);
   out->set_max_concurrent_refinements(limits.max_concurrent_refinements);
   out->set_max_message_bytes(limits.max_message_bytes);
+  out->set_max_iterations(limits.max_iterations);
+  out->set_max_lattice_n(limits.max_lattice_n);
+  out->set_max_lattice_points(limits.max_lattice_points);
+  out->set_max_call_seconds(limits.max_call_seconds);
+  out->set_input_deadline_seconds(limits.input_deadline_seconds);
+  out->set_idle_timeout_seconds(limits.idle_timeout_seconds);
+  out->set_write_stall_seconds(limits.write_stall_seconds);
+  out->set_queue_seconds(limits.queue_seconds);
+  out->set_max_calls_per_identity(limits.max_calls_per_identity);
+  out->set_memory_budget_bytes(limits.memory_budget_bytes);
+  out->set_bytes_per_output_tet(limits.bytes_per_output_tet);
 }
 
 ServiceLimits LimitsFromWire(const v1::ServerLimits& in) {
@@ -292,7 +339,18 @@ ServiceLimits LimitsFromWire(const v1::ServerLimits& in) {
                        .max_input_tets = in.max_input_tets(),
                        .max_output_tets = in.max_output_tets(),
                        .max_concurrent_refinements = in.max_concurrent_refinements(),
-                       .max_message_bytes = in.max_message_bytes()};
+                       .max_message_bytes = in.max_message_bytes(),
+                       .max_iterations = in.max_iterations(),
+                       .max_lattice_n = in.max_lattice_n(),
+                       .max_lattice_points = in.max_lattice_points(),
+                       .max_call_seconds = in.max_call_seconds(),
+                       .input_deadline_seconds = in.input_deadline_seconds(),
+                       .idle_timeout_seconds = in.idle_timeout_seconds(),
+                       .write_stall_seconds = in.write_stall_seconds(),
+                       .queue_seconds = in.queue_seconds(),
+                       .max_calls_per_identity = in.max_calls_per_identity(),
+                       .memory_budget_bytes = in.memory_budget_bytes(),
+                       .bytes_per_output_tet = in.bytes_per_output_tet()};
 }
 
 grpc::Status ToGrpcStatus(const absl::Status& status) {

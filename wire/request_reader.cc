@@ -1,5 +1,6 @@
 #include "wire/request_reader.h"
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <new>
@@ -12,8 +13,14 @@
 namespace tetrefine::wire {
 namespace {
 
-// Beyond this, per-axis arithmetic on indices could overflow; no real grid comes close.
-constexpr int64_t kMaxDim = int64_t{1} << 31;
+// The core's own bound on samples per axis (core/volume.cc), checked here so that a header the
+// core would refuse is answered before its data is uploaded. It also keeps per-axis arithmetic
+// on indices far from overflow.
+constexpr int64_t kMaxDim = int64_t{1} << 20;
+
+// The largest error the statistics may meet, value range / norm_coeff: they sum errors over up
+// to 2^63 edges (about 1e19), which must stay below the largest double (1.8e308).
+constexpr double kMaxRangeOverNorm = 1e280;
 
 std::string KindName(const v1::RefineRequest& request) {
   const google::protobuf::FieldDescriptor* field =
@@ -56,14 +63,17 @@ absl::Status RequestReader::Add(const v1::RefineRequest& request) {
         case R::kVertexChunk:
           status = AddVertexChunk(request.vertex_chunk());
           break;
-        case R::kValueChunk:
-          status = AddValueChunk(request.value_chunk());
-          break;
         case R::kTetChunk:
           status = AddTetChunk(request.tet_chunk());
           break;
         case R::kEndOfInput:
           status = AddEndOfInput();
+          break;
+        case R::kValueChunk:
+          status = Invalid(absl::StrCat(
+              "request message ", message_index_,
+              ": value_chunk not accepted: this server samples every vertex value from the "
+              "volume (client values are not used)"));
           break;
         default:
           status = Unexpected(request);
@@ -94,7 +104,7 @@ absl::Status RequestReader::Unexpected(const v1::RefineRequest& request) const {
       expected = "mesh_header";
       break;
     case Stage::kMeshData:
-      expected = "vertex_chunk, value_chunk, tet_chunk or end_of_input";
+      expected = "vertex_chunk, tet_chunk or end_of_input";
       break;
     case Stage::kDone:
       expected = "nothing after end_of_input";
@@ -229,6 +239,17 @@ absl::Status RequestReader::AddVolumeChunk(const v1::VolumeChunk& chunk) {
   volume_data_ = {};
   if (!volume.ok()) return volume.status();
   volume_ = *std::move(volume);
+  if (options_.refine.norm_coeff.has_value()) {
+    const std::array<double, 2> range = volume_->ValueRange();
+    const double ratio = (range[1] - range[0]) / *options_.refine.norm_coeff;
+    if (!(ratio <= kMaxRangeOverNorm)) {
+      return Invalid(absl::StrCat("options.norm_coeff: ", *options_.refine.norm_coeff,
+                                  " is too small for the volume's value range [", range[0], ", ",
+                                  range[1], "]: errors up to ", ratio,
+                                  " would overflow the statistics; it must be at least range / ",
+                                  kMaxRangeOverNorm));
+    }
+  }
   stage_ = Stage::kMeshHeader;
   return absl::OkStatus();
 }
@@ -264,11 +285,14 @@ absl::Status RequestReader::AddMeshHeader(const v1::MeshHeader& header) {
                                                      " exceeds this server's limit of ",
                                                      max_vertices, " input vertices"));
   }
-  has_values_ = header.has_values();
+  if (header.has_values()) {
+    return Invalid(
+        "mesh_header.has_values: must be false: this server samples every vertex value from the "
+        "volume (client values are not used), so send no value_chunk");
+  }
   try {  // as for the volume
     mesh_.points.reserve(static_cast<size_t>(vertex_count_));
     mesh_.tets.reserve(static_cast<size_t>(tet_count_));
-    if (has_values_) mesh_.values.reserve(static_cast<size_t>(vertex_count_));
   } catch (const std::bad_alloc&) {
     mesh_ = Mesh{};
     return absl::ResourceExhaustedError(absl::StrCat("mesh_header: this server cannot allocate ",
@@ -306,31 +330,6 @@ absl::Status RequestReader::AddVertexChunk(const v1::VertexChunk& chunk) {
       }
     }
     mesh_.points.push_back(p);
-  }
-  return absl::OkStatus();
-}
-
-absl::Status RequestReader::AddValueChunk(const v1::ValueChunk& chunk) {
-  if (!has_values_) {
-    return Invalid("value_chunk: not expected, mesh_header.has_values is false");
-  }
-  const int64_t received = static_cast<int64_t>(mesh_.values.size());
-  if (chunk.start_index() != received) {
-    return Invalid(absl::StrCat("value_chunk.start_index: expected ", received,
-                                " (the values received so far), got ", chunk.start_index()));
-  }
-  const int size = chunk.values_size();
-  if (size == 0 || size > vertex_count_ - received) {
-    return Invalid(absl::StrCat("value_chunk.values: ", size, " values at start_index ",
-                                chunk.start_index(), " are none or run past ",
-                                "mesh_header.vertex_count = ", vertex_count_));
-  }
-  for (int i = 0; i < size; ++i) {
-    if (!std::isfinite(chunk.values(i))) {
-      return Invalid(absl::StrCat("value_chunk.values: vertex ", received + i,
-                                  " has a non-finite value (", chunk.values(i), ")"));
-    }
-    mesh_.values.push_back(chunk.values(i));
   }
   return absl::OkStatus();
 }
@@ -373,16 +372,17 @@ absl::Status RequestReader::AddEndOfInput() {
     return Invalid(absl::StrCat("vertex_chunk: received ", mesh_.points.size(),
                                 " vertices, mesh_header.vertex_count = ", vertex_count_));
   }
-  if (has_values_ && static_cast<int64_t>(mesh_.values.size()) != vertex_count_) {
-    return Invalid(absl::StrCat("value_chunk: received ", mesh_.values.size(),
-                                " values, mesh_header.vertex_count = ", vertex_count_));
-  }
   if (static_cast<int64_t>(mesh_.tets.size()) != tet_count_) {
     return Invalid(absl::StrCat("tet_chunk: received ", mesh_.tets.size(),
                                 " tets, mesh_header.tet_count = ", tet_count_));
   }
   stage_ = Stage::kDone;
   return absl::OkStatus();
+}
+
+int64_t RequestReader::DeclaredInputBytes() const {
+  return static_cast<int64_t>(total_bytes_) + vertex_count_ * static_cast<int64_t>(sizeof(Vec3)) +
+         tet_count_ * static_cast<int64_t>(sizeof(Tet));
 }
 
 RefineInput RequestReader::Take() {

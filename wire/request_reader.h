@@ -38,6 +38,13 @@ class RequestReader {
 
   int64_t bytes_received() const { return bytes_received_; }
   int64_t tets_declared() const { return tet_count_; }
+  // Request messages added so far.
+  int64_t messages_received() const { return message_index_; }
+  // Bytes the input will occupy once assembled, as declared by the headers so far: voxel bytes
+  // plus vertices and tets at their in-memory size. Grows as headers arrive; never shrinks.
+  int64_t DeclaredInputBytes() const;
+  // The options, once the first message has been accepted.
+  const RequestOptions& options() const { return options_; }
 
   // The assembled input; only after complete(). Leaves the reader empty.
   RefineInput Take();
@@ -50,7 +57,6 @@ class RequestReader {
   absl::Status AddVolumeChunk(const v1::VolumeChunk& chunk);
   absl::Status AddMeshHeader(const v1::MeshHeader& header);
   absl::Status AddVertexChunk(const v1::VertexChunk& chunk);
-  absl::Status AddValueChunk(const v1::ValueChunk& chunk);
   absl::Status AddTetChunk(const v1::TetChunk& chunk);
   absl::Status AddEndOfInput();
   absl::Status Unexpected(const v1::RefineRequest& request) const;
@@ -71,7 +77,6 @@ class RequestReader {
 
   int64_t vertex_count_ = 0;
   int64_t tet_count_ = 0;
-  bool has_values_ = false;
   Mesh mesh_;
 };
 

@@ -53,7 +53,8 @@ bool WriteMesh(const Mesh& mesh, size_t chunk_bytes, const RequestSink& sink) {
   v1::MeshHeader* header = request.mutable_mesh_header();
   header->set_vertex_count(static_cast<int64_t>(mesh.points.size()));
   header->set_tet_count(static_cast<int64_t>(mesh.tets.size()));
-  header->set_has_values(!mesh.values.empty());
+  // Values are never sent: the server samples the volume at every vertex (tetrefine.proto,
+  // MeshHeader.has_values).
   if (!sink(request)) return false;
 
   const size_t vertex_step = PerChunk(chunk_bytes, 3 * sizeof(double));
@@ -66,15 +67,6 @@ bool WriteMesh(const Mesh& mesh, size_t chunk_bytes, const RequestSink& sink) {
     for (size_t v = start; v < end; ++v) {
       for (double c : mesh.points[v]) chunk->add_coordinates(c);
     }
-    if (!sink(request)) return false;
-  }
-  const size_t value_step = PerChunk(chunk_bytes, sizeof(double));
-  for (size_t start = 0; start < mesh.values.size(); start += value_step) {
-    const size_t end = std::min(mesh.values.size(), start + value_step);
-    request.Clear();
-    v1::ValueChunk* chunk = request.mutable_value_chunk();
-    chunk->set_start_index(static_cast<int64_t>(start));
-    chunk->mutable_values()->Assign(mesh.values.begin() + start, mesh.values.begin() + end);
     if (!sink(request)) return false;
   }
   const size_t tet_step = PerChunk(chunk_bytes, 4 * sizeof(uint32_t));

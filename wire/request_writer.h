@@ -14,7 +14,8 @@ namespace tetrefine::wire {
 using RequestSink = std::function<bool(const v1::RefineRequest&)>;
 
 // Emits a whole Refine request stream: options, the volume (or slab) in chunks of `chunk_bytes`
-// payload bytes (at least one element a chunk), the mesh likewise, then end_of_input.
+// payload bytes (at least one element a chunk), the mesh's points and tets likewise (not its
+// values: the server samples the volume), then end_of_input.
 // Returns false as soon as `sink` does.
 bool WriteRequest(const RequestOptions& options, const Volume& volume, const Mesh& mesh,
                   size_t chunk_bytes, const RequestSink& sink);

@@ -33,7 +33,9 @@ using ::tetrefine::testing::SmallVolume;
 class HardeningMalformedTest : public ::testing::TestWithParam<MalformedRequest> {
  protected:
   static void SetUpTestSuite() {
-    absl::StatusOr<std::unique_ptr<ServerProcess>> server = ServerProcess::Start({"--threads=2"});
+    // The tet budget pinned: by default it follows the machine's memory.
+    absl::StatusOr<std::unique_ptr<ServerProcess>> server =
+        ServerProcess::Start({"--threads=2", "--max_output_tets=50000000"});
     ASSERT_TRUE(server.ok()) << server.status();
     server_ = server->release();
     expected_ = new RefineResult(*Refine(SmallVolume(), SmallMesh(), SmallRefineOptions()));

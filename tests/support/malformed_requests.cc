@@ -32,10 +32,22 @@ Requests Write(const Volume& volume, const Mesh& mesh, wire::RequestOptions opti
   return requests;
 }
 Requests ValidRequests() { return GoodRequests(); }
+// The good stream as a client that sends vertex values would write it: has_values set and the
+// 27 values in two value chunks before end_of_input (the request writer sends none).
 Requests WithValues() {
-  Mesh mesh = SmallMesh();
-  for (size_t i = 0; i < mesh.points.size(); ++i) mesh.values.push_back(0.1 * i);
-  return Write(SmallVolume(), mesh);
+  Requests r = Write(SmallVolume(), SmallMesh());
+  for (v1::RefineRequest& m : r) {
+    if (m.has_mesh_header()) m.mutable_mesh_header()->set_has_values(true);
+  }
+  for (int start : {0, 25}) {
+    v1::RefineRequest values;
+    values.mutable_value_chunk()->set_start_index(start);
+    for (int i = start; i < std::min(start + 25, 27); ++i) {
+      values.mutable_value_chunk()->add_values(0.1 * i);
+    }
+    r.insert(r.end() - 1, values);
+  }
+  return r;
 }
 
 // Position of the n-th message of `kind`.
@@ -337,15 +349,24 @@ std::vector<MalformedRequest> MalformedRequests() {
          values.mutable_value_chunk()->add_values(1.0);
          r.insert(r.end() - 1, values);
        },
-       {"value_chunk: not expected", "mesh_header.has_values is false"}},
-      {"ValueNaN",
+       {"value_chunk not accepted", "samples every vertex value"}},
+      {"ValuesAnnounced",
        [](Requests& r) {
          MeshHeader(r).set_has_values(true);
          v1::RefineRequest values;
          for (int i = 0; i < 27; ++i) values.mutable_value_chunk()->add_values(i == 3 ? kNaN : 1.0);
          r.insert(r.end() - 1, values);
        },
-       {"value_chunk.values: vertex 3", "non-finite"}},
+       {"mesh_header.has_values: must be false"}},
+      {"TetChunkAfterEndOfInput",
+       [](Requests& r) { r.push_back(r[Find(r, Kind::kTetChunk)]); },
+       {"expected nothing after end_of_input, got tet_chunk"}},
+      {"DimsAboveTheCoreBound",
+       [](Requests& r) { VolumeHeader(r).mutable_dims()->set_x(1 << 21); },
+       {"volume_header.dims.x: must be in [2, 1048576], got 2097152"}},
+      {"NormCoeffTiny",
+       [](Requests& r) { Options(r).set_norm_coeff(1e-310); },
+       {"options.norm_coeff: must be a normal number"}},
       {"EmptyMesh",
        [](Requests& r) {
          MeshHeader(r).set_vertex_count(0);
@@ -397,13 +418,11 @@ std::vector<MalformedRequest> MalformedRequests() {
              std::swap(r[Find(r, Kind::kTetChunk, 1)], r[Find(r, Kind::kTetChunk, 2)]);
            },
            {"tet_chunk.start_index: expected 12", "got 24"}),
-      {"ValueChunksSwapped",
-       [] {
-         Requests r = WithValues();
-         std::swap(r[Find(r, Kind::kValueChunk, 0)], r[Find(r, Kind::kValueChunk, 1)]);
-         return r;
-       },
-       {"value_chunk.start_index: expected 0", "got 25"}},
+      // Client vertex values are refused where they are announced (the server samples every
+      // vertex; tetrefine.proto, MeshHeader.has_values).
+      {"ValuesSent",
+       [] { return WithValues(); },
+       {"mesh_header.has_values: must be false", "samples every vertex value from the volume"}},
       Edit("VolumeChunkDuplicated",
            [](Requests& r) { Duplicate(r, Find(r, Kind::kVolumeChunk, 1)); },
            {"volume_chunk.offset: expected 400", "got 200"}),
@@ -412,26 +431,26 @@ std::vector<MalformedRequest> MalformedRequests() {
            {"vertex_chunk.start_index: expected 8", "got 0"}),
       Edit("TetChunkDuplicated", [](Requests& r) { Duplicate(r, FindLast(r, Kind::kTetChunk)); },
            {"tet_chunk.start_index: expected 40", "got 36"}),
-      {"ValueChunkDuplicated",
-       [] {
-         Requests r = WithValues();
-         Duplicate(r, Find(r, Kind::kValueChunk, 0));
-         return r;
-       },
-       {"value_chunk.start_index: expected 25", "got 0"}},
       Edit("VolumeHeaderTwice", [](Requests& r) { Duplicate(r, Find(r, Kind::kVolumeHeader)); },
            {"expected volume_chunk", "got volume_header"}),
       Edit("MeshHeaderTwice", [](Requests& r) { Duplicate(r, Find(r, Kind::kMeshHeader)); },
-           {"expected vertex_chunk, value_chunk, tet_chunk or end_of_input", "got mesh_header"}),
+           {"expected vertex_chunk, tet_chunk or end_of_input", "got mesh_header"}),
       Edit("TetChunkMissing", [](Requests& r) { r.erase(r.begin() + Find(r, Kind::kTetChunk, 1)); },
            {"tet_chunk.start_index: expected 12", "got 24"}),
-      {"ValuesMissing",
+      {"ValuesAnnouncedNotSent",
        [] {
          Requests r = ValidRequests();
          MeshHeader(r).set_has_values(true);
          return r;
        },
-       {"value_chunk: received 0 values, mesh_header.vertex_count = 27"}},
+       {"mesh_header.has_values: must be false"}},
+      {"ValueChunkWithoutHeaderFlag",
+       [] {
+         Requests r = WithValues();
+         MeshHeader(r).set_has_values(false);
+         return r;
+       },
+       {"request message", "value_chunk not accepted"}},
       // Declared sizes that disagree with the data.
       Edit("TetCountTooLarge", [](Requests& r) { MeshHeader(r).set_tet_count(41); },
            {"tet_chunk: received 40 tets, mesh_header.tet_count = 41"}),
@@ -465,12 +484,12 @@ std::vector<MalformedRequest> MalformedRequests() {
              VolumeHeader(r).mutable_dims()->set_z((int64_t{1} << 31) + 1);
              VolumeHeader(r).clear_slab_hi();
            },
-           {"volume_header.dims.z: must be in [2, 2147483648], got 2147483649"}),
-      // A small slab of a grid too large for the core's index arithmetic: refused once the data
-      // is in, by the core, naming the axis.
+           {"volume_header.dims.z: must be in [2, 1048576], got 2147483649"}),
+      // A small slab of a grid too large for the core's index arithmetic: refused at the header,
+      // before the slab's data is sent (the core would refuse it only once the data is in).
       Edit("SlabOfAGridAboveTwoToThe20",
            [](Requests& r) { VolumeHeader(r).mutable_dims()->set_y((int64_t{1} << 20) + 1); },
-           {"volume.dims.y = 1048577: must be in [2, 2^20]"}),
+           {"volume_header.dims.y: must be in [2, 1048576], got 1048577"}),
       Edit(
           "TwoToThe32Tets", [](Requests& r) { MeshHeader(r).set_tet_count(int64_t{1} << 32); },
           {"mesh_header.tet_count: 4294967296 exceeds this server's limit of 10000000"},
@@ -498,13 +517,36 @@ std::vector<MalformedRequest> MalformedRequests() {
              r[Find(r, Kind::kVertexChunk, 0)].mutable_vertex_chunk()->set_coordinates(0, -kInf);
            },
            {"vertex 0 has a non-finite x coordinate (-inf)"}),
-      {"ValueInfinite",
-       [] {
-         Requests r = WithValues();
-         r[Find(r, Kind::kValueChunk, 1)].mutable_value_chunk()->set_values(1, kInf);
-         return r;
-       },
-       {"value_chunk.values: vertex 26 has a non-finite value (inf)"}},
+      // Stream contract: nothing may follow end_of_input.
+      Edit("MessageAfterEndOfInput",
+           [](Requests& r) { r.push_back(r[Find(r, Kind::kTetChunk, 0)]); },
+           {"expected nothing after end_of_input, got tet_chunk"}),
+      Edit("EndOfInputTwice", [](Requests& r) { r.push_back(r.back()); },
+           {"expected nothing after end_of_input, got end_of_input"}),
+      Edit("OptionsAfterEndOfInput", [](Requests& r) { r.push_back(r.front()); },
+           {"expected nothing after end_of_input, got options"}),
+      // Normalisations that would turn every error into inf.
+      Edit("NormCoeffSubnormal", [](Requests& r) { Options(r).set_norm_coeff(5e-324); },
+           {"options.norm_coeff: must be a normal number", "got 4.94066e-324"}),
+      Edit("NormCoeffTooSmallForTheRange", [](Requests& r) { Options(r).set_norm_coeff(1e-300); },
+           {"options.norm_coeff: 1e-300 is too small for the volume's value range",
+            "must be at least range / 1e+280"}),
+      // Per-call work caps, answered with the options.
+      Edit("MaxIterationsAboveTheCap", [](Requests& r) { Options(r).set_max_iterations(101); },
+           {"options.max_iterations: 101 exceeds this server's limit of 100 iterations"},
+           kExhausted),
+      Edit("LatticeNAboveTheCap", [](Requests& r) { Options(r).set_lattice_n(17); },
+           {"options.lattice_n: 17 exceeds this server's limit of 16 (--max_lattice_n)"},
+           kExhausted),
+      Edit("LatticeOfEveryTetUpToTheBudget",
+           [](Requests& r) {
+             Options(r).set_lattice_n(8);
+             Options(r).set_lattice_max_tets(0);
+           },
+           {"options.lattice_n = 8 (165 points a tet) on up to 50000000 tets",
+            "every tet, up to max_tets", "above this server's limit of 200000000",
+            "--max_lattice_points"},
+           kExhausted),
       Edit("SpacingInfinite", [](Requests& r) { VolumeHeader(r).mutable_spacing()->set_y(kInf); },
            {"volume_header.spacing.y: must be finite and > 0, got inf"}),
       Edit("OriginNaN", [](Requests& r) { VolumeHeader(r).mutable_origin()->set_z(kNaN); },
