@@ -1,100 +1,54 @@
 // tetrefine_server: the tetrefine.v1 Refiner service over the network.
 
-#include <pthread.h>
-#include <signal.h>
-
 #include <algorithm>
 #include <chrono>
-#include <cstdint>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <thread>
 
-#include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/str_cat.h"
 #include "grpcpp/grpcpp.h"
 #include "grpcpp/security/server_credentials.h"
+#include "server/memory_budget.h"
 #include "server/metrics.h"
 #include "server/refiner_service.h"
+#include "server/server_flags.h"
 #include "server/server_setup.h"
+#include "server/shutdown_signals.h"
+#include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
-
-ABSL_FLAG(std::string, listen, "0.0.0.0:50051", "Address to listen on, host:port (port 0: any)");
-ABSL_FLAG(std::string, metrics_listen, "0.0.0.0:9464",
-          "Prometheus /metrics HTTP endpoint, host:port (port 0: any; empty: off). If it cannot "
-          "be bound the server logs an error and serves without metrics");
-ABSL_FLAG(int, threads, 0, "Core worker threads per refinement (0: all cores)");
-ABSL_FLAG(int64_t, max_voxels, tetrefine::wire::ServiceLimits{}.max_voxels,
-          "Largest volume (slab) accepted, in voxels");
-ABSL_FLAG(int64_t, max_input_tets, tetrefine::wire::ServiceLimits{}.max_input_tets,
-          "Largest input mesh accepted, in tets (vertices: 4 times this)");
-ABSL_FLAG(int64_t, max_output_tets, tetrefine::wire::ServiceLimits{}.max_output_tets,
-          "Tet budget of a refinement: the default and largest max_tets");
-ABSL_FLAG(int, max_concurrent, tetrefine::wire::ServiceLimits{}.max_concurrent_refinements,
-          "Refinements run at once; more are RESOURCE_EXHAUSTED");
-ABSL_FLAG(int64_t, max_message_bytes, tetrefine::wire::ServiceLimits{}.max_message_bytes,
-          "Largest request message accepted, in bytes");
-ABSL_FLAG(double, drain_seconds, 30.0,
-          "On SIGTERM/SIGINT, seconds in-flight calls may take to finish before being cancelled");
-ABSL_FLAG(std::string, log_level, "info", "spdlog level: trace, debug, info, warn, error, off");
-ABSL_FLAG(std::string, tls_cert, "", "PEM server certificate chain (enables TLS, with --tls_key)");
-ABSL_FLAG(std::string, tls_key, "", "PEM private key of --tls_cert");
-ABSL_FLAG(std::string, tls_client_ca, "",
-          "PEM CA bundle: when set, clients must present a certificate it verifies");
 
 namespace tetrefine::server {
 namespace {
 
-absl::StatusOr<std::string> ReadFile(const std::string& path) {
+absl::StatusOr<std::string> ReadFile(const std::string& path, const char* flag) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return absl::NotFoundError(absl::StrCat("cannot read ", path));
+  if (!in) return absl::NotFoundError(absl::StrCat(flag, ": cannot read ", path));
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
 }
 
-absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> Credentials() {
-  const std::string cert = absl::GetFlag(FLAGS_tls_cert);
-  const std::string key = absl::GetFlag(FLAGS_tls_key);
-  const std::string client_ca = absl::GetFlag(FLAGS_tls_client_ca);
-  if (cert.empty() && key.empty()) {
-    if (!client_ca.empty()) {
-      return absl::InvalidArgumentError("--tls_client_ca needs --tls_cert and --tls_key");
-    }
-    return grpc::InsecureServerCredentials();
-  }
-  if (cert.empty() || key.empty()) {
-    return absl::InvalidArgumentError("--tls_cert and --tls_key go together");
-  }
+absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> Credentials(const ServerSettings& s) {
+  if (s.tls_cert.empty()) return grpc::InsecureServerCredentials();
   grpc::SslServerCredentialsOptions options;
-  absl::StatusOr<std::string> cert_pem = ReadFile(cert);
+  absl::StatusOr<std::string> cert_pem = ReadFile(s.tls_cert, "--tls_cert");
   if (!cert_pem.ok()) return cert_pem.status();
-  absl::StatusOr<std::string> key_pem = ReadFile(key);
+  absl::StatusOr<std::string> key_pem = ReadFile(s.tls_key, "--tls_key");
   if (!key_pem.ok()) return key_pem.status();
   options.pem_key_cert_pairs.push_back({*key_pem, *cert_pem});
-  if (!client_ca.empty()) {
-    absl::StatusOr<std::string> ca_pem = ReadFile(client_ca);
+  if (!s.tls_client_ca.empty()) {
+    absl::StatusOr<std::string> ca_pem = ReadFile(s.tls_client_ca, "--tls_client_ca");
     if (!ca_pem.ok()) return ca_pem.status();
     options.pem_root_certs = *ca_pem;
     options.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(options);
-}
-
-ServiceConfig ConfigFromFlags() {
-  ServiceConfig config;
-  config.refine_threads = absl::GetFlag(FLAGS_threads);
-  config.limits.max_voxels = absl::GetFlag(FLAGS_max_voxels);
-  config.limits.max_input_tets = absl::GetFlag(FLAGS_max_input_tets);
-  config.limits.max_output_tets = absl::GetFlag(FLAGS_max_output_tets);
-  config.limits.max_concurrent_refinements = absl::GetFlag(FLAGS_max_concurrent);
-  config.limits.max_message_bytes = absl::GetFlag(FLAGS_max_message_bytes);
-  return config;
 }
 
 // "0.0.0.0:0" with port 41234 bound -> "0.0.0.0:41234".
@@ -103,89 +57,113 @@ std::string BoundAddress(const std::string& listen, int port) {
   return absl::StrCat(colon == std::string::npos ? listen : listen.substr(0, colon), ":", port);
 }
 
-int Run() {
-  const std::string level_name = absl::GetFlag(FLAGS_log_level);
-  const spdlog::level::level_enum level = spdlog::level::from_str(level_name);
+int Run(ShutdownSignals& signals) {
+  absl::StatusOr<ServerSettings> settings = SettingsFromFlags();
+  if (!settings.ok()) {
+    spdlog::error("{}", std::string(settings.status().message()));
+    return 2;
+  }
+  const spdlog::level::level_enum level = spdlog::level::from_str(settings->log_level);
   // from_str maps every unknown name to "off": a typo must not silence the server.
-  if (level == spdlog::level::off && level_name != "off") {
-    spdlog::error("unknown --log_level {}", level_name);
+  if (level == spdlog::level::off && settings->log_level != "off") {
+    spdlog::error("unknown --log_level {}", settings->log_level);
     return 2;
   }
   spdlog::set_level(level);
+  ServiceConfig& config = settings->service;
+  const bool tls = !settings->tls_cert.empty();
 
-  ServiceConfig config = ConfigFromFlags();
-  if (config.limits.max_concurrent_refinements < 1 || config.limits.max_voxels < 1 ||
-      config.limits.max_input_tets < 1 || config.limits.max_output_tets < 1 ||
-      config.limits.max_message_bytes < 1 || config.refine_threads < 0) {
-    spdlog::error("limits must be >= 1 and --threads >= 0");
-    return 2;
-  }
-  absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = Credentials();
+  // Creating credentials initializes gRPC, which starts threads: the signals are blocked by now.
+  absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials = Credentials(*settings);
   if (!credentials.ok()) {
-    spdlog::error("{}", credentials.status().ToString());
+    spdlog::error("{}", std::string(credentials.status().message()));
     return 2;
   }
-
-  // Handled synchronously by sigwait below. Blocked before gRPC starts its threads, which
-  // inherit the mask, so no other thread can take the signal.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  if (config.access.tokens.has_value() && !tls) {
+    spdlog::warn(
+        "--token_file without --tls_cert: bearer tokens cross the network in plaintext; use TLS "
+        "anywhere but a trusted network");
+  }
 
   std::unique_ptr<MetricsEndpoint> metrics_endpoint;
-  if (const std::string metrics_listen = absl::GetFlag(FLAGS_metrics_listen);
-      !metrics_listen.empty()) {
+  if (!settings->metrics_listen.empty()) {
     auto metrics = std::make_shared<ServiceMetrics>();
-    absl::StatusOr<std::unique_ptr<MetricsEndpoint>> endpoint =
-        MetricsEndpoint::Start(metrics_listen, metrics);
+    absl::StatusOr<std::unique_ptr<MetricsEndpoint>> endpoint = MetricsEndpoint::Start(
+        settings->metrics_listen, metrics,
+        tls ? MetricsTls{.cert_file = settings->tls_cert, .key_file = settings->tls_key}
+            : MetricsTls{});
     if (endpoint.ok()) {
       metrics_endpoint = *std::move(endpoint);
       config.metrics = std::move(metrics);
-      spdlog::info("metrics on http://{}/metrics",
-                   BoundAddress(metrics_listen, metrics_endpoint->port()));
+      spdlog::info("metrics on {}://{}/metrics", tls ? "https" : "http",
+                   BoundAddress(settings->metrics_listen, metrics_endpoint->port()));
     } else {
       // Observability must not take the service down (e.g. a second server on one host with
       // the default port): refinements are served, the missing scrape target shows.
-      spdlog::error("{}; serving without metrics", endpoint.status().ToString());
+      spdlog::error("{}; serving without metrics", std::string(endpoint.status().message()));
     }
   }
 
   InitGrpcFeatures();  // before the builder exists
   RefinerService service(config);
   grpc::ServerBuilder builder;
-  int port = 0;
-  const std::string listen = absl::GetFlag(FLAGS_listen);
-  builder.AddListeningPort(listen, *credentials, &port);
-  std::unique_ptr<grpc::Server> server = StartServer(config, &service, &builder);
-  if (server == nullptr || port == 0) {
-    spdlog::error("cannot listen on {}", listen);
+  int port = 0, local_port = 0;
+  builder.AddListeningPort(settings->listen, *credentials, &port);
+  if (!settings->local_listen.empty()) {
+    builder.AddListeningPort(settings->local_listen, grpc::InsecureServerCredentials(),
+                             &local_port);
+  }
+  std::unique_ptr<grpc::Server> server = StartServer(config, &service, &builder, settings->server);
+  if (server == nullptr || port == 0 || (!settings->local_listen.empty() && local_port == 0)) {
+    spdlog::error("cannot listen on {}{}", settings->listen,
+                  settings->local_listen.empty() ? "" : " and " + settings->local_listen);
     return 1;
   }
+  const wire::ServiceLimits& l = config.limits;
+  spdlog::info(
+      "memory: limit {} ({}), budget for calls {}, {} bytes per output tet, max_output_tets {}",
+      HumanBytes(settings->memory_limit_bytes), settings->memory_source,
+      HumanBytes(l.memory_budget_bytes), l.bytes_per_output_tet, l.max_output_tets);
+  spdlog::info(
+      "calls: max_concurrent {}, queue {} s, input deadline {} s, idle timeout {} s, write stall "
+      "{} s, max {} s a call, {} open calls per client; auth: {}{}",
+      l.max_concurrent_refinements, l.queue_seconds, l.input_deadline_seconds,
+      l.idle_timeout_seconds, l.write_stall_seconds, l.max_call_seconds, l.max_calls_per_identity,
+      config.access.tokens.has_value()
+          ? absl::StrCat(config.access.tokens->size(), " bearer tokens")
+          : std::string("no tokens"),
+      config.access.allowed_subjects.empty()
+          ? std::string()
+          : absl::StrCat(", ", config.access.allowed_subjects.size(), " allowed subjects"));
+  if (local_port != 0) {
+    spdlog::info("plaintext local listener on {}",
+                 BoundAddress(settings->local_listen, local_port));
+  }
   spdlog::info("tetrefine_server listening on {} (tls: {}, max_concurrent: {})",
-               BoundAddress(listen, port), absl::GetFlag(FLAGS_tls_cert).empty() ? "off" : "on",
-               config.limits.max_concurrent_refinements);
+               BoundAddress(settings->listen, port),
+               tls ? (settings->tls_client_ca.empty() ? "on" : "mutual") : "off",
+               l.max_concurrent_refinements);
 
-  int signal_number = 0;
-  sigwait(&signals, &signal_number);
-  const double drain = absl::GetFlag(FLAGS_drain_seconds);
+  const int signal_number = signals.Wait();
+  const double drain = settings->drain_seconds;
+  const auto deadline = std::chrono::system_clock::now() +
+                        std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                            std::chrono::duration<double>(drain));
+  signals.SetDrainDeadline(deadline);
   spdlog::info("signal {}: not serving, draining in-flight calls for up to {} s", signal_number,
                drain);
   // Load balancers probing health stop sending work before the listener goes away.
   server->GetHealthCheckService()->SetServingStatus(false);
-  const auto deadline = std::chrono::system_clock::now() +
-                        std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                            std::chrono::duration<double>(drain));
   // gRPC's Shutdown closes each connection as soon as its last call ends, which can cut off the
   // end of a response its client is still reading (the client sees UNAVAILABLE "Broken pipe"
   // for a call the server completed). So new calls are refused first, in-flight ones finish
   // with every connection open, their clients get a moment to read the rest, and only then
   // does gRPC shut down (cancelling whatever still runs at the deadline).
   service.StopAdmitting();
-  while (service.active_refinements() > 0 && std::chrono::system_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
+  const auto steady_deadline = std::chrono::steady_clock::now() +
+                               std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                   std::chrono::duration<double>(drain));
+  service.WaitUntilIdle(steady_deadline);
   std::this_thread::sleep_until(
       std::min(deadline, std::chrono::system_clock::now() + std::chrono::milliseconds(500)));
   server->Shutdown(deadline);
@@ -201,7 +179,17 @@ int Run() {
 }  // namespace tetrefine::server
 
 int main(int argc, char** argv) {
-  absl::SetProgramUsageMessage("Serves tetrefine.v1.Refiner: tetrahedral mesh refinement.");
+  // First of all, before anything can start a thread.
+  tetrefine::server::ShutdownSignals::BlockInThisThread();
+  // Logs, errors included, go to stderr: stdout stays free for what a caller might parse.
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>(
+      "", std::make_shared<spdlog::sinks::stderr_color_sink_mt>()));
+  absl::SetProgramUsageMessage(
+      "Serves tetrefine.v1.Refiner: tetrahedral mesh refinement.\n"
+      "Usage: tetrefine_server [--flag=value ...]; every flag is listed below.");
+  tetrefine::server::ConfigureUsage();
   absl::ParseCommandLine(argc, argv);
-  return tetrefine::server::Run();
+  // Lives until the process exits: its thread takes every later signal.
+  auto* signals = new tetrefine::server::ShutdownSignals();
+  return tetrefine::server::Run(*signals);
 }

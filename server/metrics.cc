@@ -1,8 +1,13 @@
 #include "server/metrics.h"
 
-#include <exception>
-#include <utility>
+#include <openssl/ssl.h>
 
+#include <exception>
+#include <mutex>
+#include <utility>
+#include <vector>
+
+#include "CivetServer.h"
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "prometheus/text_serializer.h"
@@ -15,6 +20,31 @@ const prometheus::Histogram::BucketBoundaries& DurationBuckets() {
   static const auto* buckets = new prometheus::Histogram::BucketBoundaries{
       0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0, 30.0, 60.0, 120.0, 300.0};
   return *buckets;
+}
+
+// The PEM files civetweb's init_ssl callback loads. civetweb passes that callback only its own
+// server object, so the paths live here.
+std::mutex& TlsFilesMutex() {
+  static auto* mu = new std::mutex();
+  return *mu;
+}
+MetricsTls& TlsFiles() {
+  static auto* files = new MetricsTls();
+  return *files;
+}
+
+// civetweb's init_ssl: 1 when the certificate and key are loaded (civetweb then loads nothing
+// itself), -1 on failure.
+int LoadCertificate(void* ssl_ctx, void* /*user_data*/) {
+  std::lock_guard<std::mutex> lock(TlsFilesMutex());
+  auto* ctx = static_cast<SSL_CTX*>(ssl_ctx);
+  const MetricsTls& tls = TlsFiles();
+  if (SSL_CTX_use_certificate_chain_file(ctx, tls.cert_file.c_str()) != 1 ||
+      SSL_CTX_use_PrivateKey_file(ctx, tls.key_file.c_str(), SSL_FILETYPE_PEM) != 1 ||
+      SSL_CTX_check_private_key(ctx) != 1) {
+    return -1;
+  }
+  return 1;
 }
 
 std::string CodeName(grpc::StatusCode code) {
@@ -80,15 +110,27 @@ std::string ServiceMetrics::Scrape() const {
 }
 
 absl::StatusOr<std::unique_ptr<MetricsEndpoint>> MetricsEndpoint::Start(
-    const std::string& address, std::shared_ptr<ServiceMetrics> metrics) {
+    const std::string& address, std::shared_ptr<ServiceMetrics> metrics, const MetricsTls& tls) {
   std::unique_ptr<MetricsEndpoint> endpoint(new MetricsEndpoint());
   endpoint->metrics_ = std::move(metrics);
+  // civetweb's defaults wait 30 s for a request's headers, with the two threads prometheus-cpp
+  // asks for: two unfinished requests kept every scrape out. Now one client needs four
+  // connections held open for 5 s at a time to delay a scrape by that much.
+  std::vector<std::string> options = {"listening_ports",    tls.enabled() ? address + "s" : address,
+                                      "num_threads",        "4",
+                                      "request_timeout_ms", "5000"};
+  CivetCallbacks callbacks;
+  if (tls.enabled()) {
+    std::lock_guard<std::mutex> lock(TlsFilesMutex());
+    TlsFiles() = tls;
+    callbacks.init_ssl = &LoadCertificate;
+  }
   try {
-    // civetweb reports a bind failure by throwing.
-    endpoint->exposer_ = std::make_unique<prometheus::Exposer>(address, /*num_threads=*/2);
+    // civetweb reports a bind (or certificate) failure by throwing.
+    endpoint->exposer_ = std::make_unique<prometheus::Exposer>(options, &callbacks);
   } catch (const std::exception& e) {
-    return absl::UnavailableError(
-        absl::StrCat("cannot serve metrics on ", address, ": ", e.what()));
+    return absl::UnavailableError(absl::StrCat("cannot serve metrics on ", address,
+                                               tls.enabled() ? " (https)" : "", ": ", e.what()));
   }
   endpoint->exposer_->RegisterCollectable(endpoint->metrics_->registry());
   const std::vector<int> ports = endpoint->exposer_->GetListeningPorts();

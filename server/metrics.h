@@ -63,12 +63,23 @@ class ServiceMetrics {
   prometheus::Gauge& in_flight_;
 };
 
-// An HTTP server answering GET /metrics from `metrics` (prometheus-cpp's civetweb Exposer).
+// PEM files for serving /metrics over HTTPS; both empty: plain HTTP.
+struct MetricsTls {
+  std::string cert_file;  // certificate chain
+  std::string key_file;   // its private key
+  bool enabled() const { return !cert_file.empty(); }
+};
+
+// An HTTP(S) server answering GET /metrics from `metrics` (prometheus-cpp's civetweb Exposer).
+// Four worker threads, and a request that has not arrived whole within 5 s is dropped: a few
+// clients that open connections and never finish a request cannot keep a scrape out.
 class MetricsEndpoint {
  public:
-  // `address` is host:port; port 0 picks a free port (see port()). UNAVAILABLE if it cannot bind.
+  // `address` is host:port; port 0 picks a free port (see port()). UNAVAILABLE if it cannot bind
+  // or (with `tls`) cannot load the certificate. One TLS endpoint per process.
   static absl::StatusOr<std::unique_ptr<MetricsEndpoint>> Start(
-      const std::string& address, std::shared_ptr<ServiceMetrics> metrics);
+      const std::string& address, std::shared_ptr<ServiceMetrics> metrics,
+      const MetricsTls& tls = {});
 
   // The port actually bound.
   int port() const { return port_; }

@@ -1,137 +1,514 @@
 #include "server/refine_call.h"
 
-#include <atomic>
-#include <chrono>
-#include <mutex>
 #include <span>
-#include <string>
+#include <thread>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "core/refine.h"
+#include "server/memory_budget.h"
+#include "server/metrics.h"
 #include "wire/conversion.h"
-#include "wire/request_reader.h"
 #include "wire/response_writer.h"
+#include "spdlog/spdlog.h"
 
 namespace tetrefine::server {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
+Clock::duration Seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
 
-bool DeadlinePassed(const grpc::ServerContext* context) {
-  return std::chrono::system_clock::now() >= context->deadline();
+double SecondsBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
 }
 
-// The status for a call that stopped because the client went away or time ran out.
-grpc::Status Interrupted(const grpc::ServerContext* context, absl::string_view during) {
-  if (DeadlinePassed(context)) {
+// Suggested delays before a retry, for grpc-retry-pushback-ms: a busy slot or memory frees when
+// a running call ends (small ones take milliseconds, large ones seconds); a client over its own
+// quota has to wait for one of its calls.
+constexpr int kRetryBusyMs = 2000;
+
+}  // namespace
+
+RefineCall* RefineCall::Start(grpc::CallbackServerContext* context,
+                              const Environment& environment) {
+  auto call = std::make_shared<RefineCall>(context, environment);
+  call->self_ = call;
+  call->Begin();
+  return call.get();
+}
+
+RefineCall::RefineCall(grpc::CallbackServerContext* context, const Environment& environment)
+    : context_(context),
+      env_(environment),
+      limits_(environment.config->limits),
+      start_(Clock::now()),
+      reader_(environment.config->limits),
+      last_read_(start_) {}
+
+RefineCall::~RefineCall() {
+  for (Watchdog::Id id : timers_) {
+    if (id != 0) env_.watchdog->Cancel(id);
+  }
+}
+
+void RefineCall::Begin() {
+  peer_ = context_->peer();
+  grpc::Status refusal;
+  std::optional<int> retry_after;
+  absl::StatusOr<std::string> identity = IdentifyCall(env_.config->access, *context_);
+  if (!identity.ok()) {
+    refusal = wire::ToGrpcStatus(identity.status());
+  } else {
+    identity_ = *identity;
+    absl::StatusOr<CallGate::Ticket> ticket = env_.gate->Open(identity_);
+    absl::StatusOr<CallGate::Reservation> reservation;
+    if (ticket.ok()) {
+      reservation = env_.gate->Reserve(OpenCallBytes(limits_.max_message_bytes), "a new call");
+    }
+    if (!ticket.ok() || !reservation.ok()) {
+      const absl::Status& status = !ticket.ok() ? ticket.status() : reservation.status();
+      refusal = wire::ToGrpcStatus(status);
+      if (absl::IsResourceExhausted(status)) retry_after = kRetryBusyMs;
+    } else {
+      ticket_ = *std::move(ticket);
+      reservation_ = *std::move(reservation);
+    }
+  }
+  if (!refusal.ok()) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      ClaimFinishLocked();
+    }
+    SendStatus(refusal, retry_after);
+    return;
+  }
+  if (limits_.input_deadline_seconds > 0) {
+    input_deadline_ = start_ + Seconds(limits_.input_deadline_seconds);
+  }
+  if (limits_.max_call_seconds > 0) {
+    call_deadline_ = start_ + Seconds(limits_.max_call_seconds);
+    Schedule(Timer::kCall, call_deadline_);
+  }
+  Clock::time_point check = input_deadline_;
+  if (limits_.idle_timeout_seconds > 0) {
+    check = std::min(check, start_ + Seconds(limits_.idle_timeout_seconds));
+  }
+  if (check != Clock::time_point::max()) Schedule(Timer::kInput, check);
+  StartRead(&request_);
+}
+
+bool RefineCall::ClaimFinishLocked() {
+  if (finish_claimed_) return false;
+  finish_claimed_ = true;
+  return true;
+}
+
+void RefineCall::SendStatus(const grpc::Status& status, std::optional<int> retry_after_ms) {
+  int64_t bytes_in = 0, tets_in = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    phase_ = Phase::kFinished;
+    bytes_in = reader_.bytes_received();
+    tets_in = reader_.tets_declared();
+  }
+  const double seconds = SecondsBetween(start_, Clock::now());
+  if (env_.config->metrics != nullptr) {
+    env_.config->metrics->RecordCall({.code = status.error_code(),
+                                      .admitted = admitted_,
+                                      .seconds = seconds,
+                                      .bytes_in = bytes_in,
+                                      .tets_in = tets_in,
+                                      .tets_out = tets_out_});
+  }
+  spdlog::info(
+      "Refine peer={} identity={} bytes_in={} tets_in={} tets_out={} iterations={} "
+      "duration={:.3f}s status={} {}",
+      peer_, identity_, bytes_in, tets_in, tets_out_, iterations_, seconds,
+      absl::StatusCodeToString(static_cast<absl::StatusCode>(status.error_code())),
+      status.error_message());
+  if (retry_after_ms.has_value()) {
+    context_->AddTrailingMetadata("grpc-retry-pushback-ms", std::to_string(*retry_after_ms));
+  }
+  Finish(status);  // last: the call may be done with this object from here on
+}
+
+void RefineCall::OnReadDone(bool ok) {
+  std::optional<grpc::Status> finish;
+  std::optional<int> retry_after;
+  bool read_more = false;
+  bool admit = false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (finish_claimed_ || (phase_ != Phase::kInput && phase_ != Phase::kClosing)) return;
+    if (!ok) {
+      if (phase_ == Phase::kClosing) {
+        admit = true;  // the client closed the stream after end_of_input
+      } else if (context_->IsCancelled()) {
+        return;  // OnCancel finishes
+      } else {
+        ClaimFinishLocked();
+        finish = wire::ToGrpcStatus(reader_.IncompleteError());
+      }
+    } else {
+      last_read_ = Clock::now();
+      absl::Status status = reader_.Add(request_);
+      if (status.ok()) {
+        const int64_t bytes =
+            OpenCallBytes(limits_.max_message_bytes) + reader_.DeclaredInputBytes();
+        status = reservation_.GrowTo(bytes, "the input this call declares (volume and mesh)");
+        if (!status.ok() && env_.gate->FitsEver(bytes)) retry_after = kRetryBusyMs;
+      }
+      if (!status.ok()) {
+        ClaimFinishLocked();
+        finish = wire::ToGrpcStatus(status);
+      } else {
+        if (reader_.complete()) phase_ = Phase::kClosing;
+        read_more = true;
+      }
+    }
+  }
+  if (finish.has_value()) {
+    SendStatus(*finish, retry_after);
+  } else if (read_more) {
+    StartRead(&request_);
+  } else if (admit) {
+    Admit();
+  }
+}
+
+void RefineCall::Admit() {
+  std::optional<grpc::Status> refusal;
+  int64_t total = 0;
+  Watchdog::Id input_timer = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (finish_claimed_) return;
+    input_seconds_ = SecondsBetween(start_, Clock::now());
+    input_ = reader_.Take();
+    const wire::RequestOptions& o = input_->options;
+    const int64_t max_tets = o.max_tets.value_or(limits_.max_output_tets);
+    const int64_t out_tets =
+        WorstCaseOutputTets(reader_.tets_declared(), o.max_iterations, max_tets);
+    const int64_t base = OpenCallBytes(limits_.max_message_bytes) + reader_.DeclaredInputBytes();
+    const int64_t per_tet = limits_.bytes_per_output_tet;
+    total = base + out_tets * per_tet;
+    if (!env_.gate->FitsEver(total)) {
+      ClaimFinishLocked();
+      const int64_t budget = env_.gate->config().memory_budget_bytes;
+      const int64_t fits = per_tet > 0 ? std::max<int64_t>(0, (budget - base) / per_tet) : 0;
+      refusal = grpc::Status(
+          grpc::StatusCode::RESOURCE_EXHAUSTED,
+          absl::StrCat("this call may need ", HumanBytes(total), " (input ", HumanBytes(base),
+                       ", and up to ", out_tets, " output tets at ", per_tet,
+                       " bytes each), more than this server's whole memory budget of ",
+                       HumanBytes(budget), "; ask for max_tets of at most ", fits,
+                       " (or fewer max_iterations)"));
+    } else {
+      phase_ = Phase::kQueued;
+    }
+    std::swap(input_timer, timers_[static_cast<int>(Timer::kInput)]);
+  }
+  if (input_timer != 0) env_.watchdog->Cancel(input_timer);
+  if (refusal.has_value()) {
+    SendStatus(*refusal);
+    return;
+  }
+  std::weak_ptr<RefineCall> weak = weak_from_this();
+  const uint64_t waiter = env_.gate->Enqueue(&reservation_, total, [weak] {
+    if (std::shared_ptr<RefineCall> call = weak.lock()) call->StartRefinement();
+  });
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    waiter_ = waiter;
+  }
+  if (limits_.queue_seconds > 0) {
+    Schedule(Timer::kQueue, Clock::now() + Seconds(limits_.queue_seconds));
+  } else if (env_.gate->Withdraw(waiter)) {
+    OnTimer(Timer::kQueue);  // no wait allowed: refused now
+  }
+}
+
+std::string RefineCall::WhyNotAdmitted() const {
+  const CallGate& gate = *env_.gate;
+  if (gate.running() >= gate.config().slots) {
+    return absl::StrCat("all ", gate.config().slots,
+                        " refinement slots of this server are busy (--max_concurrent)");
+  }
+  return absl::StrCat(
+      "this call's worst case does not fit the memory left: ", HumanBytes(gate.reserved_bytes()),
+      " of ", HumanBytes(gate.config().memory_budget_bytes),
+      " are reserved by other calls (--memory_budget_bytes)");
+}
+
+void RefineCall::StartRefinement() {
+  Watchdog::Id queue_timer = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    phase_ = Phase::kRefining;
+    admitted_ = true;
+    std::swap(queue_timer, timers_[static_cast<int>(Timer::kQueue)]);
+  }
+  if (queue_timer != 0) env_.watchdog->Cancel(queue_timer);
+  std::thread([call = shared_from_this()] { call->Work(); }).detach();
+}
+
+void RefineCall::Work() {
+  const grpc::Status status = Refine();
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    finish_claimed_ = true;  // from the start of the refinement, only this thread finishes
+  }
+  SendStatus(status);
+}
+
+bool RefineCall::Interrupted() const {
+  return cancelled_.load() || deadline_hit_.load() || stalled_.load() || broken_.load() ||
+         Clock::now() >= call_deadline_;
+}
+
+grpc::Status RefineCall::InterruptedStatus(const std::string& during) const {
+  if (stalled_.load()) {
+    return grpc::Status(
+        grpc::StatusCode::DEADLINE_EXCEEDED,
+        absl::StrCat("the client took no response message for ", limits_.write_stall_seconds,
+                     " s (--write_stall_seconds) during ", during));
+  }
+  if (deadline_hit_.load() || Clock::now() >= call_deadline_) {
+    return grpc::Status(
+        grpc::StatusCode::DEADLINE_EXCEEDED,
+        absl::StrCat("this call ran into this server's limit of ", limits_.max_call_seconds,
+                     " s a call (--max_call_seconds) during ", during,
+                     "; ask for less work (max_tets, epsilon, max_iterations, lattice_n)"));
+  }
+  if (std::chrono::system_clock::now() >= context_->deadline()) {
     return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
                         absl::StrCat("deadline exceeded during ", during));
   }
   return grpc::Status(grpc::StatusCode::CANCELLED, absl::StrCat("cancelled during ", during));
 }
 
-// The core's should_cancel. The core polls it from every worker thread; ServerContext::
-// IsCancelled plucks the call's completion queue, which allows only a few concurrent pluckers, so
-// one thread at a time asks it and the others reuse the last answer.
-class CancellationProbe {
- public:
-  CancellationProbe(grpc::ServerContext* context, const std::atomic<bool>* broken)
-      : context_(context), broken_(broken) {}
-
-  bool operator()() {
-    if (cancelled_.load(std::memory_order_relaxed)) return true;
-    std::unique_lock<std::mutex> lock(mu_, std::try_to_lock);
-    if (!lock.owns_lock()) return false;
-    if (broken_->load() || context_->IsCancelled() || DeadlinePassed(context_)) {
-      cancelled_.store(true);
-    }
-    return cancelled_.load();
-  }
-
- private:
-  grpc::ServerContext* context_;
-  const std::atomic<bool>* broken_;
-  std::mutex mu_;
-  std::atomic<bool> cancelled_{false};
-};
-
-absl::StatusOr<wire::RefineInput> ReadInput(const ServiceConfig& config,
-                                            grpc::ServerContext* context, RefineStream* stream,
-                                            CallRecord* record) {
-  wire::RequestReader reader(config.limits);
-  v1::RefineRequest request;
-  while (!reader.complete()) {
-    if (!stream->Read(&request)) {
-      record->bytes_in = reader.bytes_received();
-      if (context->IsCancelled()) return absl::CancelledError("input");
-      return reader.IncompleteError();
-    }
-    absl::Status status = reader.Add(request);
-    record->bytes_in = reader.bytes_received();
-    if (!status.ok()) return status;
-  }
-  record->tets_in = reader.tets_declared();
-  return reader.Take();
-}
-
-}  // namespace
-
-grpc::Status RunRefineCall(const ServiceConfig& config, grpc::ServerContext* context,
-                           RefineStream* stream, CallRecord* record) {
-  const Clock::time_point start = Clock::now();
-  absl::StatusOr<wire::RefineInput> input = ReadInput(config, context, stream, record);
-  if (!input.ok()) {
-    if (absl::IsCancelled(input.status())) return Interrupted(context, "input");
-    return wire::ToGrpcStatus(input.status());
-  }
-  const double input_seconds = SecondsSince(start);
-
-  const wire::RequestOptions& request_options = input->options;
-  RefineOptions options = wire::ToCoreOptions(request_options, config.limits);
-  options.threads = config.refine_threads;
-
+grpc::Status RefineCall::Refine() {
+  const wire::RequestOptions request_options = input_->options;
+  RefineOptions options = wire::ToCoreOptions(request_options, limits_);
+  options.threads = env_.config->refine_threads;
   wire::ResponseWriter writer(request_options.response_chunk_bytes,
-                              [stream](const v1::RefineResponse& r) { return stream->Write(r); });
-  // Set when a write fails: the client is gone, so the work is pointless.
-  std::atomic<bool> broken{false};
+                              [this](const v1::RefineResponse& r) { return BlockingWrite(r); });
   options.on_iteration = [&](const IterationStats& stats, const Mesh& mesh) {
-    if (broken.load()) return;
+    if (broken_.load()) return;
     bool ok = writer.WriteIterationStats(stats);
     if (ok && request_options.stream_every_iteration) {
       ok = writer.WriteMesh(stats.iteration, /*final=*/false, mesh, {}, {});
     }
-    if (!ok) broken.store(true);
+    if (!ok) broken_.store(true);
   };
-  CancellationProbe probe(context, &broken);
-  options.should_cancel = [&probe] { return probe(); };
+  options.should_cancel = [this] { return Interrupted(); };
 
-  absl::StatusOr<RefineResult> result = Refine(input->volume, input->mesh, options);
-  if (!result.ok()) return wire::ToGrpcStatus(result.status());
-  record->iterations = static_cast<int>(result->iterations.size());
-  record->tets_out = static_cast<int64_t>(result->mesh.tets.size());
-  if (result->stop_reason == StopReason::kCancelled || broken.load() || context->IsCancelled()) {
-    return Interrupted(context,
-                       absl::StrCat("refinement, after ", record->iterations, " iterations"));
+  absl::StatusOr<RefineResult> result;
+  {
+    ServiceMetrics::InFlight in_flight(env_.config->metrics.get());
+    result = tetrefine::Refine(input_->volume, input_->mesh, options);
   }
-
+  // The CPU work is done: the slot goes to the next call while this one writes its result.
+  env_.gate->ReleaseSlot();
+  input_.reset();
+  if (!result.ok()) return wire::ToGrpcStatus(result.status());
+  iterations_ = static_cast<int>(result->iterations.size());
+  tets_out_ = static_cast<int64_t>(result->mesh.tets.size());
+  if (result->stop_reason == StopReason::kCancelled || Interrupted()) {
+    return InterruptedStatus(absl::StrCat("refinement, after ", iterations_, " iterations"));
+  }
   if (!request_options.skip_final_mesh &&
-      !writer.WriteMesh(record->iterations, /*final=*/true, result->mesh,
+      !writer.WriteMesh(iterations_, /*final=*/true, result->mesh,
                         std::span<const int32_t>(result->tet_iteration),
                         std::span<const float>(result->tet_quality))) {
-    return Interrupted(context, "output");
+    return InterruptedStatus("output");
   }
   const wire::ServiceSummary service{.max_tets = options.max_tets,
-                                     .input_seconds = input_seconds,
-                                     .total_seconds = SecondsSince(start)};
-  if (!writer.WriteSummary(*result, service, record->tets_in)) {
-    return Interrupted(context, "output");
+                                     .input_seconds = input_seconds_,
+                                     .total_seconds = SecondsBetween(start_, Clock::now())};
+  if (!writer.WriteSummary(*result, service, reader_.tets_declared())) {
+    return InterruptedStatus("output");
   }
   return grpc::Status::OK;
+}
+
+bool RefineCall::BlockingWrite(const v1::RefineResponse& response) {
+  if (Interrupted()) return false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    write_pending_ = true;
+    write_ok_ = false;
+  }
+  if (limits_.write_stall_seconds > 0) {
+    Schedule(Timer::kStall, Clock::now() + Seconds(limits_.write_stall_seconds));
+  }
+  StartWrite(&response);
+  bool ok = false;
+  Watchdog::Id stall_timer = 0;
+  {
+    std::unique_lock<std::mutex> lock(mu_);
+    write_done_cv_.wait(lock, [&] { return !write_pending_; });
+    ok = write_ok_;
+    std::swap(stall_timer, timers_[static_cast<int>(Timer::kStall)]);
+  }
+  if (stall_timer != 0) env_.watchdog->Cancel(stall_timer);
+  if (!ok) broken_.store(true);
+  return ok;
+}
+
+void RefineCall::OnWriteDone(bool ok) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    write_pending_ = false;
+    write_ok_ = ok;
+  }
+  write_done_cv_.notify_all();
+}
+
+void RefineCall::OnCancel() {
+  cancelled_.store(true);
+  bool finish = false;
+  bool withdraw = false;
+  uint64_t waiter = 0;
+  std::string during = "input";
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (finish_claimed_) return;
+    if (phase_ == Phase::kInput || phase_ == Phase::kClosing) {
+      finish = ClaimFinishLocked();
+    } else if (phase_ == Phase::kQueued) {
+      withdraw = true;
+      waiter = waiter_;
+      during = "the wait for a refinement slot";
+    }
+  }
+  if (withdraw && waiter != 0 && env_.gate->Withdraw(waiter)) {
+    std::lock_guard<std::mutex> lock(mu_);
+    finish = ClaimFinishLocked();
+  }
+  if (finish) SendStatus(InterruptedStatus(during));
+}
+
+void RefineCall::OnDone() {
+  std::shared_ptr<RefineCall> keep = std::move(self_);
+  // `keep` may be the last reference: this object goes when the function returns.
+}
+
+void RefineCall::Schedule(Timer timer, Clock::time_point when) {
+  std::weak_ptr<RefineCall> weak = weak_from_this();
+  const Watchdog::Id id = env_.watchdog->Schedule(when, [weak, timer] {
+    if (std::shared_ptr<RefineCall> call = weak.lock()) call->OnTimer(timer);
+  });
+  Watchdog::Id old = 0;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    old = std::exchange(timers_[static_cast<int>(timer)], id);
+  }
+  if (old != 0) env_.watchdog->Cancel(old);
+}
+
+void RefineCall::OnTimer(Timer timer) {
+  const Clock::time_point now = Clock::now();
+  std::optional<grpc::Status> finish;
+  std::optional<int> retry_after;
+  bool cancel_write = false;
+  std::optional<Clock::time_point> again;
+  switch (timer) {
+    case Timer::kInput: {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (finish_claimed_ || (phase_ != Phase::kInput && phase_ != Phase::kClosing)) return;
+      const Clock::time_point idle_end = limits_.idle_timeout_seconds > 0
+                                             ? last_read_ + Seconds(limits_.idle_timeout_seconds)
+                                             : Clock::time_point::max();
+      const std::string received = absl::StrCat(reader_.messages_received(), " request messages (",
+                                                reader_.bytes_received(), " bytes) received");
+      if (now >= input_deadline_) {
+        ClaimFinishLocked();
+        finish = grpc::Status(
+            grpc::StatusCode::DEADLINE_EXCEEDED,
+            absl::StrCat("the input was not complete ", limits_.input_deadline_seconds,
+                         " s after the call began (--input_deadline_seconds); ", received,
+                         ". Send the whole request, end_of_input, and close the stream"));
+      } else if (now >= idle_end) {
+        ClaimFinishLocked();
+        finish = grpc::Status(
+            grpc::StatusCode::DEADLINE_EXCEEDED,
+            phase_ == Phase::kClosing
+                ? absl::StrCat("end_of_input arrived but the client did not close the stream for ",
+                               limits_.idle_timeout_seconds, " s (--idle_timeout_seconds)")
+                : absl::StrCat("no request message for ", limits_.idle_timeout_seconds,
+                               " s (--idle_timeout_seconds); ", received));
+      } else {
+        again = std::min(input_deadline_, idle_end);
+      }
+      break;
+    }
+    case Timer::kQueue: {
+      // Reached with the call already withdrawn (no wait allowed), or to withdraw it now.
+      uint64_t waiter = 0;
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        if (finish_claimed_ || phase_ != Phase::kQueued) return;
+        waiter = waiter_;
+      }
+      const bool withdrawn = limits_.queue_seconds <= 0 || env_.gate->Withdraw(waiter);
+      if (!withdrawn) return;  // it has just started
+      std::lock_guard<std::mutex> lock(mu_);
+      if (!ClaimFinishLocked()) return;
+      finish = grpc::Status(
+          grpc::StatusCode::RESOURCE_EXHAUSTED,
+          absl::StrCat(WhyNotAdmitted(),
+                       limits_.queue_seconds > 0 ? absl::StrCat(" (waited ", limits_.queue_seconds,
+                                                                " s, --queue_seconds)")
+                                                 : std::string(),
+                       "; retry in a few seconds"));
+      retry_after = kRetryBusyMs;
+      break;
+    }
+    case Timer::kCall: {
+      deadline_hit_.store(true);
+      uint64_t waiter = 0;
+      bool queued = false;
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        if (finish_claimed_) {
+          cancel_write = write_pending_;  // the refinement's thread finishes
+        } else if (phase_ == Phase::kInput || phase_ == Phase::kClosing) {
+          ClaimFinishLocked();
+          finish = InterruptedStatus("input");
+        } else if (phase_ == Phase::kQueued) {
+          queued = true;
+          waiter = waiter_;
+        } else {
+          cancel_write = write_pending_;
+        }
+      }
+      if (queued && env_.gate->Withdraw(waiter)) {
+        std::lock_guard<std::mutex> lock(mu_);
+        if (ClaimFinishLocked()) finish = InterruptedStatus("the wait for a refinement slot");
+      }
+      break;
+    }
+    case Timer::kStall: {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (!write_pending_) return;
+      stalled_.store(true);
+      cancel_write = true;
+      break;
+    }
+  }
+  if (again.has_value()) Schedule(Timer::kInput, *again);
+  if (cancel_write) {
+    spdlog::warn("Refine peer={} identity={}: {}", peer_, identity_,
+                 stalled_.load() ? "the client stopped reading; cancelling the call"
+                                 : "max_call_seconds passed while writing; cancelling the call");
+    context_->TryCancel();
+  }
+  if (finish.has_value()) SendStatus(*finish, retry_after);
 }
 
 }  // namespace tetrefine::server

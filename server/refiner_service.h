@@ -1,48 +1,63 @@
 #pragma once
 
-#include <atomic>
 #include <memory>
 
 #include "grpcpp/grpcpp.h"
-#include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "server/call_gate.h"
+#include "server/identity.h"
 #include "wire/service_limits.h"
+#include "server/watchdog.h"
+#include "tetrefine/v1/tetrefine.grpc.pb.h"
 
 namespace tetrefine::server {
 
 class ServiceMetrics;  // server/metrics.h
 
 struct ServiceConfig {
+  // Sizes, caps, time limits, per-identity quota and memory budget (all advertised by
+  // GetServerInfo). The defaults suit an embedded service: no time limits, no quota, no budget.
   wire::ServiceLimits limits;
   int refine_threads = 0;                   // core worker threads per refinement; 0: all cores
   std::shared_ptr<ServiceMetrics> metrics;  // null: no metrics recorded
+  AccessPolicy access;                      // tokens and certificate allow-list; none by default
 };
 
-// The tetrefine.v1.Refiner service. Stateless: a call keeps nothing once it returns; the only
-// shared state is the count of refinements in flight, which enforces the concurrency limit.
-class RefinerService final : public v1::Refiner::Service {
+// The tetrefine.v1.Refiner service. Refine is a callback (reactor) method, so a call that sends
+// nothing costs no thread; GetServerInfo is synchronous. Stateless between calls: what a call
+// holds (server/call_gate.h) is released when it ends.
+class RefinerService final : public v1::Refiner::WithCallbackMethod_Refine<v1::Refiner::Service> {
  public:
-  explicit RefinerService(const ServiceConfig& config) : config_(config) {}
+  explicit RefinerService(const ServiceConfig& config);
+  // Waits until every call has ended and released what it held (the server must have been shut
+  // down, which cancels what still runs).
+  ~RefinerService() override;
 
-  grpc::Status Refine(
-      grpc::ServerContext* context,
-      grpc::ServerReaderWriter<v1::RefineResponse, v1::RefineRequest>* stream) override;
+  grpc::ServerBidiReactor<v1::RefineRequest, v1::RefineResponse>* Refine(
+      grpc::CallbackServerContext* context) override;
 
   grpc::Status GetServerInfo(grpc::ServerContext* context, const v1::GetServerInfoRequest* request,
                              v1::ServerInfo* response) override;
 
-  // Refine calls admitted and not yet returned.
-  int active_refinements() const { return active_.load(); }
+  // Refine calls open (reading input, queued, refining or writing results).
+  int open_calls() const { return gate_.open_calls(); }
+  // Refinements running: slots taken.
+  int running_refinements() const { return gate_.running(); }
 
-  // From now on every new Refine call is refused with UNAVAILABLE; calls already admitted run on.
-  // The first step of a graceful shutdown, taken while the listener still accepts connections.
-  void StopAdmitting() { admitting_.store(false); }
+  // From now on every new Refine call is refused with UNAVAILABLE; open calls carry on. The
+  // first step of a graceful shutdown, taken while the listener still accepts connections.
+  void StopAdmitting() { gate_.StopAdmitting(); }
+  // Waits until no call is open or `deadline` passes; true if none is.
+  bool WaitUntilIdle(std::chrono::steady_clock::time_point deadline) {
+    return gate_.WaitUntilIdle(deadline);
+  }
 
   const ServiceConfig& config() const { return config_; }
+  CallGate& gate() { return gate_; }
 
  private:
   ServiceConfig config_;
-  std::atomic<int> active_{0};
-  std::atomic<bool> admitting_{true};
+  Watchdog watchdog_;
+  CallGate gate_;
 };
 
 }  // namespace tetrefine::server

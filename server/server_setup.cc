@@ -3,27 +3,62 @@
 #include <algorithm>
 #include <climits>
 #include <mutex>
+#include <string>
+#include <vector>
 
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/health_check_service_interface.h"
+#include "grpcpp/impl/server_builder_option.h"
 
 namespace tetrefine::server {
+namespace {
+
+int Milliseconds(double seconds) {
+  return static_cast<int>(std::clamp(seconds * 1000.0, 1.0, static_cast<double>(INT_MAX)));
+}
+
+// Decides for one server whether it serves reflection. Loading grpc++_reflection registers its
+// plugin for every server of the process; this option takes it out, then adds it back when wanted
+// (so exactly once either way).
+class ReflectionOption : public grpc::ServerBuilderOption {
+ public:
+  explicit ReflectionOption(bool enabled) : enabled_(enabled) {}
+  void UpdateArguments(grpc::ChannelArguments* /*args*/) override {}
+  void UpdatePlugins(std::vector<std::unique_ptr<grpc::ServerBuilderPlugin>>* plugins) override {
+    auto reflection = std::make_unique<grpc::reflection::ProtoServerReflectionPlugin>();
+    const std::string name = reflection->name();
+    std::erase_if(*plugins, [&](const auto& plugin) { return plugin->name() == name; });
+    if (enabled_) plugins->push_back(std::move(reflection));
+  }
+
+ private:
+  bool enabled_;
+};
+
+}  // namespace
 
 void InitGrpcFeatures() {
   static std::once_flag once;
-  std::call_once(once, [] {
-    grpc::EnableDefaultHealthCheckService(true);
-    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
-  });
+  std::call_once(once, [] { grpc::EnableDefaultHealthCheckService(true); });
 }
 
 std::unique_ptr<grpc::Server> StartServer(const ServiceConfig& config, RefinerService* service,
-                                          grpc::ServerBuilder* builder) {
+                                          grpc::ServerBuilder* builder,
+                                          const ServerOptions& options) {
   InitGrpcFeatures();
   builder->RegisterService(service);
   builder->SetMaxReceiveMessageSize(
       static_cast<int>(std::clamp<int64_t>(config.limits.max_message_bytes, 1, INT_MAX)));
   // Responses are chunked to at most 3 MiB; the send limit stays gRPC's default (unlimited).
+  builder->AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, Milliseconds(options.keepalive_seconds));
+  builder->AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS,
+                              Milliseconds(options.keepalive_timeout_seconds));
+  builder->AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  builder->AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
+                              Milliseconds(options.min_client_ping_seconds));
+  builder->AddChannelArgument(GRPC_ARG_MAX_CONNECTION_IDLE_MS,
+                              Milliseconds(options.max_connection_idle_seconds));
+  builder->SetOption(std::make_unique<ReflectionOption>(options.reflection));
   std::unique_ptr<grpc::Server> server = builder->BuildAndStart();
   if (server == nullptr) return nullptr;
   if (grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService()) {

@@ -7,16 +7,32 @@
 
 namespace tetrefine::server {
 
+// Connection-level settings of a server (gRPC channel arguments), and its optional services.
+struct ServerOptions {
+  // The server pings a connection idle for this long and drops it when no answer comes within
+  // keepalive_timeout_seconds: a client that vanished without closing (a pulled cable, a dead
+  // NAT entry) does not keep its calls open until their own time limits.
+  double keepalive_seconds = 60;
+  double keepalive_timeout_seconds = 20;
+  // Clients may keep their connections alive with pings this often (gRPC's default, 5 minutes,
+  // makes the server close a connection whose client pings every 30 s as "too many pings").
+  double min_client_ping_seconds = 10;
+  // A connection with no call for this long is closed (the client reconnects when it needs to).
+  double max_connection_idle_seconds = 300;
+  // grpc.reflection.v1alpha.ServerReflection (what grpcurl lists and describes).
+  bool reflection = true;
+};
+
 // Turns on the process-wide gRPC features every tetrefine server offers: the grpc.health.v1
-// service and server reflection. Idempotent; must run before a ServerBuilder is constructed
-// (both hook in there).
+// service. Idempotent; must run before a ServerBuilder is constructed.
 void InitGrpcFeatures();
 
 // Registers `service` on `builder` (which carries the caller's listening ports, if any), applies
-// the message size limit, starts the server and marks it SERVING, both as a whole ("") and as
-// "tetrefine.v1.Refiner". Shared by the network server, the embedded one and the tests, so all
-// serve exactly the same thing. Null if the server could not start.
+// the message size limit and `options`, starts the server and marks it SERVING, both as a whole
+// ("") and as "tetrefine.v1.Refiner". Shared by the network server, the embedded one and the
+// tests, so all serve exactly the same thing. Null if the server could not start.
 std::unique_ptr<grpc::Server> StartServer(const ServiceConfig& config, RefinerService* service,
-                                          grpc::ServerBuilder* builder);
+                                          grpc::ServerBuilder* builder,
+                                          const ServerOptions& options = {});
 
 }  // namespace tetrefine::server

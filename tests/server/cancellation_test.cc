@@ -38,7 +38,7 @@ const HeavyCase& Heavy() {
 
 // How long the server still worked on the call after `since`.
 milliseconds IdleAfter(server::RefinerService& service, Clock::time_point since) {
-  while (service.active_refinements() != 0 && Clock::now() - since < std::chrono::seconds(30)) {
+  while (service.open_calls() != 0 && Clock::now() - since < std::chrono::seconds(30)) {
     std::this_thread::sleep_for(milliseconds(2));
   }
   return std::chrono::duration_cast<milliseconds>(Clock::now() - since);

@@ -88,9 +88,10 @@ TEST_F(ServiceLimitsTest, HugeDeclaredVolume) {
   ExpectExhausted(CutAfter(v1::RefineRequest::kVolumeHeader,
                            [](v1::RefineRequest& r) {
                              v1::VolumeHeader* h = r.mutable_volume_header();
-                             h->mutable_dims()->set_x(int64_t{1} << 31);
-                             h->mutable_dims()->set_y(int64_t{1} << 31);
-                             h->mutable_dims()->set_z(int64_t{1} << 31);
+                             // The largest grid the core takes: 2^60 voxels.
+                             h->mutable_dims()->set_x(int64_t{1} << 20);
+                             h->mutable_dims()->set_y(int64_t{1} << 20);
+                             h->mutable_dims()->set_z(int64_t{1} << 20);
                              h->clear_slab_lo();
                              h->clear_slab_hi();
                              h->set_total_bytes(~uint64_t{0});
@@ -124,28 +125,28 @@ TEST_F(ServiceLimitsTest, MessageAboveMaxMessageBytes) {
   ExpectExhausted(GoodRequests(/*chunk_bytes=*/8000), {});
 }
 
-TEST_F(ServiceLimitsTest, ConcurrentRefinementsBeyondTheLimit) {
-  // Hold the only slot with a call that has sent its options and waits for more.
+TEST_F(ServiceLimitsTest, AStreamStillSendingItsInputHoldsNoRefinementSlot) {
+  // The only slot is free while a call has sent its options and waits for more: a slot is taken
+  // when the input is complete, not when a stream opens.
   v1::Refiner::Stub stub(server_.NewChannel());
   grpc::ClientContext holder;
   auto stream = stub.Refine(&holder);
   ASSERT_TRUE(stream->Write(GoodRequests()[0]));
-  for (int i = 0; i < 500 && server_.service().active_refinements() == 0; ++i) {
+  for (int i = 0; i < 500 && server_.service().open_calls() == 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  ASSERT_EQ(server_.service().active_refinements(), 1);
+  ASSERT_EQ(server_.service().open_calls(), 1);
+  EXPECT_EQ(server_.service().running_refinements(), 0);
 
-  const grpc::Status refused = SendRaw(server_.NewChannel(), GoodRequests());
-  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-  EXPECT_THAT(refused.error_message(), HasSubstr("limit of 1 concurrent refinements"));
+  const grpc::Status served = SendRaw(server_.NewChannel(), GoodRequests());
+  EXPECT_TRUE(served.ok()) << served.error_message();
 
   holder.TryCancel();
   EXPECT_EQ(stream->Finish().error_code(), grpc::StatusCode::CANCELLED);
-  for (int i = 0; i < 500 && server_.service().active_refinements() != 0; ++i) {
+  for (int i = 0; i < 500 && server_.service().open_calls() != 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  EXPECT_EQ(server_.service().active_refinements(), 0);
-  EXPECT_TRUE(SendRaw(server_.NewChannel(), GoodRequests()).ok());
+  EXPECT_EQ(server_.service().open_calls(), 0);
 }
 
 }  // namespace

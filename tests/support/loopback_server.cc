@@ -10,12 +10,13 @@
 
 namespace tetrefine::testing {
 
-LoopbackServer::LoopbackServer(const server::ServiceConfig& config) {
+LoopbackServer::LoopbackServer(const server::ServiceConfig& config,
+                               const server::ServerOptions& options) {
   server::InitGrpcFeatures();  // before the builder exists
   service_ = std::make_unique<server::RefinerService>(config);
   grpc::ServerBuilder builder;
   builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port_);
-  server_ = server::StartServer(config, service_.get(), &builder);
+  server_ = server::StartServer(config, service_.get(), &builder, options);
   EXPECT_NE(server_, nullptr);
   EXPECT_NE(port_, 0);
 }

@@ -8,6 +8,7 @@
 
 #include "grpcpp/grpcpp.h"
 #include "server/refiner_service.h"
+#include "server/server_setup.h"
 #include "tetrefine/v1/tetrefine.pb.h"
 
 namespace tetrefine::testing {
@@ -15,7 +16,8 @@ namespace tetrefine::testing {
 // A real tetrefine server on a loopback port.
 class LoopbackServer {
  public:
-  explicit LoopbackServer(const server::ServiceConfig& config = {});
+  explicit LoopbackServer(const server::ServiceConfig& config = {},
+                          const server::ServerOptions& options = {});
   ~LoopbackServer();
   std::shared_ptr<grpc::Channel> NewChannel() const;
   server::RefinerService& service() { return *service_; }

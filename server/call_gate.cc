@@ -1,0 +1,222 @@
+#include "server/call_gate.h"
+
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "server/memory_budget.h"
+
+namespace tetrefine::server {
+
+CallGate::Reservation::Reservation(Reservation&& other) noexcept
+    : gate_(std::exchange(other.gate_, nullptr)), bytes_(std::exchange(other.bytes_, 0)) {}
+
+CallGate::Reservation& CallGate::Reservation::operator=(Reservation&& other) noexcept {
+  if (this != &other) {
+    Release();
+    gate_ = std::exchange(other.gate_, nullptr);
+    bytes_ = std::exchange(other.bytes_, 0);
+  }
+  return *this;
+}
+
+absl::Status CallGate::Reservation::GrowTo(int64_t total, const std::string& what) {
+  if (gate_ == nullptr || total <= bytes_) return absl::OkStatus();
+  {
+    std::lock_guard<std::mutex> lock(gate_->mu_);
+    const int64_t budget = gate_->config_.memory_budget_bytes;
+    if (budget > 0 && gate_->reserved_ - bytes_ + total > budget) {
+      return absl::ResourceExhaustedError(absl::StrCat(
+          what, " needs ", HumanBytes(total), " of this server's memory budget and ", gate_->Free(),
+          "; retry in a few seconds, when running calls have finished"));
+    }
+    gate_->reserved_ += total - bytes_;
+    bytes_ = total;
+  }
+  return absl::OkStatus();
+}
+
+void CallGate::Reservation::Release() {
+  if (gate_ == nullptr) return;
+  std::vector<std::function<void()>> starts;
+  {
+    std::lock_guard<std::mutex> lock(gate_->mu_);
+    gate_->reserved_ -= bytes_;
+    starts = gate_->Admit();
+  }
+  CallGate* gate = std::exchange(gate_, nullptr);
+  bytes_ = 0;
+  gate->RunStarts(std::move(starts));
+}
+
+CallGate::Ticket::Ticket(Ticket&& other) noexcept
+    : gate_(std::exchange(other.gate_, nullptr)), identity_(std::move(other.identity_)) {}
+
+CallGate::Ticket& CallGate::Ticket::operator=(Ticket&& other) noexcept {
+  if (this != &other) {
+    Release();
+    gate_ = std::exchange(other.gate_, nullptr);
+    identity_ = std::move(other.identity_);
+  }
+  return *this;
+}
+
+void CallGate::Ticket::Release() {
+  if (gate_ == nullptr) return;
+  CallGate* gate = std::exchange(gate_, nullptr);
+  std::lock_guard<std::mutex> lock(gate->mu_);
+  --gate->open_;
+  if (auto it = gate->per_identity_.find(identity_);
+      it != gate->per_identity_.end() && --it->second == 0) {
+    gate->per_identity_.erase(it);
+  }
+  // Under the lock: a waiter may destroy the gate as soon as it sees no open call.
+  gate->idle_.notify_all();
+}
+
+absl::StatusOr<CallGate::Ticket> CallGate::Open(const std::string& identity) {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (!admitting_) {
+    return absl::UnavailableError("this server is shutting down; retry on another");
+  }
+  int& calls = per_identity_[identity];
+  if (config_.max_calls_per_identity > 0 && calls >= config_.max_calls_per_identity) {
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "client ", identity, " already has ", calls, " Refine calls open, this server's limit",
+        " per client (--max_calls_per_identity); retry when one of them has finished"));
+  }
+  ++calls;
+  ++open_;
+  Ticket ticket;
+  ticket.gate_ = this;
+  ticket.identity_ = identity;
+  return ticket;
+}
+
+absl::StatusOr<CallGate::Reservation> CallGate::Reserve(int64_t bytes, const std::string& what) {
+  Reservation reservation;
+  reservation.gate_ = this;
+  absl::Status status = reservation.GrowTo(bytes, what);
+  if (!status.ok()) {
+    reservation.gate_ = nullptr;
+    return status;
+  }
+  return reservation;
+}
+
+bool CallGate::FitsEver(int64_t bytes) const {
+  return config_.memory_budget_bytes <= 0 || bytes <= config_.memory_budget_bytes;
+}
+
+uint64_t CallGate::Enqueue(Reservation* reservation, int64_t total_bytes,
+                           std::function<void()> start) {
+  std::vector<std::function<void()>> starts;
+  uint64_t id;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    id = next_waiter_++;
+    queue_.push_back(Waiter{.id = id,
+                            .reservation = reservation,
+                            .total_bytes = total_bytes,
+                            .start = std::move(start)});
+    starts = Admit();
+  }
+  RunStarts(std::move(starts));
+  return id;
+}
+
+bool CallGate::Withdraw(uint64_t id) {
+  std::lock_guard<std::mutex> lock(mu_);
+  for (auto it = queue_.begin(); it != queue_.end(); ++it) {
+    if (it->id == id) {
+      queue_.erase(it);
+      return true;
+    }
+  }
+  return false;
+}
+
+void CallGate::ReleaseSlot() {
+  std::vector<std::function<void()>> starts;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    --running_;
+    starts = Admit();
+  }
+  RunStarts(std::move(starts));
+}
+
+std::vector<std::function<void()>> CallGate::Admit() {
+  std::vector<std::function<void()>> starts;
+  const int64_t budget = config_.memory_budget_bytes;
+  for (auto it = queue_.begin(); it != queue_.end() && running_ < config_.slots;) {
+    Reservation& r = *it->reservation;
+    const int64_t more = std::max<int64_t>(0, it->total_bytes - r.bytes_);
+    if (budget > 0 && reserved_ + more > budget) {
+      ++it;  // later, smaller calls may still fit
+      continue;
+    }
+    reserved_ += more;
+    r.bytes_ += more;
+    ++running_;
+    ++started_;
+    starts.push_back(std::move(it->start));
+    it = queue_.erase(it);
+  }
+  return starts;
+}
+
+void CallGate::RunStarts(std::vector<std::function<void()>> starts) {
+  for (std::function<void()>& start : starts) start();
+}
+
+std::string CallGate::Free() const {
+  return absl::StrCat(HumanBytes(config_.memory_budget_bytes - reserved_), " of ",
+                      HumanBytes(config_.memory_budget_bytes), " are free");
+}
+
+void CallGate::StopAdmitting() {
+  std::lock_guard<std::mutex> lock(mu_);
+  admitting_ = false;
+}
+
+bool CallGate::admitting() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return admitting_;
+}
+
+bool CallGate::WaitUntilIdle(std::chrono::steady_clock::time_point deadline) {
+  std::unique_lock<std::mutex> lock(mu_);
+  if (deadline == std::chrono::steady_clock::time_point::max()) {
+    idle_.wait(lock, [&] { return open_ == 0; });
+    return true;
+  }
+  return idle_.wait_until(lock, deadline, [&] { return open_ == 0; });
+}
+
+int CallGate::open_calls() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return open_;
+}
+
+int CallGate::running() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return running_;
+}
+
+int64_t CallGate::started_total() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return started_;
+}
+
+int CallGate::queued() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return static_cast<int>(queue_.size());
+}
+
+int64_t CallGate::reserved_bytes() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return reserved_;
+}
+
+}  // namespace tetrefine::server

@@ -1,0 +1,137 @@
+#pragma once
+
+// Admission of Refine calls: what a call may hold, and when it may start refining.
+//
+// A call holds three kinds of resource, each taken when it is needed and bounded separately, so
+// that no kind of client can hold the others hostage:
+//   - an open-call ticket from its arrival (one of max_calls_per_identity for its identity);
+//   - memory, reserved as the headers declare it (the input) and at admission (the output at its
+//     tet budget), against memory_budget_bytes;
+//   - a refinement slot (one of max_concurrent_refinements) only from the moment its input is
+//     complete until its refinement's CPU work ends; a finished result waiting for a slow
+//     reader holds memory, not a slot.
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <list>
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+
+namespace tetrefine::server {
+
+class CallGate {
+ public:
+  struct Config {
+    int slots = 4;                    // refinements at once, >= 1
+    int max_calls_per_identity = 0;   // open calls of one identity; 0: no limit
+    int64_t memory_budget_bytes = 0;  // 0: memory is not budgeted
+  };
+  explicit CallGate(const Config& config) : config_(config) {}
+  CallGate(const CallGate&) = delete;
+  CallGate& operator=(const CallGate&) = delete;
+
+  // Memory held by one call; released when destroyed.
+  class Reservation {
+   public:
+    Reservation() = default;
+    ~Reservation() { Release(); }
+    Reservation(Reservation&& other) noexcept;
+    Reservation& operator=(Reservation&& other) noexcept;
+    // Grows the reservation to `total` bytes (nothing if it already holds as much).
+    // RESOURCE_EXHAUSTED, saying how much is needed, held and free, when that does not fit now;
+    // the reservation is then unchanged.
+    absl::Status GrowTo(int64_t total, const std::string& what);
+    int64_t bytes() const { return bytes_; }
+    void Release();
+
+   private:
+    friend class CallGate;
+    CallGate* gate_ = nullptr;
+    int64_t bytes_ = 0;
+  };
+
+  // One open call of an identity; released when destroyed.
+  class Ticket {
+   public:
+    Ticket() = default;
+    ~Ticket() { Release(); }
+    Ticket(Ticket&& other) noexcept;
+    Ticket& operator=(Ticket&& other) noexcept;
+    void Release();
+
+   private:
+    friend class CallGate;
+    CallGate* gate_ = nullptr;
+    std::string identity_;
+  };
+
+  // Admits a new call from `identity`: UNAVAILABLE once StopAdmitting was called,
+  // RESOURCE_EXHAUSTED (naming the identity, its limit and when to retry) when it already has
+  // max_calls_per_identity calls open.
+  absl::StatusOr<Ticket> Open(const std::string& identity);
+
+  // A reservation of `bytes` for a new call (RESOURCE_EXHAUSTED if they do not fit).
+  absl::StatusOr<Reservation> Reserve(int64_t bytes, const std::string& what);
+
+  // Queues a call whose input is complete. As soon as a slot is free and `total_bytes` fit
+  // (counting what `reservation` already holds), grows the reservation to them, takes the slot
+  // and runs `start`: here if that is possible now, else on the thread that frees enough
+  // (a refinement ending, a call finishing). Calls start in arrival order, except that a call
+  // whose memory does not fit yet does not hold back later ones that fit. `reservation` must
+  // stay valid until `start` has run or Withdraw returned true. Returns an id for Withdraw.
+  // A call that could never fit (total_bytes above the whole budget) is the caller's to refuse
+  // first (see FitsEver).
+  uint64_t Enqueue(Reservation* reservation, int64_t total_bytes, std::function<void()> start);
+  // Takes a queued call out: true if it had not started (its `start` will never run).
+  bool Withdraw(uint64_t id);
+  // Frees the slot taken for a started call.
+  void ReleaseSlot();
+
+  // False when `bytes` exceed the whole budget.
+  bool FitsEver(int64_t bytes) const;
+
+  // From now on Open refuses with UNAVAILABLE (a draining server); open calls carry on.
+  void StopAdmitting();
+  bool admitting() const;
+  // Waits until no call is open (or `deadline`); true if none is.
+  bool WaitUntilIdle(std::chrono::steady_clock::time_point deadline);
+
+  int open_calls() const;
+  int running() const;            // slots taken
+  int64_t started_total() const;  // calls that have taken a slot since the gate was made
+  int queued() const;
+  int64_t reserved_bytes() const;
+  const Config& config() const { return config_; }
+
+ private:
+  struct Waiter {
+    uint64_t id;
+    Reservation* reservation;
+    int64_t total_bytes;
+    std::function<void()> start;
+  };
+  // Starts every waiter that fits now; their start functions, to run unlocked.
+  std::vector<std::function<void()>> Admit();
+  void RunStarts(std::vector<std::function<void()>> starts);
+  std::string Free() const;  // "X free of Y" for messages (under mu_)
+
+  const Config config_;
+  mutable std::mutex mu_;
+  std::condition_variable idle_;
+  bool admitting_ = true;
+  int open_ = 0;
+  std::map<std::string, int> per_identity_;
+  int running_ = 0;
+  int64_t started_ = 0;
+  int64_t reserved_ = 0;
+  std::list<Waiter> queue_;
+  uint64_t next_waiter_ = 1;
+};
+
+}  // namespace tetrefine::server

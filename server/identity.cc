@@ -1,0 +1,162 @@
+#include "server/identity.h"
+
+#include <openssl/crypto.h>
+#include <openssl/sha.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
+#include "grpc/grpc_security_constants.h"
+
+namespace tetrefine::server {
+namespace {
+
+// 16 characters of any token generator (hex, base64) carry 64 bits or more.
+constexpr size_t kMinTokenLength = 16;
+
+std::array<unsigned char, 32> Digest(absl::string_view text) {
+  std::array<unsigned char, 32> digest;
+  SHA256(reinterpret_cast<const unsigned char*>(text.data()), text.size(), digest.data());
+  return digest;
+}
+
+bool ValidIdentity(absl::string_view name) {
+  if (name.empty()) return false;
+  for (char c : name) {
+    if (!absl::ascii_isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '@' &&
+        c != '-') {
+      return false;
+    }
+  }
+  return true;
+}
+
+std::vector<std::string> Property(const grpc::AuthContext& auth, const char* name) {
+  std::vector<std::string> values;
+  for (const grpc::string_ref& value : auth.FindPropertyValues(name)) {
+    values.emplace_back(value.data(), value.size());
+  }
+  return values;
+}
+
+}  // namespace
+
+absl::StatusOr<TokenTable> TokenTable::FromFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot read the token file"));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return FromText(text.str(), path);
+}
+
+absl::StatusOr<TokenTable> TokenTable::FromText(absl::string_view text, absl::string_view source) {
+  TokenTable table;
+  int line_number = 0;
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    ++line_number;
+    line = absl::StripAsciiWhitespace(line);
+    if (line.empty() || line.front() == '#') continue;
+    const std::vector<absl::string_view> fields =
+        absl::StrSplit(line, absl::ByAnyChar(" \t"), absl::SkipEmpty());
+    auto error = [&](absl::string_view what) {
+      return absl::InvalidArgumentError(absl::StrCat(source, ":", line_number, ": ", what));
+    };
+    if (fields.size() != 2) return error("expected \"<identity> <token>\"");
+    if (!ValidIdentity(fields[0])) {
+      return error(absl::StrCat("identity '", fields[0], "' must be [A-Za-z0-9._@-]+"));
+    }
+    if (fields[1].size() < kMinTokenLength) {
+      return error(absl::StrCat("the token of ", fields[0], " has ", fields[1].size(),
+                                " characters; at least ", kMinTokenLength, " are needed"));
+    }
+    Entry entry{.identity = std::string(fields[0]), .digest = Digest(fields[1])};
+    for (const Entry& other : table.entries_) {
+      if (other.digest == entry.digest) {
+        return error(absl::StrCat("the token of ", entry.identity, " is already the token of ",
+                                  other.identity));
+      }
+    }
+    table.entries_.push_back(std::move(entry));
+  }
+  if (table.entries_.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat(source, ": no tokens"));
+  }
+  return table;
+}
+
+std::optional<std::string> TokenTable::Find(absl::string_view token) const {
+  const std::array<unsigned char, 32> digest = Digest(token);
+  const Entry* match = nullptr;
+  for (const Entry& entry : entries_) {
+    // No early exit: every entry costs the same.
+    const bool same = CRYPTO_memcmp(entry.digest.data(), digest.data(), digest.size()) == 0;
+    match = same ? &entry : match;
+  }
+  if (match == nullptr) return std::nullopt;
+  return match->identity;
+}
+
+std::string PeerAddress(absl::string_view peer) {
+  absl::string_view address = peer;
+  if (!absl::ConsumePrefix(&address, "ipv4:") && !absl::ConsumePrefix(&address, "ipv6:")) {
+    return std::string(peer);
+  }
+  const size_t colon = address.rfind(':');
+  const size_t bracket = address.rfind(']');
+  if (colon == absl::string_view::npos || (bracket != absl::string_view::npos && colon < bracket)) {
+    return std::string(address);
+  }
+  return std::string(address.substr(0, colon));
+}
+
+absl::StatusOr<std::string> IdentifyCall(const AccessPolicy& policy,
+                                         const grpc::ServerContextBase& context) {
+  const std::shared_ptr<const grpc::AuthContext> auth = context.auth_context();
+  std::vector<std::string> common_names, subjects;
+  if (auth != nullptr && auth->IsPeerAuthenticated()) {
+    common_names = Property(*auth, GRPC_X509_CN_PROPERTY_NAME);
+    subjects = Property(*auth, GRPC_X509_SUBJECT_PROPERTY_NAME);
+  }
+  if (!policy.allowed_subjects.empty()) {
+    bool allowed = false;
+    for (const std::string& entry : policy.allowed_subjects) {
+      for (const std::vector<std::string>* names : {&common_names, &subjects}) {
+        for (const std::string& name : *names) allowed = allowed || name == entry;
+      }
+    }
+    if (!allowed) {
+      return absl::PermissionDeniedError(absl::StrCat(
+          "client certificate ",
+          subjects.empty() ? std::string("(none)") : absl::StrCat("'", subjects.front(), "'"),
+          " is not on this server's allow-list (--tls_allowed_subjects)"));
+    }
+  }
+  if (policy.tokens.has_value()) {
+    const auto& metadata = context.client_metadata();
+    const auto header = metadata.find("authorization");
+    if (header == metadata.end()) {
+      return absl::UnauthenticatedError(
+          "this server requires a bearer token: send call metadata 'authorization: Bearer "
+          "<token>' (tetrefine CLI: --token-file)");
+    }
+    absl::string_view value(header->second.data(), header->second.size());
+    if (!absl::ConsumePrefix(&value, "Bearer ")) {
+      return absl::UnauthenticatedError("authorization metadata must be 'Bearer <token>'");
+    }
+    std::optional<std::string> identity = policy.tokens->Find(absl::StripAsciiWhitespace(value));
+    if (!identity.has_value()) {
+      return absl::UnauthenticatedError("the bearer token is not one this server knows");
+    }
+    return absl::StrCat("token:", *identity);
+  }
+  if (!common_names.empty()) return absl::StrCat("cert:", common_names.front());
+  return absl::StrCat("peer:", PeerAddress(context.peer()));
+}
+
+}  // namespace tetrefine::server

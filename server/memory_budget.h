@@ -1,0 +1,48 @@
+#pragma once
+
+// How much memory the server may give its calls, and how much one call may need at worst.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace tetrefine::server {
+
+// The memory limit of the cgroup this process runs in, bytes: cgroup v2 memory.max, else v1
+// memory.limit_in_bytes, each looked up both at the cgroup root (a container's own view) and at
+// this process's cgroup path from /proc/self/cgroup; the smallest limit found. nullopt when
+// there is none ("max", or v1's "unlimited" of about 2^63). `root` replaces "/" for tests.
+std::optional<int64_t> CgroupMemoryLimit(const std::string& root = "/");
+
+// Physical memory of the machine, bytes.
+int64_t PhysicalMemoryBytes();
+
+// The part of a memory limit the calls may reserve: the limit less what the process needs
+// besides its calls (code, gRPC and TBB threads, allocator slack): max(256 MiB, 10% of it).
+// Why: an idle tetrefine_server has 30-40 MB resident; the rest covers fragmentation, which
+// grows with the number of calls. Never below 0.
+int64_t BudgetForLimit(int64_t limit_bytes);
+
+// Bytes the server reserves per tet of a call's output, by default. Measured: peak resident
+// memory of tetrefine_server per output tet over one call, 96-141 bytes at 1-4.4 M output
+// tets (docs/results/service_abuse.md; docs/results/benchmarks.md gives 85-92 for the core
+// alone), rounded up for growth between measurements.
+inline constexpr int64_t kDefaultBytesPerOutputTet = 160;
+
+// The most tets one iteration can make of one tet: the largest child count of the subdivision
+// table (11: configuration 6's eight children, or a Schönhardt prism's Steiner fan).
+int64_t MaxChildrenPerTet();
+
+// The most tets a refinement of `input_tets` tets can end with: the tet budget, or fewer when
+// `max_iterations` iterations cannot reach it (each multiplies the count by at most
+// MaxChildrenPerTet()).
+int64_t WorstCaseOutputTets(int64_t input_tets, int max_iterations, int64_t max_tets);
+
+// What one open call may hold before its input is complete: up to one request message as gRPC
+// received it plus its parsed copy.
+inline int64_t OpenCallBytes(int64_t max_message_bytes) { return 2 * max_message_bytes; }
+
+// "1.5 GiB", "312 MiB", "640 KiB", "12 B": for messages.
+std::string HumanBytes(int64_t bytes);
+
+}  // namespace tetrefine::server

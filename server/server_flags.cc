@@ -1,0 +1,253 @@
+#include "server/server_flags.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/usage_config.h"
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
+#include "server/memory_budget.h"
+
+namespace {
+const tetrefine::wire::ServiceLimits kDefaults;
+}  // namespace
+
+// --- network -------------------------------------------------------------------------------
+ABSL_FLAG(std::string, listen, "0.0.0.0:50051", "Address to listen on, host:port (port 0: any)");
+ABSL_FLAG(std::string, local_listen, "",
+          "A second, plaintext gRPC listener on a loopback address (127.0.0.1:PORT or [::1]:PORT; "
+          "empty: none), for health probes run inside the container when --listen uses TLS. "
+          "Tokens, quotas and limits apply there too");
+ABSL_FLAG(std::string, metrics_listen, "127.0.0.1:9464",
+          "Prometheus /metrics endpoint, host:port (port 0: any; empty: off). HTTPS with the "
+          "--tls_cert certificate when gRPC uses TLS. If it cannot be bound the server logs an "
+          "error and serves without metrics");
+ABSL_FLAG(double, keepalive_seconds, 60,
+          "Ping a connection idle this long; drop it when the ping is not answered within "
+          "--keepalive_timeout_seconds");
+ABSL_FLAG(double, keepalive_timeout_seconds, 20, "See --keepalive_seconds");
+ABSL_FLAG(double, max_connection_idle_seconds, 300,
+          "Close a connection that has had no call for this long");
+ABSL_FLAG(bool, reflection, true, "Serve gRPC server reflection (what grpcurl uses)");
+
+// --- TLS and identity ------------------------------------------------------------------------
+ABSL_FLAG(std::string, tls_cert, "", "PEM server certificate chain (enables TLS, with --tls_key)");
+ABSL_FLAG(std::string, tls_key, "", "PEM private key of --tls_cert");
+ABSL_FLAG(std::string, tls_client_ca, "",
+          "PEM CA bundle: when set, clients must present a certificate it verifies; quotas then "
+          "count per certificate common name");
+ABSL_FLAG(std::string, tls_allowed_subjects, "",
+          "Semicolon-separated client certificate common names or full subjects (as gRPC "
+          "prints them, e.g. CN=a,O=b) allowed to call; empty: any certificate --tls_client_ca "
+          "verifies");
+ABSL_FLAG(std::string, token_file, "",
+          "File of lines '<identity> <token>': every Refine and GetServerInfo call must carry "
+          "metadata 'authorization: Bearer <token>'; quotas then count per identity");
+
+// --- work and its limits ---------------------------------------------------------------------
+ABSL_FLAG(int, threads, 0, "Core worker threads per refinement (0: all cores)");
+ABSL_FLAG(int, max_concurrent, kDefaults.max_concurrent_refinements,
+          "Refinements running at once; a call whose input is complete waits up to "
+          "--queue_seconds for one of them");
+ABSL_FLAG(int64_t, max_voxels, kDefaults.max_voxels, "Largest volume (slab) accepted, in voxels");
+ABSL_FLAG(int64_t, max_input_tets, kDefaults.max_input_tets,
+          "Largest input mesh accepted, in tets (vertices: 4 times this)");
+ABSL_FLAG(int64_t, max_output_tets, 0,
+          "Tet budget of a refinement: the default and largest max_tets (0: 50000000, or less "
+          "when that many tets at --bytes_per_output_tet would not fit the memory budget)");
+ABSL_FLAG(int64_t, max_message_bytes, kDefaults.max_message_bytes,
+          "Largest request message accepted, in bytes (GetServerInfo tells clients)");
+ABSL_FLAG(int, max_iterations, kDefaults.max_iterations, "Largest max_iterations of a call");
+ABSL_FLAG(int, max_lattice_n, kDefaults.max_lattice_n,
+          "Largest lattice_n (order of the final lattice check) of a call, at most 64");
+ABSL_FLAG(int64_t, max_lattice_points, kDefaults.max_lattice_points,
+          "Most lattice points a call's final check may sample: points per tet x "
+          "lattice_max_tets (or x max_tets when lattice_max_tets = 0)");
+ABSL_FLAG(double, max_call_seconds, 600,
+          "Wall time of a whole Refine call (input, wait, refinement, output); then "
+          "DEADLINE_EXCEEDED");
+ABSL_FLAG(double, input_deadline_seconds, 300,
+          "A call's input must be complete (end_of_input, stream closed) this long after it began");
+ABSL_FLAG(double, idle_timeout_seconds, 30,
+          "Longest pause between a call's request messages, and after end_of_input until the "
+          "client closes the stream");
+ABSL_FLAG(double, write_stall_seconds, 60,
+          "Longest wait for a client to take a response message; then its call is cancelled and "
+          "what it holds is freed");
+ABSL_FLAG(double, queue_seconds, 10,
+          "Longest wait of a complete input for a refinement slot and memory; then "
+          "RESOURCE_EXHAUSTED saying which was missing");
+ABSL_FLAG(int, max_calls_per_identity, 16,
+          "Open Refine calls of one client (its token identity, certificate common name, or "
+          "else address); more are RESOURCE_EXHAUSTED. 0: no limit");
+ABSL_FLAG(int64_t, memory_limit_bytes, 0,
+          "Memory this server may use in all (0: the cgroup limit, memory.max or "
+          "memory.limit_in_bytes, else the machine's physical memory)");
+ABSL_FLAG(int64_t, memory_budget_bytes, 0,
+          "Memory the calls may reserve (0: the limit less max(256 MiB, 10%)). A call reserves "
+          "2 x --max_message_bytes when it opens, its declared input as it arrives, and its "
+          "output at its tet budget x --bytes_per_output_tet before it refines");
+ABSL_FLAG(int64_t, bytes_per_output_tet, tetrefine::server::kDefaultBytesPerOutputTet,
+          "Peak bytes of a refinement per tet of its budget (measured: 96-141)");
+
+// --- process ---------------------------------------------------------------------------------
+ABSL_FLAG(double, drain_seconds, 30.0,
+          "On SIGTERM/SIGINT, seconds in-flight calls may take to finish before being cancelled; "
+          "later signals during the drain are logged and ignored");
+ABSL_FLAG(std::string, log_level, "info",
+          "spdlog level: trace, debug, info, warn, error, off (logs go to stderr)");
+
+namespace tetrefine::server {
+namespace {
+
+absl::Status Invalid(const std::string& message) { return absl::InvalidArgumentError(message); }
+
+bool IsLoopback(const std::string& address) {
+  return absl::StartsWith(address, "127.") || absl::StartsWith(address, "[::1]:") ||
+         absl::StartsWith(address, "localhost:");
+}
+
+bool Positive(double seconds) { return std::isfinite(seconds) && seconds > 0; }
+
+}  // namespace
+
+void ConfigureUsage() {
+  absl::FlagsUsageConfig config;
+  auto ours = [](absl::string_view file) { return absl::EndsWith(file, "server_flags.cc"); };
+  config.contains_helpshort_flags = ours;
+  config.contains_help_flags = ours;
+  absl::SetFlagsUsageConfig(config);
+}
+
+absl::StatusOr<ServerSettings> SettingsFromFlags() {
+  ServerSettings s;
+  s.listen = absl::GetFlag(FLAGS_listen);
+  s.local_listen = absl::GetFlag(FLAGS_local_listen);
+  s.metrics_listen = absl::GetFlag(FLAGS_metrics_listen);
+  s.tls_cert = absl::GetFlag(FLAGS_tls_cert);
+  s.tls_key = absl::GetFlag(FLAGS_tls_key);
+  s.tls_client_ca = absl::GetFlag(FLAGS_tls_client_ca);
+  s.drain_seconds = absl::GetFlag(FLAGS_drain_seconds);
+  s.log_level = absl::GetFlag(FLAGS_log_level);
+  if (!s.local_listen.empty() && !IsLoopback(s.local_listen)) {
+    return Invalid(absl::StrCat("--local_listen=", s.local_listen,
+                                ": must be a loopback address (127.x.x.x:PORT, [::1]:PORT or "
+                                "localhost:PORT); it is plaintext"));
+  }
+  if (s.tls_cert.empty() != s.tls_key.empty()) {
+    return Invalid("--tls_cert and --tls_key go together");
+  }
+  if (!s.tls_client_ca.empty() && s.tls_cert.empty()) {
+    return Invalid("--tls_client_ca needs --tls_cert and --tls_key");
+  }
+
+  ServerOptions& server = s.server;
+  server.keepalive_seconds = absl::GetFlag(FLAGS_keepalive_seconds);
+  server.keepalive_timeout_seconds = absl::GetFlag(FLAGS_keepalive_timeout_seconds);
+  server.max_connection_idle_seconds = absl::GetFlag(FLAGS_max_connection_idle_seconds);
+  server.reflection = absl::GetFlag(FLAGS_reflection);
+  for (auto [name, value] : {std::pair{"keepalive_seconds", server.keepalive_seconds},
+                             {"keepalive_timeout_seconds", server.keepalive_timeout_seconds},
+                             {"max_connection_idle_seconds", server.max_connection_idle_seconds}}) {
+    if (!Positive(value)) return Invalid(absl::StrCat("--", name, ": must be > 0, got ", value));
+  }
+  if (!(s.drain_seconds >= 0) || !std::isfinite(s.drain_seconds)) {
+    return Invalid(absl::StrCat("--drain_seconds: must be >= 0, got ", s.drain_seconds));
+  }
+
+  ServiceConfig& service = s.service;
+  service.refine_threads = absl::GetFlag(FLAGS_threads);
+  wire::ServiceLimits& l = service.limits;
+  l.max_voxels = absl::GetFlag(FLAGS_max_voxels);
+  l.max_input_tets = absl::GetFlag(FLAGS_max_input_tets);
+  l.max_concurrent_refinements = absl::GetFlag(FLAGS_max_concurrent);
+  l.max_message_bytes = absl::GetFlag(FLAGS_max_message_bytes);
+  l.max_iterations = absl::GetFlag(FLAGS_max_iterations);
+  l.max_lattice_n = absl::GetFlag(FLAGS_max_lattice_n);
+  l.max_lattice_points = absl::GetFlag(FLAGS_max_lattice_points);
+  l.max_call_seconds = absl::GetFlag(FLAGS_max_call_seconds);
+  l.input_deadline_seconds = absl::GetFlag(FLAGS_input_deadline_seconds);
+  l.idle_timeout_seconds = absl::GetFlag(FLAGS_idle_timeout_seconds);
+  l.write_stall_seconds = absl::GetFlag(FLAGS_write_stall_seconds);
+  l.queue_seconds = absl::GetFlag(FLAGS_queue_seconds);
+  l.max_calls_per_identity = absl::GetFlag(FLAGS_max_calls_per_identity);
+  l.bytes_per_output_tet = absl::GetFlag(FLAGS_bytes_per_output_tet);
+  if (l.max_concurrent_refinements < 1 || l.max_voxels < 1 || l.max_input_tets < 1 ||
+      l.max_message_bytes < 1024 || l.max_iterations < 0 || l.max_lattice_points < 0 ||
+      l.max_calls_per_identity < 0 || l.bytes_per_output_tet < 1 || service.refine_threads < 0) {
+    return Invalid(
+        "--max_concurrent, --max_voxels, --max_input_tets and --bytes_per_output_tet must be >= "
+        "1, --max_message_bytes >= 1024, --max_iterations, --max_lattice_points, "
+        "--max_calls_per_identity and --threads >= 0");
+  }
+  if (l.max_lattice_n < 0 || l.max_lattice_n > 64) {
+    return Invalid(absl::StrCat("--max_lattice_n: must be in [0, 64] (the core's bound), got ",
+                                l.max_lattice_n));
+  }
+  for (auto [name, value] : {std::pair{"max_call_seconds", l.max_call_seconds},
+                             {"input_deadline_seconds", l.input_deadline_seconds},
+                             {"idle_timeout_seconds", l.idle_timeout_seconds},
+                             {"write_stall_seconds", l.write_stall_seconds}}) {
+    if (!Positive(value)) return Invalid(absl::StrCat("--", name, ": must be > 0, got ", value));
+  }
+  if (!(l.queue_seconds >= 0) || !std::isfinite(l.queue_seconds)) {
+    return Invalid(absl::StrCat("--queue_seconds: must be >= 0, got ", l.queue_seconds));
+  }
+
+  // Memory: the limit, the budget the calls share, and the tet budget that fits it.
+  s.memory_limit_bytes = absl::GetFlag(FLAGS_memory_limit_bytes);
+  if (s.memory_limit_bytes < 0) return Invalid("--memory_limit_bytes: must be >= 0");
+  if (s.memory_limit_bytes > 0) {
+    s.memory_source = "--memory_limit_bytes";
+  } else if (std::optional<int64_t> cgroup = CgroupMemoryLimit()) {
+    s.memory_limit_bytes = *cgroup;
+    s.memory_source = "the cgroup limit";
+  } else {
+    s.memory_limit_bytes = PhysicalMemoryBytes();
+    s.memory_source = "physical memory (no cgroup limit)";
+  }
+  l.memory_budget_bytes = absl::GetFlag(FLAGS_memory_budget_bytes);
+  if (l.memory_budget_bytes < 0) return Invalid("--memory_budget_bytes: must be >= 0");
+  if (l.memory_budget_bytes == 0) l.memory_budget_bytes = BudgetForLimit(s.memory_limit_bytes);
+  if (l.memory_budget_bytes > s.memory_limit_bytes) {
+    return Invalid(absl::StrCat("--memory_budget_bytes=", l.memory_budget_bytes,
+                                " exceeds the memory limit of ", s.memory_limit_bytes, " (",
+                                s.memory_source, ")"));
+  }
+  const int64_t call_floor = OpenCallBytes(l.max_message_bytes);
+  if (l.memory_budget_bytes < call_floor) {
+    return Invalid(absl::StrCat("the memory budget (", HumanBytes(l.memory_budget_bytes),
+                                ") cannot hold even one open call (2 x --max_message_bytes)"));
+  }
+  l.max_output_tets = absl::GetFlag(FLAGS_max_output_tets);
+  if (l.max_output_tets < 0) return Invalid("--max_output_tets: must be >= 0");
+  if (l.max_output_tets == 0) {
+    l.max_output_tets = std::clamp<int64_t>(
+        (l.memory_budget_bytes - call_floor) / l.bytes_per_output_tet, 1, 50'000'000);
+  }
+
+  // Identity.
+  if (const std::string path = absl::GetFlag(FLAGS_token_file); !path.empty()) {
+    absl::StatusOr<TokenTable> tokens = TokenTable::FromFile(path);
+    if (!tokens.ok())
+      return absl::Status(tokens.status().code(),
+                          absl::StrCat("--token_file: ", tokens.status().message()));
+    service.access.tokens = *std::move(tokens);
+  }
+  for (absl::string_view subject :
+       absl::StrSplit(absl::GetFlag(FLAGS_tls_allowed_subjects), ';', absl::SkipWhitespace())) {
+    service.access.allowed_subjects.emplace_back(absl::StripAsciiWhitespace(subject));
+  }
+  if (!service.access.allowed_subjects.empty() && s.tls_client_ca.empty()) {
+    return Invalid("--tls_allowed_subjects needs --tls_client_ca (clients must send certificates)");
+  }
+  return s;
+}
+
+}  // namespace tetrefine::server

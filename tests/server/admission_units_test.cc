@@ -1,0 +1,256 @@
+// The pieces admission is built from, one at a time: the watchdog's timers, the call gate's
+// slots, memory and per-identity counts, bearer tokens, the cgroup memory limit and the worst
+// case of a call.
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "server/call_gate.h"
+#include "server/identity.h"
+#include "server/memory_budget.h"
+#include "server/watchdog.h"
+
+namespace tetrefine::server {
+namespace {
+
+using ::testing::HasSubstr;
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+TEST(WatchdogTest, RunsCallbacksInTimeOrderAndNotCancelledOnes) {
+  Watchdog watchdog;
+  std::mutex mu;
+  std::vector<int> ran;
+  auto record = [&](int n) {
+    return [&, n] {
+      std::lock_guard<std::mutex> lock(mu);
+      ran.push_back(n);
+    };
+  };
+  const Clock::time_point now = Clock::now();
+  watchdog.Schedule(now + milliseconds(60), record(3));
+  const Watchdog::Id cancelled = watchdog.Schedule(now + milliseconds(40), record(99));
+  watchdog.Schedule(now + milliseconds(20), record(2));
+  watchdog.Schedule(now - milliseconds(5), record(1));  // already due: at once
+  watchdog.Cancel(cancelled);
+  for (int i = 0; i < 500; ++i) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      if (ran.size() == 3) break;
+    }
+    std::this_thread::sleep_for(milliseconds(5));
+  }
+  std::lock_guard<std::mutex> lock(mu);
+  EXPECT_EQ(ran, (std::vector<int>{1, 2, 3}));
+}
+
+TEST(WatchdogTest, CancelWaitsForARunningCallback) {
+  Watchdog watchdog;
+  std::atomic<bool> started{false}, finished{false};
+  const Watchdog::Id id = watchdog.Schedule(Clock::now(), [&] {
+    started.store(true);
+    std::this_thread::sleep_for(milliseconds(100));
+    finished.store(true);
+  });
+  while (!started.load()) std::this_thread::sleep_for(milliseconds(1));
+  watchdog.Cancel(id);
+  EXPECT_TRUE(finished.load()) << "Cancel returned while the callback still ran";
+}
+
+TEST(CallGateTest, SlotsStartCallsInOrderAndFreeSlotsStartTheNext) {
+  CallGate gate({.slots = 2});
+  std::vector<int> started;
+  std::vector<CallGate::Reservation> reservations(4);
+  for (int i = 0; i < 4; ++i) {
+    gate.Enqueue(&reservations[i], 0, [&, i] { started.push_back(i); });
+  }
+  EXPECT_EQ(started, (std::vector<int>{0, 1}));
+  EXPECT_EQ(gate.running(), 2);
+  EXPECT_EQ(gate.queued(), 2);
+  gate.ReleaseSlot();
+  EXPECT_EQ(started, (std::vector<int>{0, 1, 2}));
+  gate.ReleaseSlot();
+  gate.ReleaseSlot();
+  EXPECT_EQ(started, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(gate.running(), 1);
+}
+
+TEST(CallGateTest, AWithdrawnCallNeverStarts) {
+  CallGate gate({.slots = 1});
+  CallGate::Reservation first, second;
+  bool second_started = false;
+  gate.Enqueue(&first, 0, [] {});
+  const uint64_t id = gate.Enqueue(&second, 0, [&] { second_started = true; });
+  EXPECT_TRUE(gate.Withdraw(id));
+  EXPECT_FALSE(gate.Withdraw(id));
+  gate.ReleaseSlot();
+  EXPECT_FALSE(second_started);
+}
+
+TEST(CallGateTest, MemoryTheWorstCaseNeedsIsReservedBeforeStartAndLaterSmallerCallsPass) {
+  CallGate gate({.slots = 4, .memory_budget_bytes = 1000});
+  absl::StatusOr<CallGate::Reservation> big = gate.Reserve(100, "input");
+  ASSERT_TRUE(big.ok());
+  CallGate::Reservation large, small;
+  std::vector<std::string> started;
+  gate.Enqueue(&*big, 700, [&] { started.push_back("big"); });
+  EXPECT_EQ(gate.reserved_bytes(), 700);
+  gate.Enqueue(&large, 600, [&] { started.push_back("large"); });  // 700 + 600 > 1000: waits
+  gate.Enqueue(&small, 200, [&] { started.push_back("small"); });  // fits: passes it
+  EXPECT_EQ(started, (std::vector<std::string>{"big", "small"}));
+  EXPECT_EQ(gate.reserved_bytes(), 900);
+  gate.ReleaseSlot();
+  big->Release();  // its memory frees: the large call fits now
+  EXPECT_EQ(started, (std::vector<std::string>{"big", "small", "large"}));
+  EXPECT_EQ(large.bytes(), 600);
+  EXPECT_FALSE(gate.FitsEver(1001));
+  EXPECT_TRUE(gate.FitsEver(1000));
+}
+
+TEST(CallGateTest, AReservationThatDoesNotFitSaysHowMuchIsFree) {
+  CallGate gate({.slots = 1, .memory_budget_bytes = 4 << 20});
+  absl::StatusOr<CallGate::Reservation> a = gate.Reserve(3 << 20, "call a");
+  ASSERT_TRUE(a.ok());
+  absl::StatusOr<CallGate::Reservation> b = gate.Reserve(2 << 20, "call b");
+  ASSERT_FALSE(b.ok());
+  EXPECT_EQ(b.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(b.status().message(), HasSubstr("call b needs 2.0 MiB"));
+  EXPECT_THAT(b.status().message(), HasSubstr("1.0 MiB of 4.0 MiB are free"));
+  EXPECT_THAT(b.status().message(), HasSubstr("retry"));
+  a->Release();
+  EXPECT_TRUE(gate.Reserve(2 << 20, "call b").ok());
+}
+
+TEST(CallGateTest, OpenCallsAreCountedPerIdentity) {
+  CallGate gate({.slots = 1, .max_calls_per_identity = 2});
+  absl::StatusOr<CallGate::Ticket> a1 = gate.Open("peer:a");
+  absl::StatusOr<CallGate::Ticket> a2 = gate.Open("peer:a");
+  ASSERT_TRUE(a1.ok() && a2.ok());
+  absl::StatusOr<CallGate::Ticket> a3 = gate.Open("peer:a");
+  EXPECT_EQ(a3.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(a3.status().message(), HasSubstr("client peer:a already has 2 Refine calls open"));
+  EXPECT_THAT(a3.status().message(), HasSubstr("--max_calls_per_identity"));
+  EXPECT_TRUE(gate.Open("peer:b").ok()) << "another identity is not affected";
+  a1->Release();
+  EXPECT_TRUE(gate.Open("peer:a").ok());
+  EXPECT_EQ(gate.open_calls(), 1);  // a2; the temporaries are released at once
+  gate.StopAdmitting();
+  EXPECT_EQ(gate.Open("peer:c").status().code(), absl::StatusCode::kUnavailable);
+}
+
+TEST(TokenTableTest, FindsTheIdentityOfEachTokenAndNothingElse) {
+  absl::StatusOr<TokenTable> table = TokenTable::FromText(
+      "# operators\n"
+      "alice  0123456789abcdef0123\n"
+      "\n"
+      "bob\tsecret-token-of-bob-42\n"
+      "alice  rotated-token-of-alice-77\n",
+      "tokens.txt");
+  ASSERT_TRUE(table.ok()) << table.status();
+  EXPECT_EQ(table->size(), 3u);
+  EXPECT_EQ(table->Find("0123456789abcdef0123"), "alice");
+  EXPECT_EQ(table->Find("rotated-token-of-alice-77"), "alice");
+  EXPECT_EQ(table->Find("secret-token-of-bob-42"), "bob");
+  EXPECT_EQ(table->Find("secret-token-of-bob-4"), std::nullopt);
+  EXPECT_EQ(table->Find("secret-token-of-bob-421"), std::nullopt);
+  EXPECT_EQ(table->Find(""), std::nullopt);
+}
+
+TEST(TokenTableTest, BadLinesAreNamedWithTheirLineNumber) {
+  struct Case {
+    std::string text;
+    std::string message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"alice\n", "t:1: expected \"<identity> <token>\""},
+           {"ok 0123456789abcdef\nbad! 0123456789abcdefgh\n", "t:2: identity 'bad!'"},
+           {"alice short\n", "t:1: the token of alice has 5 characters; at least 16"},
+           {"a 0123456789abcdef\nb 0123456789abcdef\n",
+            "t:2: the token of b is already the token of a"},
+           {"# nothing\n\n", "t: no tokens"},
+       }) {
+    absl::StatusOr<TokenTable> table = TokenTable::FromText(c.text, "t");
+    ASSERT_FALSE(table.ok()) << c.text;
+    EXPECT_EQ(table.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_THAT(table.status().message(), HasSubstr(c.message));
+  }
+  EXPECT_EQ(TokenTable::FromFile("/nonexistent/tokens").status().code(),
+            absl::StatusCode::kNotFound);
+}
+
+TEST(PeerAddressTest, DropsThePort) {
+  EXPECT_EQ(PeerAddress("ipv4:10.0.0.7:51234"), "10.0.0.7");
+  EXPECT_EQ(PeerAddress("ipv6:[::1]:5000"), "[::1]");
+  EXPECT_EQ(PeerAddress("unix:/tmp/socket"), "unix:/tmp/socket");
+  EXPECT_EQ(PeerAddress("inproc"), "inproc");
+}
+
+class CgroupTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = std::filesystem::temp_directory_path() /
+            ("tetrefine_cgroup_" + std::to_string(::getpid()) + "_" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(root_);
+    std::filesystem::create_directories(root_ / "proc/self");
+  }
+  void TearDown() override { std::filesystem::remove_all(root_); }
+  void Write(const std::string& relative, const std::string& text) {
+    const std::filesystem::path path = root_ / relative;
+    std::filesystem::create_directories(path.parent_path());
+    std::ofstream(path) << text;
+  }
+  std::filesystem::path root_;
+};
+
+TEST_F(CgroupTest, V2LimitAtTheRootOrOnTheOwnPath) {
+  Write("proc/self/cgroup", "0::/\n");
+  Write("sys/fs/cgroup/memory.max", "8589934592\n");
+  EXPECT_EQ(CgroupMemoryLimit(root_.string()), int64_t{8} << 30);
+  Write("proc/self/cgroup", "0::/kubepods/pod1\n");
+  Write("sys/fs/cgroup/memory.max", "max\n");
+  Write("sys/fs/cgroup/kubepods/pod1/memory.max", "1073741824\n");
+  EXPECT_EQ(CgroupMemoryLimit(root_.string()), int64_t{1} << 30);
+}
+
+TEST_F(CgroupTest, V1LimitAndItsUnlimitedValue) {
+  Write("proc/self/cgroup", "4:memory:/docker/abc\n0::/\n");
+  Write("sys/fs/cgroup/memory/memory.limit_in_bytes", "9223372036854771712\n");
+  EXPECT_EQ(CgroupMemoryLimit(root_.string()), std::nullopt);
+  Write("sys/fs/cgroup/memory/docker/abc/memory.limit_in_bytes", "536870912\n");
+  EXPECT_EQ(CgroupMemoryLimit(root_.string()), int64_t{512} << 20);
+}
+
+TEST_F(CgroupTest, NoCgroupFilesNoLimit) {
+  EXPECT_EQ(CgroupMemoryLimit(root_.string()), std::nullopt);
+  EXPECT_GT(PhysicalMemoryBytes(), int64_t{64} << 20);
+}
+
+TEST(MemoryBudgetTest, BudgetLeavesTheProcessItsShare) {
+  EXPECT_EQ(BudgetForLimit(int64_t{8} << 30), (int64_t{8} << 30) - (int64_t{8} << 30) / 10);
+  EXPECT_EQ(BudgetForLimit(int64_t{1} << 30), (int64_t{1} << 30) - (int64_t{256} << 20));
+  EXPECT_EQ(BudgetForLimit(int64_t{100} << 20), 0);
+}
+
+TEST(MemoryBudgetTest, WorstCaseOutputIsTheBudgetOrWhatTheIterationsCanReach) {
+  // The subdivision table: configuration 6 makes 8 children, a prism with a Steiner point more.
+  EXPECT_GE(MaxChildrenPerTet(), 8);
+  EXPECT_LE(MaxChildrenPerTet(), 11);
+  const int64_t g = MaxChildrenPerTet();
+  EXPECT_EQ(WorstCaseOutputTets(40, 0, 1'000'000), 40);
+  EXPECT_EQ(WorstCaseOutputTets(40, 2, 1'000'000), 40 * g * g);
+  EXPECT_EQ(WorstCaseOutputTets(40, 16, 1'000'000), 1'000'000);
+  EXPECT_EQ(WorstCaseOutputTets(40, 1'000'000'000, 50'000'000), 50'000'000);
+  EXPECT_EQ(HumanBytes(1536), "1.5 KiB");
+  EXPECT_EQ(HumanBytes(12), "12 B");
+}
+
+}  // namespace
+}  // namespace tetrefine::server
