@@ -1,5 +1,6 @@
 #include "client/refine_client.h"
 
+#include <algorithm>
 #include <atomic>
 #include <thread>
 #include <utility>
@@ -16,6 +17,14 @@ void ApplyDeadline(const std::optional<std::chrono::system_clock::time_point>& d
                    grpc::ClientContext* context) {
   if (deadline.has_value()) context->set_deadline(*deadline);
 }
+
+void ApplyToken(const std::string& token, grpc::ClientContext* context) {
+  if (!token.empty()) context->AddMetadata("authorization", "Bearer " + token);
+}
+
+// Room for a request message's framing around a chunk's payload: the oneof tag, the chunk's
+// start index or offset and the payload's length prefix, each a few bytes.
+constexpr int64_t kMessageOverheadBytes = 64;
 
 // Cancels `context` once should_cancel() says so, polling until destroyed. Blocking reads give
 // the caller no other chance to stop a long iteration.
@@ -55,6 +64,7 @@ absl::StatusOr<ClientResult> RefineViaService(std::shared_ptr<grpc::Channel> cha
   v1::Refiner::Stub stub(channel);
   grpc::ClientContext context;
   ApplyDeadline(call.deadline, &context);
+  ApplyToken(call.bearer_token, &context);
   context.set_wait_for_ready(call.wait_for_ready);
   auto stream = stub.Refine(&context);
   absl::Status reader_status;
@@ -85,12 +95,21 @@ absl::StatusOr<ClientResult> RefineViaService(std::shared_ptr<grpc::Channel> cha
   }
 }
 
+size_t ChunkBytesFor(int64_t max_message_bytes, size_t preferred) {
+  const int64_t room = max_message_bytes - kMessageOverheadBytes;
+  // At least one element (a vertex, 24 bytes) must fit; a server advertising less cannot be
+  // sent a mesh at all, and its refusal will say so.
+  return static_cast<size_t>(std::clamp<int64_t>(room, 24, static_cast<int64_t>(preferred)));
+}
+
 absl::StatusOr<ServerInfo> GetServerInfo(
     std::shared_ptr<grpc::Channel> channel,
-    std::optional<std::chrono::system_clock::time_point> deadline) {
+    std::optional<std::chrono::system_clock::time_point> deadline,
+    const std::string& bearer_token) {
   v1::Refiner::Stub stub(channel);
   grpc::ClientContext context;
   ApplyDeadline(deadline, &context);
+  ApplyToken(bearer_token, &context);
   v1::ServerInfo info;
   grpc::Status status = stub.GetServerInfo(&context, v1::GetServerInfoRequest(), &info);
   if (!status.ok()) return wire::FromGrpcStatus(status);

@@ -47,6 +47,9 @@ struct CallOptions {
   // Wait for the server to become reachable (up to the deadline) instead of failing with
   // UNAVAILABLE at once.
   bool wait_for_ready = false;
+  // Non-empty: sent as call metadata "authorization: Bearer <token>", for a server started with
+  // --token_file.
+  std::string bearer_token;
 };
 
 // Refines `mesh` in `volume` (a whole volume or a slab of one) on the server behind `channel`.
@@ -64,9 +67,15 @@ struct ServerInfo {
   wire::ServiceLimits limits;
 };
 
+// `bearer_token` as in CallOptions.
 absl::StatusOr<ServerInfo> GetServerInfo(
     std::shared_ptr<grpc::Channel> channel,
-    std::optional<std::chrono::system_clock::time_point> deadline = std::nullopt);
+    std::optional<std::chrono::system_clock::time_point> deadline = std::nullopt,
+    const std::string& bearer_token = "");
+
+// The request chunk size to use with a server whose largest accepted message is
+// `max_message_bytes`: `preferred`, lowered so that a chunk and its message framing fit.
+size_t ChunkBytesFor(int64_t max_message_bytes, size_t preferred = size_t{1} << 20);
 
 // grpc.health.v1 serving status.
 enum class ServingStatus { kUnknown, kServing, kNotServing, kServiceUnknown };

@@ -1,6 +1,8 @@
 #include "client/cli/grpc_channel.h"
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
 #include "client/io/file_bytes.h"
 #include "grpcpp/create_channel.h"
 #include "grpcpp/security/credentials.h"
@@ -41,6 +43,31 @@ absl::StatusOr<TlsFiles> TlsFilesFromArgs(const ParsedArgs& args) {
   return tls;
 }
 
+FlagSpec TokenFlagSpec() {
+  return {"token-file", "FILE",
+          "bearer token for a server started with --token_file (the file's first line)"};
+}
+
+absl::StatusOr<std::string> TokenFromArgs(const ParsedArgs& args) {
+  const std::optional<std::string> path = args.Get("token-file");
+  if (!path.has_value()) return std::string();
+  absl::StatusOr<std::string> text = io::ReadFileBytes(*path);
+  if (!text.ok()) {
+    return absl::Status(text.status().code(),
+                        absl::StrCat(text.status().message(), " (--token-file)"));
+  }
+  for (absl::string_view line : absl::StrSplit(*text, '\n')) {
+    line = absl::StripAsciiWhitespace(line);
+    if (line.empty()) continue;
+    if (line.find_first_of(" \t") != absl::string_view::npos) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(*path, ": the token must be one word on the first line (--token-file)"));
+    }
+    return std::string(line);
+  }
+  return absl::InvalidArgumentError(absl::StrCat(*path, ": no token in it (--token-file)"));
+}
+
 absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
                                                            const TlsFiles& tls) {
   if (address.empty()) return absl::InvalidArgumentError("--server: empty address");
@@ -48,6 +75,11 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& ad
   // Response chunks are at most 3 MiB, so the default 4 MiB receive limit suffices; say so
   // explicitly rather than depend on the default.
   args.SetMaxReceiveMessageSize(8 << 20);
+  // A long refinement can be silent for minutes (the final lattice check); keepalive pings keep
+  // NATs and load balancers from dropping the connection meanwhile. tetrefine_server accepts
+  // pings every 10 s (--keepalive_seconds documents its side).
+  args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, 30'000);
+  args.SetInt(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 20'000);
   if (!tls.enabled()) {
     return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
   }

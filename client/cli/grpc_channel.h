@@ -25,6 +25,12 @@ std::vector<FlagSpec> TlsFlagSpecs();
 // Their values; --tls-cert and --tls-key must come together.
 absl::StatusOr<TlsFiles> TlsFilesFromArgs(const ParsedArgs& args);
 
+// --token-file FILE: a bearer token for a server started with --token_file.
+FlagSpec TokenFlagSpec();
+// The token in --token-file (its first non-blank line, trimmed), or "" without the flag.
+// Errors name the file: unreadable (NOT_FOUND), empty or holding spaces (INVALID_ARGUMENT).
+absl::StatusOr<std::string> TokenFromArgs(const ParsedArgs& args);
+
 // A channel to `address` (host:port, or any gRPC target such as unix:/path), plain or TLS.
 // Errors: an unreadable PEM file, named with its flag.
 absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,

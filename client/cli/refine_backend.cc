@@ -1,6 +1,7 @@
 #include "client/cli/refine_backend.h"
 
 #include <algorithm>
+#include <chrono>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -11,28 +12,55 @@
 namespace tetrefine::cli {
 namespace {
 
+// The request chunk size for the servers behind `channels`: what the smallest of their message
+// limits allows. A server without GetServerInfo (UNIMPLEMENTED) gets the default.
+absl::StatusOr<size_t> ChunkBytesForServers(
+    const std::vector<std::shared_ptr<grpc::Channel>>& channels, const std::string& token) {
+  size_t chunk = client::CallOptions{}.chunk_bytes;
+  for (const std::shared_ptr<grpc::Channel>& channel : channels) {
+    absl::StatusOr<client::ServerInfo> info = client::GetServerInfo(
+        channel, std::chrono::system_clock::now() + std::chrono::seconds(30), token);
+    if (absl::IsUnimplemented(info.status())) continue;
+    if (!info.ok()) return info.status();
+    chunk = std::min(chunk, client::ChunkBytesFor(info->limits.max_message_bytes, chunk));
+  }
+  return chunk;
+}
+
 class ChannelBackend : public RefineBackend {
  public:
-  ChannelBackend(std::string name, std::shared_ptr<grpc::Channel> channel)
-      : name_(std::move(name)), channel_(std::move(channel)) {}
+  ChannelBackend(std::string name, std::shared_ptr<grpc::Channel> channel, std::string token,
+                 bool ask_server)
+      : name_(std::move(name)), channel_(std::move(channel)), ask_server_(ask_server) {
+    call_.bearer_token = std::move(token);
+  }
 
   std::string Name() const override { return name_; }
 
   absl::StatusOr<client::ClientResult> Refine(const Volume& volume, const Mesh& mesh,
                                               const client::RefineRequestOptions& options,
                                               const client::RefineCallbacks& callbacks) override {
-    return client::RefineViaService(channel_, volume, mesh, options, callbacks);
+    if (ask_server_) {
+      absl::StatusOr<size_t> chunk = ChunkBytesForServers({channel_}, call_.bearer_token);
+      if (!chunk.ok()) return chunk.status();
+      call_.chunk_bytes = *chunk;
+      ask_server_ = false;
+    }
+    return client::RefineViaService(channel_, volume, mesh, options, callbacks, call_);
   }
 
  private:
   std::string name_;
   std::shared_ptr<grpc::Channel> channel_;
+  bool ask_server_;
+  client::CallOptions call_;
 };
 
 class EmbeddedBackend : public ChannelBackend {
  public:
   explicit EmbeddedBackend(std::unique_ptr<server::EmbeddedServer> server)
-      : ChannelBackend("embedded service", server->Channel()), server_(std::move(server)) {}
+      : ChannelBackend("embedded service", server->Channel(), "", /*ask_server=*/false),
+        server_(std::move(server)) {}
 
  private:
   std::unique_ptr<server::EmbeddedServer> server_;
@@ -42,21 +70,28 @@ class EmbeddedBackend : public ChannelBackend {
 // unsharded one (client/sharding/sharded_refine.h).
 class ShardedBackend : public RefineBackend {
  public:
-  ShardedBackend(std::string name, std::vector<std::shared_ptr<grpc::Channel>> channels, int shards)
-      : name_(std::move(name)), channels_(std::move(channels)), shards_(shards) {}
+  ShardedBackend(std::string name, std::vector<std::shared_ptr<grpc::Channel>> channels, int shards,
+                 std::string token)
+      : name_(std::move(name)), channels_(std::move(channels)), shards_(shards) {
+    call_.bearer_token = std::move(token);
+  }
 
   std::string Name() const override { return name_; }
 
   absl::StatusOr<client::ClientResult> Refine(const Volume& volume, const Mesh& mesh,
                                               const client::RefineRequestOptions& options,
                                               const client::RefineCallbacks& callbacks) override {
-    return sharding::RefineSharded(channels_, volume, mesh, options, shards_, callbacks);
+    absl::StatusOr<size_t> chunk = ChunkBytesForServers(channels_, call_.bearer_token);
+    if (!chunk.ok()) return chunk.status();
+    call_.chunk_bytes = *chunk;
+    return sharding::RefineSharded(channels_, volume, mesh, options, shards_, callbacks, call_);
   }
 
  private:
   std::string name_;
   std::vector<std::shared_ptr<grpc::Channel>> channels_;
   int shards_;
+  client::CallOptions call_;
 };
 
 }  // namespace
@@ -70,8 +105,10 @@ absl::StatusOr<std::unique_ptr<RefineBackend>> StartEmbeddedBackend(
 }
 
 std::unique_ptr<RefineBackend> MakeRemoteBackend(std::string address,
-                                                 std::shared_ptr<grpc::Channel> channel) {
-  return std::make_unique<ChannelBackend>(absl::StrCat("server ", address), std::move(channel));
+                                                 std::shared_ptr<grpc::Channel> channel,
+                                                 std::string bearer_token) {
+  return std::make_unique<ChannelBackend>(absl::StrCat("server ", address), std::move(channel),
+                                          std::move(bearer_token), /*ask_server=*/true);
 }
 
 absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice& choice) {
@@ -87,12 +124,12 @@ absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice
     return std::make_unique<ShardedBackend>(
         absl::StrCat(choice.shards, " shards over ", channels.size(), " server",
                      channels.size() == 1 ? "" : "s", " (", choice.server, ")"),
-        std::move(channels), choice.shards);
+        std::move(channels), choice.shards, choice.token);
   }
   if (!choice.server.empty()) {
     absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(choice.server, choice.tls);
     if (!channel.ok()) return channel.status();
-    return MakeRemoteBackend(choice.server, *channel);
+    return MakeRemoteBackend(choice.server, *channel, choice.token);
   }
   server::ServiceConfig config;
   config.refine_threads = choice.threads;

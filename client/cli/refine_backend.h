@@ -38,15 +38,19 @@ class RefineBackend {
 absl::StatusOr<std::unique_ptr<RefineBackend>> StartEmbeddedBackend(
     const server::ServiceConfig& config);
 
-// A tetrefine_server reached through `channel`; `address` is only for messages.
+// A tetrefine_server reached through `channel`; `address` is only for messages. Before its
+// first refinement it asks the server (GetServerInfo) for its largest request message and
+// chunks the input to fit. `bearer_token`: for a server with --token_file.
 std::unique_ptr<RefineBackend> MakeRemoteBackend(std::string address,
-                                                 std::shared_ptr<grpc::Channel> channel);
+                                                 std::shared_ptr<grpc::Channel> channel,
+                                                 std::string bearer_token = "");
 
 // What `tetrefine refine`'s flags say about where to run, plus the job's size.
 struct BackendChoice {
   std::string server;  // --server; empty: the embedded service. Comma-separated with shards.
   int shards = 0;      // --shards; > 0: the mesh in that many parts over the --server list
   TlsFiles tls;        // --tls-*, with --server only
+  std::string token;   // --token-file's token, with --server only
   int threads = 0;     // --threads, embedded only
   // The job, so that the embedded service's limits admit it.
   int64_t voxels = 0;

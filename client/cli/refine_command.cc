@@ -39,6 +39,7 @@ struct RefineSettings {
   std::string stats_json_path;  // empty: none
   std::string server;           // empty: embedded service
   TlsFiles tls;
+  std::string token;  // --token-file's
   client::RefineRequestOptions options;
   int threads = 0;
   int shards = 0;  // > 0: sharded over the comma-separated --server list
@@ -133,6 +134,13 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   if (s->tls.enabled() && s->server.empty()) {
     return absl::InvalidArgumentError(
         "--tls-ca/--tls-cert/--tls-key apply to --server; the embedded service needs none");
+  }
+  absl::StatusOr<std::string> token = TokenFromArgs(args);
+  if (!token.ok()) return token.status();
+  s->token = *token;
+  if (!s->token.empty() && s->server.empty()) {
+    return absl::InvalidArgumentError(
+        "--token-file applies to --server; the embedded service needs none");
   }
   s->output_path =
       args.Get("output").value_or(absl::StrCat(FileStem(s->mesh_path), ".refined.vtu"));
@@ -230,6 +238,7 @@ int RunRefinement(const RefineSettings& s) {
       {.server = s.server,
        .shards = s.shards,
        .tls = s.tls,
+       .token = s.token,
        .threads = s.threads,
        .voxels = volume->volume.voxel_count(),
        .vertices = static_cast<int64_t>(mesh.points.size()),
@@ -371,6 +380,7 @@ const CommandSpec& RefineSpec() {
             },
         .positional = ""};
     for (FlagSpec& flag : TlsFlagSpecs()) s->flags.push_back(std::move(flag));
+    s->flags.push_back(TokenFlagSpec());
     return s;
   }();
   return *spec;

@@ -315,12 +315,13 @@ std::vector<std::shared_ptr<grpc::Channel>> ChannelsFor(
 absl::StatusOr<client::ClientResult> RefineSharded(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
-    const client::RefineCallbacks& callbacks) {
+    const client::RefineCallbacks& callbacks, const client::CallOptions& call) {
   if (callbacks.on_mesh) {
     return absl::UnimplementedError("sharded refinement does not stream intermediate meshes");
   }
   ShardOptions shard;
   shard.shards = shards;
+  shard.call = call;
   ShardCallbacks sharded;
   sharded.should_cancel = callbacks.should_cancel;
   absl::StatusOr<ShardedResult> result =

@@ -97,13 +97,14 @@ absl::StatusOr<ShardedResult> ShardedRefine(
     const ShardOptions& shard_options = {}, const ShardCallbacks& callbacks = {});
 
 // The same call shape as client::RefineViaService, for code built around it (the CLI's
-// RefineBackend): `shards` parts over `targets`, default ShardOptions. callbacks.should_cancel
-// cancels; callbacks.on_iteration receives the combined statistics of each iteration once every
-// part is done (the parts' own iterations are not forwarded); on_mesh is UNIMPLEMENTED.
+// RefineBackend): `shards` parts over `targets`, default ShardOptions with `call` as every
+// part's call options (chunk size, bearer token). callbacks.should_cancel cancels;
+// callbacks.on_iteration receives the combined statistics of each iteration once every part is
+// done (the parts' own iterations are not forwarded); on_mesh is UNIMPLEMENTED.
 absl::StatusOr<client::ClientResult> RefineSharded(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
-    const client::RefineCallbacks& callbacks = {});
+    const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {});
 
 // One channel per address ("host:port", or any gRPC target such as "dns:///name:port").
 std::vector<std::shared_ptr<grpc::Channel>> ChannelsFor(
