@@ -51,6 +51,9 @@ constexpr milliseconds kPromptly{1000};
 // A short drain unless a test is about draining: these tests keep connections open, and a
 // server with open connections takes the whole drain time to stop.
 std::unique_ptr<ServerProcess> StartServer(std::vector<std::string> flags = {"--drain_seconds=2"}) {
+  // The heavy workloads check every output tet on the lattice, far beyond the default caps:
+  // work that only cancellation ends early is what these tests need.
+  flags.insert(flags.end(), {"--max_lattice_n=64", "--max_lattice_points=1000000000000"});
   absl::StatusOr<std::unique_ptr<ServerProcess>> server = ServerProcess::Start(flags);
   EXPECT_TRUE(server.ok()) << server.status();
   return server.ok() ? *std::move(server) : nullptr;

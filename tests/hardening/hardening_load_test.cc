@@ -114,12 +114,14 @@ TEST(HardeningLoadTest, ConcurrentClientsGetCorrectResultsAndMemoryStaysFlat) {
   EXPECT_EQ(server->Stop(), 0) << server->process().Output();
 }
 
+// With no queue (--queue_seconds=0) a call whose input is complete and finds every slot busy is
+// refused at once.
 TEST(HardeningLoadTest, PastTheConcurrencyLimitCallersAreRefusedQuickly) {
   ExpectedResults();
   constexpr int kClients = 8;
   const Clock::duration duration = milliseconds(4000);
   absl::StatusOr<std::unique_ptr<ServerProcess>> started =
-      ServerProcess::Start({"--max_concurrent=2", "--threads=1"});
+      ServerProcess::Start({"--max_concurrent=2", "--threads=1", "--queue_seconds=0"});
   ASSERT_TRUE(started.ok()) << started.status();
   std::unique_ptr<ServerProcess> server = *std::move(started);
   CallStats warmup;

@@ -103,12 +103,18 @@ TEST_F(HardeningLimitsTest, TinyResponseChunkHintIsRaisedTo256Bytes) {
   EXPECT_GT(r.largest_chunk_elements, 1u) << "a 1-byte hint was taken literally";
 }
 
-TEST_F(HardeningLimitsTest, AbsurdIterationCountStaysBoundedByTheTetBudget) {
+TEST_F(HardeningLimitsTest, AbsurdIterationCountIsRefusedAndTheCapStaysBoundedByTheTetBudget) {
   Workload w = SmallWorkloads()[0];
   w.options.refine.epsilon = 1e-9;
   w.options.refine.max_iterations = std::numeric_limits<int32_t>::max();
   w.options.SetMaxTets(20'000);
   w.options.refine.min_edge_length = 0.0;
+  const Responses refused = Call(server_->NewChannel(), w);
+  EXPECT_EQ(refused.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_THAT(refused.status.error_message(),
+              ::testing::HasSubstr("options.max_iterations: 2147483647 exceeds this server's "
+                                   "limit of 100 iterations (--max_iterations)"));
+  w.options.refine.max_iterations = wire::ServiceLimits{}.max_iterations;
   const Responses r = Call(server_->NewChannel(), w);
   ASSERT_TRUE(r.status.ok()) << r.status.error_message();
   const RefineResult expected = CoreResult(w);
