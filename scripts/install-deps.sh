@@ -10,7 +10,7 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libabsl-dev libspdlog-dev libtbb-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  prometheus-cpp-dev libcivetweb-dev libssl-dev openssl clang-format
+  prometheus-cpp-dev libssl-dev openssl clang-format
   python3 python3-grpcio python3-numpy python3-meshio python3-yaml
   # The Python package (python/) and its tests: pip install --no-build-isolation in a venv
   # over these needs setuptools and wheel from Debian, nothing from PyPI.

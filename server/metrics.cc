@@ -1,13 +1,10 @@
 #include "server/metrics.h"
 
-#include <openssl/ssl.h>
-
 #include <exception>
-#include <mutex>
+#include <string>
 #include <utility>
 #include <vector>
 
-#include "CivetServer.h"
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "prometheus/text_serializer.h"
@@ -22,30 +19,9 @@ const prometheus::Histogram::BucketBoundaries& DurationBuckets() {
   return *buckets;
 }
 
-// The PEM files civetweb's init_ssl callback loads. civetweb passes that callback only its own
-// server object, so the paths live here.
-std::mutex& TlsFilesMutex() {
-  static auto* mu = new std::mutex();
-  return *mu;
-}
-MetricsTls& TlsFiles() {
-  static auto* files = new MetricsTls();
-  return *files;
-}
-
-// civetweb's init_ssl: 1 when the certificate and key are loaded (civetweb then loads nothing
-// itself), -1 on failure.
-int LoadCertificate(void* ssl_ctx, void* /*user_data*/) {
-  std::lock_guard<std::mutex> lock(TlsFilesMutex());
-  auto* ctx = static_cast<SSL_CTX*>(ssl_ctx);
-  const MetricsTls& tls = TlsFiles();
-  if (SSL_CTX_use_certificate_chain_file(ctx, tls.cert_file.c_str()) != 1 ||
-      SSL_CTX_use_PrivateKey_file(ctx, tls.key_file.c_str(), SSL_FILETYPE_PEM) != 1 ||
-      SSL_CTX_check_private_key(ctx) != 1) {
-    return -1;
-  }
-  return 1;
-}
+// Both endpoints: four connections served at once, a request not whole within 5 s dropped.
+constexpr int kWorkers = 4;
+constexpr int kRequestTimeoutMs = 5000;
 
 std::string CodeName(grpc::StatusCode code) {
   // gRPC and Abseil share the canonical codes and their names (OK, UNAVAILABLE, ...).
@@ -113,24 +89,32 @@ absl::StatusOr<std::unique_ptr<MetricsEndpoint>> MetricsEndpoint::Start(
     const std::string& address, std::shared_ptr<ServiceMetrics> metrics, const MetricsTls& tls) {
   std::unique_ptr<MetricsEndpoint> endpoint(new MetricsEndpoint());
   endpoint->metrics_ = std::move(metrics);
+  if (tls.enabled()) {
+    const std::shared_ptr<ServiceMetrics> served = endpoint->metrics_;
+    absl::StatusOr<std::unique_ptr<HttpsEndpoint>> https = HttpsEndpoint::Start(
+        address, tls.cert_file, tls.key_file, "/metrics", [served] { return served->Scrape(); },
+        kWorkers, kRequestTimeoutMs);
+    if (!https.ok()) {
+      return absl::UnavailableError(absl::StrCat("cannot serve metrics (https) on ", address, ": ",
+                                                 https.status().message()));
+    }
+    endpoint->https_ = *std::move(https);
+    endpoint->port_ = endpoint->https_->port();
+    return endpoint;
+  }
   // civetweb's defaults wait 30 s for a request's headers, with the two threads prometheus-cpp
   // asks for: two unfinished requests kept every scrape out. Now one client needs four
   // connections held open for 5 s at a time to delay a scrape by that much.
-  std::vector<std::string> options = {"listening_ports",    tls.enabled() ? address + "s" : address,
-                                      "num_threads",        "4",
-                                      "request_timeout_ms", "5000"};
-  CivetCallbacks callbacks;
-  if (tls.enabled()) {
-    std::lock_guard<std::mutex> lock(TlsFilesMutex());
-    TlsFiles() = tls;
-    callbacks.init_ssl = &LoadCertificate;
-  }
+  const std::vector<std::string> options = {
+      "listening_ports",    address,
+      "num_threads",        std::to_string(kWorkers),
+      "request_timeout_ms", std::to_string(kRequestTimeoutMs)};
   try {
-    // civetweb reports a bind (or certificate) failure by throwing.
-    endpoint->exposer_ = std::make_unique<prometheus::Exposer>(options, &callbacks);
+    // civetweb reports a bind failure by throwing.
+    endpoint->exposer_ = std::make_unique<prometheus::Exposer>(options);
   } catch (const std::exception& e) {
-    return absl::UnavailableError(absl::StrCat("cannot serve metrics on ", address,
-                                               tls.enabled() ? " (https)" : "", ": ", e.what()));
+    return absl::UnavailableError(
+        absl::StrCat("cannot serve metrics on ", address, ": ", e.what()));
   }
   endpoint->exposer_->RegisterCollectable(endpoint->metrics_->registry());
   const std::vector<int> ports = endpoint->exposer_->GetListeningPorts();

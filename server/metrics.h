@@ -14,14 +14,17 @@
 #include "prometheus/gauge.h"
 #include "prometheus/histogram.h"
 #include "prometheus/registry.h"
+#include "server/https_endpoint.h"
 
 namespace tetrefine::server {
 
 // What one finished Refine call contributes to the metrics.
 struct CallMetrics {
   grpc::StatusCode code = grpc::StatusCode::OK;
-  bool admitted = false;  // false: refused by the concurrency limit before any work
-  double seconds = 0.0;   // from arrival to status
+  // false: refused on arrival, before any work (shutting down, authentication, the client's
+  // quota of open calls, no memory for one more call)
+  bool admitted = false;
+  double seconds = 0.0;  // from arrival to status
   int64_t bytes_in = 0;
   int64_t tets_in = 0;
   int64_t tets_out = 0;
@@ -70,9 +73,10 @@ struct MetricsTls {
   bool enabled() const { return !cert_file.empty(); }
 };
 
-// An HTTP(S) server answering GET /metrics from `metrics` (prometheus-cpp's civetweb Exposer).
-// Four worker threads, and a request that has not arrived whole within 5 s is dropped: a few
-// clients that open connections and never finish a request cannot keep a scrape out.
+// An HTTP server answering GET /metrics from `metrics` (prometheus-cpp's civetweb Exposer), or
+// HTTPS (server/https_endpoint.h). Four connections at once, and a request that has not arrived
+// whole within 5 s is dropped: a few clients that open connections and never finish a request
+// cannot keep a scrape out.
 class MetricsEndpoint {
  public:
   // `address` is host:port; port 0 picks a free port (see port()). UNAVAILABLE if it cannot bind
@@ -87,8 +91,9 @@ class MetricsEndpoint {
  private:
   MetricsEndpoint() = default;
 
-  std::shared_ptr<ServiceMetrics> metrics_;  // outlives the exposer that reads it
-  std::unique_ptr<prometheus::Exposer> exposer_;
+  std::shared_ptr<ServiceMetrics> metrics_;       // outlives the endpoint that reads it
+  std::unique_ptr<prometheus::Exposer> exposer_;  // plain HTTP
+  std::unique_ptr<HttpsEndpoint> https_;          // HTTPS
   int port_ = 0;
 };
 

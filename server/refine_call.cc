@@ -76,6 +76,7 @@ void RefineCall::Begin() {
     } else {
       ticket_ = *std::move(ticket);
       reservation_ = *std::move(reservation);
+      admitted_ = true;
     }
   }
   if (!refusal.ok()) {
@@ -249,7 +250,6 @@ void RefineCall::StartRefinement() {
   {
     std::lock_guard<std::mutex> lock(mu_);
     phase_ = Phase::kRefining;
-    admitted_ = true;
     std::swap(queue_timer, timers_[static_cast<int>(Timer::kQueue)]);
   }
   if (queue_timer != 0) env_.watchdog->Cancel(queue_timer);

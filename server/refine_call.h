@@ -113,7 +113,7 @@ class RefineCall final : public grpc::ServerBidiReactor<v1::RefineRequest, v1::R
   double input_seconds_ = 0.0;
   int64_t tets_out_ = 0;
   int iterations_ = 0;
-  bool admitted_ = false;
+  bool admitted_ = false;  // past identity, quota and memory checks at arrival (for metrics)
 };
 
 }  // namespace tetrefine::server

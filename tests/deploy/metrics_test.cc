@@ -1,5 +1,10 @@
 // The server's Prometheus endpoint: scraped over HTTP on loopback, its counters follow the calls.
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <map>
 #include <memory>
 #include <sstream>
@@ -84,6 +89,40 @@ TEST(MetricsTest, CountersFollowRefineCalls) {
   EXPECT_GT(Get(after, "tetrefine_refine_duration_seconds_sum"), 0.0);
   EXPECT_EQ(Get(after, R"(tetrefine_refine_duration_seconds_bucket{le="+Inf"})"), 2.0);
   EXPECT_EQ(Get(after, "tetrefine_refinements_in_flight"), 0.0);
+}
+
+// Opens `count` connections to the metrics port that send half a request and then nothing.
+std::vector<int> UnfinishedRequests(int port, int count) {
+  std::vector<int> fds;
+  for (int i = 0; i < count; ++i) {
+    const int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(static_cast<uint16_t>(port));
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    EXPECT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
+    const std::string partial = "GET /metrics HTTP/1.1\r\nHost: 127.0.0.1\r\n";
+    EXPECT_EQ(send(fd, partial.data(), partial.size(), MSG_NOSIGNAL),
+              static_cast<ssize_t>(partial.size()));
+    fds.push_back(fd);
+  }
+  return fds;
+}
+
+TEST(MetricsTest, UnfinishedRequestsDoNotKeepAScrapeOut) {
+  std::unique_ptr<ServerProcess> server = StartServer({"--metrics_listen=127.0.0.1:0"});
+  ASSERT_NE(server, nullptr);
+  ASSERT_NE(server->metrics_port(), 0) << server->Log();
+  // Two unfinished requests used to take both of civetweb's threads for 30 s. Now there are
+  // four threads: a scrape beside two goes through at once.
+  std::vector<int> slow = UnfinishedRequests(server->metrics_port(), 2);
+  EXPECT_TRUE(HttpGet(server->metrics_port(), "/metrics").ok());
+  // Beside six (more than the threads), it goes through once the endpoint has dropped the
+  // unfinished ones after their 5 s request timeout: within HttpGet's own 10 s.
+  std::vector<int> more = UnfinishedRequests(server->metrics_port(), 4);
+  EXPECT_TRUE(HttpGet(server->metrics_port(), "/metrics").ok());
+  for (int fd : slow) close(fd);
+  for (int fd : more) close(fd);
 }
 
 TEST(MetricsTest, EmptyAddressDisablesTheEndpoint) {

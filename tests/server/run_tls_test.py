@@ -1,12 +1,18 @@
 #!/usr/bin/env python3
 """CTest driver: tetrefine_server with --tls_cert/--tls_key/--tls_client_ca accepts a client
-certificate signed by the CA and refuses clients without one or with a foreign one."""
+certificate signed by the CA and refuses clients without one or with a foreign one;
+--tls_allowed_subjects admits only the listed subjects among those; /metrics is served over HTTPS
+with the server's certificate; --local_listen serves plaintext on loopback for probes."""
 
 import argparse
 import os
+import re
+import ssl
 import subprocess
 import sys
 import tempfile
+import urllib.error
+import urllib.request
 
 import grpc
 
@@ -59,6 +65,47 @@ def server_info(stubs, target, ca, client=None):
             return error.code().name
 
 
+def fetch(url, ca=None):
+    """The body at `url`, or the error's class name."""
+    context = ssl.create_default_context(cafile=ca) if ca else None
+    try:
+        with urllib.request.urlopen(url, timeout=10, context=context) as response:
+            return response.read().decode()
+    except (urllib.error.URLError, ConnectionError, ssl.SSLError, OSError) as error:
+        return type(error).__name__
+
+
+def logged_port(log, pattern):
+    for line in log:
+        match = re.search(pattern, line)
+        if match:
+            return int(match.group(1))
+    return None
+
+
+def plaintext_calls(stubs, target):
+    """Over plaintext: the health check (raw bytes: HealthCheckResponse{status: SERVING} is
+    08 01) and GetServerInfo, as status names."""
+    sys.path.insert(0, stubs)
+    from tetrefine.v1 import tetrefine_pb2 as pb
+    from tetrefine.v1 import tetrefine_pb2_grpc as pb_grpc
+
+    with grpc.insecure_channel(target) as channel:
+        check = channel.unary_unary("/grpc.health.v1.Health/Check",
+                                    request_serializer=lambda b: b,
+                                    response_deserializer=lambda b: b)
+        try:
+            health = "SERVING" if check(b"", timeout=10) == b"\x08\x01" else "NOT_SERVING"
+        except grpc.RpcError as error:
+            health = error.code().name
+        try:
+            pb_grpc.RefinerStub(channel).GetServerInfo(pb.GetServerInfoRequest(), timeout=10)
+            info = "OK"
+        except grpc.RpcError as error:
+            info = error.code().name
+    return health, info
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--server", required=True)
@@ -72,10 +119,12 @@ def main():
                                 "subjectAltName=DNS:localhost,IP:127.0.0.1\n"
                                 "extendedKeyUsage=serverAuth\n")
         client_cert = make_leaf(d, "client", ca, "extendedKeyUsage=clientAuth\n")
+        stranger_cert = make_leaf(d, "stranger", ca, "extendedKeyUsage=clientAuth\n")
         foreign_cert = make_leaf(d, "intruder", other_ca, "extendedKeyUsage=clientAuth\n")
 
         flags = [f"--tls_cert={server_cert[1]}", f"--tls_key={server_cert[0]}",
-                 f"--tls_client_ca={ca[1]}"]
+                 f"--tls_client_ca={ca[1]}", "--tls_allowed_subjects=client",
+                 "--metrics_listen=127.0.0.1:0", "--local_listen=127.0.0.1:0"]
         with ServerProcess(args.server, flags) as server:
             results = {
                 "trusted client certificate": server_info(args.stubs, server.target, ca,
@@ -83,14 +132,35 @@ def main():
                 "no client certificate": server_info(args.stubs, server.target, ca),
                 "foreign client certificate": server_info(args.stubs, server.target, ca,
                                                           foreign_cert),
+                "trusted certificate not on the allow-list": server_info(
+                    args.stubs, server.target, ca, stranger_cert),
             }
+            metrics_port = logged_port(server.log, r"metrics on https://127\.0\.0\.1:(\d+)/")
+            local_port = logged_port(server.log, r"plaintext local listener on 127\.0\.0\.1:(\d+)")
+            https = fetch(f"https://localhost:{metrics_port}/metrics", ca[1]) if metrics_port else ""
+            plain = fetch(f"http://127.0.0.1:{metrics_port}/metrics") if metrics_port else ""
+            local = plaintext_calls(args.stubs, f"127.0.0.1:{local_port}") if local_port else ()
     print("".join(server.log), end="")
     failures = []
+    expected = {"trusted client certificate": "OK",
+                "trusted certificate not on the allow-list": "PERMISSION_DENIED"}
     for case, code in results.items():
         print(f"{case}: {code}")
-        expected_ok = case == "trusted client certificate"
-        if (code == "OK") != expected_ok:
+        if expected.get(case) is not None:
+            if code != expected[case]:
+                failures.append(case)
+        elif code == "OK":
             failures.append(case)
+    print(f"metrics over https: {https[:60]!r}; over plain http: {plain[:60]!r}")
+    if "tetrefine_refine_calls_total" not in https:
+        failures.append("metrics over https with the server's certificate")
+    if "tetrefine_refine_calls_total" in plain:
+        failures.append("metrics also served as plain http")
+    # The local listener answers probes; the allow-list still applies to calls made there.
+    print(f"plaintext local listener: health {local[0] if local else None}, "
+          f"GetServerInfo {local[1] if local else None}")
+    if local != ("SERVING", "PERMISSION_DENIED"):
+        failures.append("plaintext local listener")
     if server.exit_code != 0:
         failures.append(f"server exit code {server.exit_code}")
     if failures:
