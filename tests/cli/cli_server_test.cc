@@ -178,5 +178,57 @@ TEST(CliHealth, RefineAgainstAClosedPortFailsWithoutOutput) {
   EXPECT_FALSE(FileExists(out));
 }
 
+TEST(CliServerToken, TheTokenFileIsSentToAServerThatNeedsOne) {
+  ScratchDir dir;
+  io::iotest::WriteBytes(dir.File("tokens.txt"), "alice token-of-alice-0123456789\n");
+  io::iotest::WriteBytes(dir.File("alice.token"), "token-of-alice-0123456789\n");
+  io::iotest::WriteBytes(dir.File("mallory.token"), "token-of-mallory-012345678\n");
+  ServerProcess server({"--token_file=" + dir.File("tokens.txt"), "--threads=2"});
+  ASSERT_TRUE(server.started()) << server.log();
+  const std::string volume = dir.File("v.nii");
+  const std::string mesh = dir.File("m.vtu");
+  WriteVolume(volume, BumpVolume({9, 9, 9}, {0, 0, 0}, {1, 1, 1}));
+  WriteMeshFile(mesh, testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
+  const std::vector<std::string> common = {
+      "refine",    "--volume", volume,     "--mesh",         mesh,
+      "--epsilon", "0.05",     "--server", server.address(), "--quiet"};
+  auto refine = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return RunTetrefine(args);
+  };
+  const ProcessResult without = refine({"--output", dir.File("a.vtu")});
+  EXPECT_EQ(without.exit_code, 1) << without.err;
+  EXPECT_TRUE(absl::StrContains(without.err, "--token-file")) << without.err;
+  const ProcessResult wrong =
+      refine({"--token-file", dir.File("mallory.token"), "--output", dir.File("b.vtu")});
+  EXPECT_EQ(wrong.exit_code, 1) << wrong.err;
+  EXPECT_TRUE(absl::StrContains(wrong.err, "not one this server knows")) << wrong.err;
+  const ProcessResult right =
+      refine({"--token-file", dir.File("alice.token"), "--output", dir.File("c.vtu")});
+  EXPECT_EQ(right.exit_code, 0) << right.err;
+  EXPECT_TRUE(FileExists(dir.File("c.vtu")));
+  const ProcessResult missing =
+      refine({"--token-file", dir.File("nonexistent"), "--output", dir.File("d.vtu")});
+  EXPECT_EQ(missing.exit_code, 2) << missing.err;
+  EXPECT_TRUE(absl::StrContains(missing.err, "--token-file")) << missing.err;
+}
+
+TEST(CliServerChunks, TheUploadFitsTheServersMessageLimit) {
+  // 48^3 float64 voxels (864 KiB) would be one 864 KiB message at the default chunk size; this
+  // server takes 64 KiB at most and says so through GetServerInfo.
+  ServerProcess server({"--max_message_bytes=65536", "--threads=2"});
+  ASSERT_TRUE(server.started()) << server.log();
+  ScratchDir dir;
+  const std::string volume = dir.File("v.nii");
+  const std::string mesh = dir.File("m.vtu");
+  WriteVolume(volume, BumpVolume({48, 48, 48}, {0, 0, 0}, {1, 1, 1}));
+  WriteMeshFile(mesh, testing::FiveTetMesh({1, 1, 1}, {46, 46, 46}, {3, 3, 3}));
+  const ProcessResult run = RunTetrefine(
+      {"refine", "--volume", volume, "--mesh", mesh, "--epsilon", "0.1", "--max-iterations", "1",
+       "--server", server.address(), "--output", dir.File("out.vtu"), "--quiet"});
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+}
+
 }  // namespace
 }  // namespace tetrefine::clitest
