@@ -4,7 +4,9 @@
 #   docker run --rm -p 50051:50051 -p 9464:9464 tetrefine:0.1.0
 #   docker run --rm --entrypoint tetrefine tetrefine:0.1.0 health --server host:50051
 #
-# Server flags go after the image name (they follow the entrypoint's), e.g. --threads=2.
+# Server flags go after the image name (they follow the entrypoint's), e.g. --threads=2, or
+# --tls_cert=... --tls_key=... for TLS (deploy/README.md). The HEALTHCHECK asks the plaintext
+# listener the entrypoint opens on the container's loopback, so it works with TLS on or off.
 
 # --- build: the same dependency script as CI and the README, a Release build without tests ---
 FROM debian:bookworm AS build
@@ -38,8 +40,10 @@ RUN apt-get update \
  && useradd --system --uid 10001 --user-group --no-create-home --shell /usr/sbin/nologin tetrefine
 COPY --from=build /out/tetrefine_server /out/tetrefine /usr/local/bin/
 USER 10001:10001
-# gRPC (tetrefine.v1.Refiner, grpc.health.v1, reflection) and Prometheus /metrics.
+# gRPC (tetrefine.v1.Refiner, grpc.health.v1, reflection) and Prometheus /metrics (HTTPS when
+# gRPC has TLS). 50052 is the loopback-only plaintext listener for probes inside the container.
 EXPOSE 50051 9464
 HEALTHCHECK --interval=15s --timeout=5s --start-period=10s --retries=3 \
-  CMD ["tetrefine","health","--server","127.0.0.1:50051"]
-ENTRYPOINT ["tetrefine_server", "--listen=0.0.0.0:50051", "--metrics_listen=0.0.0.0:9464"]
+  CMD ["tetrefine","health","--server","127.0.0.1:50052"]
+ENTRYPOINT ["tetrefine_server", "--listen=0.0.0.0:50051", "--metrics_listen=0.0.0.0:9464", \
+            "--local_listen=127.0.0.1:50052"]
