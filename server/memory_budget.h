@@ -23,10 +23,12 @@ int64_t PhysicalMemoryBytes();
 // grows with the number of calls. Never below 0.
 int64_t BudgetForLimit(int64_t limit_bytes);
 
-// Bytes the server reserves per tet of a call's output, by default. Measured: peak resident
-// memory of tetrefine_server per output tet over one call, 96-141 bytes at 1-4.4 M output
-// tets (docs/results/service_abuse.md; docs/results/benchmarks.md gives 85-92 for the core
-// alone), rounded up for growth between measurements.
+// Bytes the server reserves per tet of a call's output, by default. Measured peaks of
+// tetrefine_server over one call, less its idle footprint: 78 bytes per output tet at 8.6 M and
+// 82 at 1.08 M (tests/hardening/hardening_abuse_load_test.cc, which checks they stay below this),
+// 85-92 for the core alone (docs/results/benchmarks.md), 131 when a 4.9 M-tet input is counted
+// in (the T1 brain grid, deploy/kubernetes). The input is reserved apart, so 160 leaves the
+// output about 1.7 times its measured need: room for allocator fragmentation when calls overlap.
 inline constexpr int64_t kDefaultBytesPerOutputTet = 160;
 
 // The most tets one iteration can make of one tet: the largest child count of the subdivision
