@@ -60,7 +60,8 @@ ABSL_FLAG(int64_t, max_input_tets, kDefaults.max_input_tets,
           "Largest input mesh accepted, in tets (vertices: 4 times this)");
 ABSL_FLAG(int64_t, max_output_tets, 0,
           "Tet budget of a refinement: the default and largest max_tets (0: 50000000, or less "
-          "when that many tets at --bytes_per_output_tet would not fit the memory budget)");
+          "when that many tets at --bytes_per_output_tet would not fit 90% of the memory "
+          "budget)");
 ABSL_FLAG(int64_t, max_message_bytes, kDefaults.max_message_bytes,
           "Largest request message accepted, in bytes (GetServerInfo tells clients)");
 ABSL_FLAG(int, max_iterations, kDefaults.max_iterations, "Largest max_iterations of a call");
@@ -229,8 +230,10 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   l.max_output_tets = absl::GetFlag(FLAGS_max_output_tets);
   if (l.max_output_tets < 0) return Invalid("--max_output_tets: must be >= 0");
   if (l.max_output_tets == 0) {
+    // One call at the default budget must fit the whole memory budget with its input: a tenth
+    // of the budget is left for the input (a 1.8 GiB budget takes a 180 MiB volume and mesh).
     l.max_output_tets = std::clamp<int64_t>(
-        (l.memory_budget_bytes - call_floor) / l.bytes_per_output_tet, 1, 50'000'000);
+        (l.memory_budget_bytes / 10 * 9 - call_floor) / l.bytes_per_output_tet, 1, 50'000'000);
   }
 
   // Identity.
