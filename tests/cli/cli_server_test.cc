@@ -183,15 +183,17 @@ TEST(CliServerToken, TheTokenFileIsSentToAServerThatNeedsOne) {
   io::iotest::WriteBytes(dir.File("tokens.txt"), "alice token-of-alice-0123456789\n");
   io::iotest::WriteBytes(dir.File("alice.token"), "token-of-alice-0123456789\n");
   io::iotest::WriteBytes(dir.File("mallory.token"), "token-of-mallory-012345678\n");
-  ServerProcess server({"--token_file=" + dir.File("tokens.txt"), "--threads=2"});
-  ASSERT_TRUE(server.started()) << server.log();
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--token_file=" + dir.File("tokens.txt"), "--threads=2"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  ServerProcess& server = **started;
   const std::string volume = dir.File("v.nii");
   const std::string mesh = dir.File("m.vtu");
   WriteVolume(volume, BumpVolume({9, 9, 9}, {0, 0, 0}, {1, 1, 1}));
   WriteMeshFile(mesh, testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
   const std::vector<std::string> common = {
-      "refine",    "--volume", volume,     "--mesh",         mesh,
-      "--epsilon", "0.05",     "--server", server.address(), "--quiet"};
+      "refine",    "--volume", volume,     "--mesh",        mesh,
+      "--epsilon", "0.05",     "--server", server.target(), "--quiet"};
   auto refine = [&](std::vector<std::string> extra) {
     std::vector<std::string> args = common;
     args.insert(args.end(), extra.begin(), extra.end());
@@ -217,8 +219,10 @@ TEST(CliServerToken, TheTokenFileIsSentToAServerThatNeedsOne) {
 TEST(CliServerChunks, TheUploadFitsTheServersMessageLimit) {
   // 48^3 float64 voxels (864 KiB) would be one 864 KiB message at the default chunk size; this
   // server takes 64 KiB at most and says so through GetServerInfo.
-  ServerProcess server({"--max_message_bytes=65536", "--threads=2"});
-  ASSERT_TRUE(server.started()) << server.log();
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--max_message_bytes=65536", "--threads=2"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  ServerProcess& server = **started;
   ScratchDir dir;
   const std::string volume = dir.File("v.nii");
   const std::string mesh = dir.File("m.vtu");
@@ -226,7 +230,7 @@ TEST(CliServerChunks, TheUploadFitsTheServersMessageLimit) {
   WriteMeshFile(mesh, testing::FiveTetMesh({1, 1, 1}, {46, 46, 46}, {3, 3, 3}));
   const ProcessResult run = RunTetrefine(
       {"refine", "--volume", volume, "--mesh", mesh, "--epsilon", "0.1", "--max-iterations", "1",
-       "--server", server.address(), "--output", dir.File("out.vtu"), "--quiet"});
+       "--server", server.target(), "--output", dir.File("out.vtu"), "--quiet"});
   EXPECT_EQ(run.exit_code, 0) << run.err;
 }
 

@@ -23,16 +23,18 @@
 #include "client/refine_client.h"
 #include "gtest/gtest.h"
 #include "server/memory_budget.h"
-#include "server/wire_request_writer.h"
 #include "tests/hardening/call_stats.h"
-#include "tests/hardening/server_process.h"
 #include "tests/hardening/workloads.h"
-#include "tests/server/service_test_support.h"
+#include "tests/support/child_process.h"
+#include "tests/support/server_process.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "wire/request_writer.h"
 
 namespace tetrefine::hardening {
 namespace {
 
+using ::tetrefine::testing::ChildProcess;
+using ::tetrefine::testing::ServerProcess;
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 using Stream = grpc::ClientReaderWriter<v1::RefineRequest, v1::RefineResponse>;
@@ -137,15 +139,14 @@ TEST(HardeningAbuseLoadTest, GoodClientsAreServedCorrectlyAmongHostileOnesWithin
   limits.max_output_tets = kMaxOutputTets;
   const RefineResult expected_greedy = CoreResult(TinyEpsilon(), limits);
   const std::string tokens = WriteTokenFile();
-  std::string error;
-  std::unique_ptr<ServerProcess> server = ServerProcess::Start(
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
       {"--threads=1", "--max_concurrent=2", "--memory_limit_bytes=" + std::to_string(kMemoryLimit),
        "--max_output_tets=" + std::to_string(kMaxOutputTets), "--input_deadline_seconds=6",
        "--idle_timeout_seconds=2", "--write_stall_seconds=2", "--queue_seconds=3",
        "--max_call_seconds=20", "--max_calls_per_identity=6", "--token_file=" + tokens,
-       "--drain_seconds=5"},
-      0, &error);
-  ASSERT_NE(server, nullptr) << error;
+       "--drain_seconds=5"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
   const int64_t budget = server::BudgetForLimit(kMemoryLimit);
   const int64_t rss_idle_kb = server->process().RssKb();
   RssWatcher rss(server->process());
@@ -325,10 +326,10 @@ TEST(HardeningAbuseLoadTest, PeakMemoryPerOutputTetIsWithinTheReservedRate) {
   two.options.skip_final_mesh = true;
   cases.push_back({"135k -> 8.6M tets, statistics only", two});
   for (const Case& c : cases) {
-    std::string error;
-    std::unique_ptr<ServerProcess> server =
-        ServerProcess::Start({"--threads=2", "--drain_seconds=2"}, 0, &error);
-    ASSERT_NE(server, nullptr) << error;
+    absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+        ServerProcess::Start({"--threads=2", "--drain_seconds=2"});
+    ASSERT_TRUE(started.ok()) << started.status();
+    std::unique_ptr<ServerProcess> server = *std::move(started);
     const int64_t idle_kb = server->process().StatusField("VmHWM");
     client::CallOptions call;
     call.deadline = std::chrono::system_clock::now() + std::chrono::seconds(120);

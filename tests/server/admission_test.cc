@@ -346,6 +346,8 @@ TEST(AdmissionTest, TheMemoryBudgetHoldsForInputsAndWorstCases) {
   EXPECT_GT(fits, 300'000);
   client::RefineRequestOptions fitting = too_big;
   fitting.max_tets = fits;
+  // It takes the whole budget: the refused call must have let go of its own reservation.
+  ASSERT_TRUE(Eventually([&] { return server.service().gate().reserved_bytes() == 0; }));
   EXPECT_TRUE(
       client::RefineViaService(server.NewChannel(), Small().volume, Small().mesh, fitting).ok());
 

@@ -28,7 +28,10 @@ class ShardedRefineTest : public ::testing::Test {
   void SetUp() override {
     for (int i = 0; i < 3; ++i) {
       absl::StatusOr<std::unique_ptr<ServerProcess>> server =
-          ServerProcess::Start({"--metrics_listen=", "--threads=1"});
+          // The tests check the lattice of every tet (Options below): 35 points a tet for up
+          // to the 50M-tet budget, above the server's default cap on lattice points.
+          ServerProcess::Start(
+              {"--metrics_listen=", "--threads=1", "--max_lattice_points=2000000000"});
       ASSERT_TRUE(server.ok()) << server.status();
       addresses_.push_back((*server)->target());
       servers_.push_back(*std::move(server));

@@ -42,13 +42,14 @@ RequestOptions RandomOptions(std::mt19937_64& rng) {
   RequestOptions o;
   RefineOptions& r = o.refine;
   r.epsilon = 1e-4 + unit(rng);
-  r.max_iterations = static_cast<int>(rng() % 100);
+  r.max_iterations = static_cast<int>(rng() % 101);  // the default cap: 100
   if (coin()) o.SetMaxTets(1 + static_cast<int64_t>(rng() % 1'000'000));
   if (coin()) r.norm_coeff = 0.5 + 1000.0 * unit(rng);
   r.outside = coin() ? OutsidePolicy::kClamp : OutsidePolicy::kReject;
   r.orientation = coin() ? OrientationPolicy::kNormalize : OrientationPolicy::kReject;
-  r.lattice_n = static_cast<int>(rng() % 65);
-  r.lattice_max_tets = static_cast<int64_t>(rng() % 1'000'000);
+  // Within the default caps: order 16 (969 points a tet) on at most 200 000 tets.
+  r.lattice_n = static_cast<int>(rng() % 17);
+  r.lattice_max_tets = 1 + static_cast<int64_t>(rng() % 200'000);
   r.lattice_seed = rng();
   if (coin()) r.min_edge_length = unit(rng);
   r.min_quality = 0.5 * unit(rng);
