@@ -31,15 +31,29 @@ class RefinerServicer(object):
 
     def Refine(self, request_iterator, context):
         """Refines a mesh. Request stream, in this order:
-        options, volume_header, volume_chunk*, mesh_header, (vertex_chunk | value_chunk |
-        tet_chunk)*, end_of_input.
+        options, volume_header, volume_chunk*, mesh_header, (vertex_chunk | tet_chunk)*,
+        end_of_input, then the client closes its side of the stream (half-close).
         Chunks of one kind must arrive in order without gaps or overlaps; chunks of different mesh
-        kinds may interleave. The server reads the whole input before refining.
+        kinds may interleave. A message after end_of_input is INVALID_ARGUMENT. No message may be
+        larger than max_message_bytes (GetServerInfo). Each header is checked when it arrives, so a
+        bad or oversized header is answered before the data it announces is sent.
+        The server refines once the input is complete and the stream closed: only then does the call
+        take one of the server's refinement slots and reserve memory for its worst case (volume,
+        input, and the output at its tet budget); it waits for both up to queue_seconds.
+        Time limits (GetServerInfo): the input must be complete within input_deadline_seconds of the
+        call's start, with no pause longer than idle_timeout_seconds; every response message must be
+        taken by the client within write_stall_seconds; the whole call ends by max_call_seconds (or
+        the client's own deadline, if earlier).
         Response stream: for each iteration an iteration_stats (and, when requested, that
         iteration's mesh), then the final mesh (unless skipped), then a summary. A mesh is a
         mesh_header (a ResultMeshHeader) followed by its chunks.
         Errors: INVALID_ARGUMENT (malformed input; the message names the field and index),
-        RESOURCE_EXHAUSTED (a server limit, see GetServerInfo), CANCELLED, DEADLINE_EXCEEDED.
+        RESOURCE_EXHAUSTED (a server limit or cap, named, or a busy server: the message says why and
+        when to retry; the trailing metadata grpc-retry-pushback-ms carries the suggested delay),
+        UNAUTHENTICATED / PERMISSION_DENIED (a server with tokens or a client-certificate allow-list),
+        UNAVAILABLE (the server is shutting down: retry on another), CANCELLED, DEADLINE_EXCEEDED
+        (the client's deadline, the server's max_call_seconds, or the input time limits).
+        Authentication, when the server has tokens: call metadata `authorization: Bearer <token>`.
         """
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
         context.set_details('Method not implemented!')
