@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <future>
 #include <memory>
 #include <string>
@@ -398,9 +399,12 @@ TEST(AdmissionTest, ACallEndsAtTheServersWallTimeLimit) {
 
 TEST(AdmissionTest, HeaderErrorsAreAnsweredBeforeTheUploadGoesOn) {
   LoopbackServer server(Config(1));
-  client::RefineRequestOptions options = Heavy().options;
-  // 2 MiB of volume in 4 KiB chunks: 512 messages follow the bad options.
-  const Requests requests = RequestsOf(Heavy().volume, Heavy().mesh, options, 4096);
+  // Options and a volume header announcing 256 MiB of float64 voxels, then that many bytes in
+  // 64 KiB chunks (4096 messages, built as they are sent): far more than any transport buffer,
+  // so a client that only learned of the error at the end would send them all.
+  const Requests good = RequestsOf(Small().volume, Small().mesh, Small().options);
+  constexpr int64_t kChunk = 64 << 10, kChunks = 4096;
+  const std::string payload(kChunk, '\0');
   for (const auto& [name, edit, code] :
        std::vector<std::tuple<std::string, std::function<void(Requests&)>, grpc::StatusCode>>{
            {"lattice_n", [](Requests& r) { r[0].mutable_options()->set_lattice_n(40); },
@@ -409,16 +413,30 @@ TEST(AdmissionTest, HeaderErrorsAreAnsweredBeforeTheUploadGoesOn) {
             [](Requests& r) { r[1].mutable_volume_header()->mutable_dims()->set_x(1 << 21); },
             grpc::StatusCode::INVALID_ARGUMENT},
        }) {
-    Requests edited = requests;
-    edit(edited);
+    Requests head(good.begin(), good.begin() + 2);
+    v1::VolumeHeader* h = head[1].mutable_volume_header();
+    h->mutable_dims()->set_x(512);
+    h->mutable_dims()->set_y(512);
+    h->mutable_dims()->set_z(128);
+    h->clear_slab_lo();
+    h->clear_slab_hi();
+    h->set_total_bytes(static_cast<uint64_t>(kChunk * kChunks));
+    edit(head);
     OpenStream call(server.NewChannel());
-    size_t written = 0;
-    while (written < edited.size() && call.stream->Write(edited[written])) ++written;
+    int64_t written = 0;
+    bool open = call.stream->Write(head[0]) && call.stream->Write(head[1]);
+    for (v1::RefineRequest chunk; open && written < kChunks; ++written) {
+      chunk.mutable_volume_chunk()->set_offset(static_cast<uint64_t>(written * kChunk));
+      chunk.mutable_volume_chunk()->set_data(payload);
+      open = call.stream->Write(chunk);
+    }
     const grpc::Status status = call.Finish();
     EXPECT_EQ(status.error_code(), code) << name << ": " << status.error_message();
     EXPECT_THAT(status.error_message(), HasSubstr(name));
     // The refusal reached the client while it was still uploading.
-    EXPECT_LT(written, edited.size() / 2) << name;
+    EXPECT_LT(written, kChunks / 2) << name;
+    std::printf("[admission] %s refused after %lld of %lld volume chunks were written\n",
+                name.c_str(), static_cast<long long>(written), static_cast<long long>(kChunks));
   }
 }
 
