@@ -9,9 +9,9 @@
 #include "core/refine.h"
 #include "server/memory_budget.h"
 #include "server/metrics.h"
+#include "spdlog/spdlog.h"
 #include "wire/conversion.h"
 #include "wire/response_writer.h"
-#include "spdlog/spdlog.h"
 
 namespace tetrefine::server {
 namespace {
@@ -191,9 +191,9 @@ void RefineCall::Admit() {
     input_seconds_ = SecondsBetween(start_, Clock::now());
     input_ = reader_.Take();
     const wire::RequestOptions& o = input_->options;
-    const int64_t max_tets = o.max_tets.value_or(limits_.max_output_tets);
+    const int64_t max_tets = o.send_max_tets ? o.refine.max_tets : limits_.max_output_tets;
     const int64_t out_tets =
-        WorstCaseOutputTets(reader_.tets_declared(), o.max_iterations, max_tets);
+        WorstCaseOutputTets(reader_.tets_declared(), o.refine.max_iterations, max_tets);
     const int64_t base = OpenCallBytes(limits_.max_message_bytes) + reader_.DeclaredInputBytes();
     const int64_t per_tet = limits_.bytes_per_output_tet;
     total = base + out_tets * per_tet;

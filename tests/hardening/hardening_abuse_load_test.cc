@@ -108,10 +108,10 @@ std::string Token(const std::string& identity) { return identity + "-token-01234
 Workload BigResult() {
   Workload w = HeavyWorkload();
   w.name = "big-result";
-  w.options.max_iterations = 1;
-  w.options.lattice_n = 0;
+  w.options.refine.max_iterations = 1;
+  w.options.refine.lattice_n = 0;
   w.options.skip_final_mesh = false;
-  w.options.max_tets.reset();
+  w.options.send_max_tets = false;
   w.options.response_chunk_bytes = 256 << 10;
   return w;
 }
@@ -121,10 +121,10 @@ Workload BigResult() {
 Workload TinyEpsilon() {
   Workload w = SmallWorkloads()[1];
   w.name = "tiny-epsilon";
-  w.options.epsilon = 1e-12;
-  w.options.max_iterations = 16;
-  w.options.min_edge_length = 0.0;
-  w.options.lattice_n = 0;
+  w.options.refine.epsilon = 1e-12;
+  w.options.refine.max_iterations = 16;
+  w.options.refine.min_edge_length = 0.0;
+  w.options.refine.lattice_n = 0;
   w.options.skip_final_mesh = true;
   return w;
 }
@@ -246,7 +246,7 @@ TEST(HardeningAbuseLoadTest, GoodClientsAreServedCorrectlyAmongHostileOnesWithin
       client::CallOptions call;
       call.bearer_token = Token("greedy");
       call.deadline = std::chrono::system_clock::now() + std::chrono::seconds(60);
-      if (round % 2 == 1) w.options.max_tets = 50'000'000;  // above --max_output_tets
+      if (round % 2 == 1) w.options.SetMaxTets(50'000'000);  // above --max_output_tets
       absl::StatusOr<client::ClientResult> result =
           client::RefineViaService(channel, w.volume, w.mesh, w.options, {}, call);
       tally.Add(round % 2 == 1 ? "greedy-over-limit" : "greedy", result.status().code());
@@ -266,21 +266,21 @@ TEST(HardeningAbuseLoadTest, GoodClientsAreServedCorrectlyAmongHostileOnesWithin
     for (int round = 0; running() && round < 9; ++round) {
       Workload w = SmallWorkloads()[round % 2];
       if (round % 3 == 0) {
-        w.options.lattice_n = 64;
+        w.options.refine.lattice_n = 64;
       } else if (round % 3 == 1) {
-        w.options.lattice_n = 16;
-        w.options.lattice_max_tets = 0;
+        w.options.refine.lattice_n = 16;
+        w.options.refine.lattice_max_tets = 0;
       } else {
-        w.options.lattice_n = 16;
-        w.options.lattice_max_tets = 200'000;  // 1.9e8 points at most: within the cap
+        w.options.refine.lattice_n = 16;
+        w.options.refine.lattice_max_tets = 200'000;  // 1.9e8 points at most: within the cap
       }
       client::CallOptions call;
       call.bearer_token = Token("lattice");
       call.deadline = std::chrono::system_clock::now() + std::chrono::seconds(60);
       absl::StatusOr<client::ClientResult> result =
           client::RefineViaService(channel, w.volume, w.mesh, w.options, {}, call);
-      tally.Add("lattice-n" + std::to_string(w.options.lattice_n) +
-                    (w.options.lattice_max_tets == 0 ? "-every-tet" : ""),
+      tally.Add("lattice-n" + std::to_string(w.options.refine.lattice_n) +
+                    (w.options.refine.lattice_max_tets == 0 ? "-every-tet" : ""),
                 result.status().code());
     }
   });
@@ -322,7 +322,7 @@ TEST(HardeningAbuseLoadTest, PeakMemoryPerOutputTetIsWithinTheReservedRate) {
   std::vector<Case> cases;
   cases.push_back({"135k -> 1.08M tets, result sent", BigResult()});
   Workload two = BigResult();
-  two.options.max_iterations = 2;
+  two.options.refine.max_iterations = 2;
   two.options.skip_final_mesh = true;
   cases.push_back({"135k -> 8.6M tets, statistics only", two});
   for (const Case& c : cases) {

@@ -66,8 +66,8 @@ const Workload& BigResult() {
   static const Workload* w = [] {
     auto* out = new Workload(HeavyWorkload());
     out->name = "big-result";
-    out->options.max_iterations = 1;
-    out->options.lattice_n = 0;
+    out->options.refine.max_iterations = 1;
+    out->options.refine.lattice_n = 0;
     out->options.skip_final_mesh = false;
     return out;
   }();
@@ -156,8 +156,8 @@ TEST(AbuseTest, EightNeverReadingClientsAndFourSlotsStillServeAGoodClient) {
 Workload DrainWorkload() {
   Workload w = HeavyWorkload();
   w.name = "drain";
-  w.options.max_iterations = 2;
-  w.options.lattice_n = 0;
+  w.options.refine.max_iterations = 2;
+  w.options.refine.lattice_n = 0;
   w.options.skip_final_mesh = true;
   return w;
 }

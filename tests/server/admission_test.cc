@@ -38,8 +38,8 @@ struct SmallCase {
   Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {8.0, 8.0, 8.0}, {2, 2, 2});
   client::RefineRequestOptions options = [] {
     client::RefineRequestOptions o;
-    o.epsilon = 0.05;
-    o.max_iterations = 2;
+    o.refine.epsilon = 0.05;
+    o.refine.max_iterations = 2;
     return o;
   }();
 };
@@ -59,10 +59,10 @@ struct HeavyCase {
   Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {61.0, 61.0, 61.0}, {30, 30, 30});
   client::RefineRequestOptions options = [] {
     client::RefineRequestOptions o;
-    o.epsilon = 1e-6;
-    o.max_iterations = 4;
-    o.max_tets = 20'000'000;
-    o.lattice_n = 0;
+    o.refine.epsilon = 1e-6;
+    o.refine.max_iterations = 4;
+    o.SetMaxTets(20'000'000);
+    o.refine.lattice_n = 0;
     o.skip_final_mesh = true;
     return o;
   }();
@@ -217,7 +217,7 @@ TEST(AdmissionTest, AStreamLeftOpenAfterEndOfInputIsTimedOut) {
 // client that never reads cannot take in.
 client::RefineRequestOptions BigResultOptions() {
   client::RefineRequestOptions o = Heavy().options;
-  o.max_iterations = 1;
+  o.refine.max_iterations = 1;
   o.skip_final_mesh = false;
   return o;
 }
@@ -334,8 +334,8 @@ TEST(AdmissionTest, TheMemoryBudgetHoldsForInputsAndWorstCases) {
 
   // A worst case above the whole budget is refused at once, with the tet budget that would fit.
   client::RefineRequestOptions too_big = Small().options;
-  too_big.max_tets = 1'000'000;
-  too_big.max_iterations = 16;
+  too_big.SetMaxTets(1'000'000);
+  too_big.refine.max_iterations = 16;
   absl::StatusOr<client::ClientResult> refused =
       client::RefineViaService(server.NewChannel(), Small().volume, Small().mesh, too_big);
   ASSERT_EQ(refused.status().code(), absl::StatusCode::kResourceExhausted) << refused.status();
@@ -346,7 +346,7 @@ TEST(AdmissionTest, TheMemoryBudgetHoldsForInputsAndWorstCases) {
   const int64_t fits = std::stoll(message.substr(message.rfind("at most ") + 8));
   EXPECT_GT(fits, 300'000);
   client::RefineRequestOptions fitting = too_big;
-  fitting.max_tets = fits;
+  fitting.SetMaxTets(fits);
   // It takes the whole budget: the refused call must have let go of its own reservation.
   ASSERT_TRUE(Eventually([&] { return server.service().gate().reserved_bytes() == 0; }));
   EXPECT_TRUE(
@@ -367,8 +367,8 @@ TEST(AdmissionTest, TheMemoryBudgetHoldsForInputsAndWorstCases) {
               HasSubstr("the input this call declares (volume and mesh) needs 42.0 MiB of this "
                         "server's memory budget"));
   client::RefineRequestOptions thirty_mib = Small().options;
-  thirty_mib.max_tets = 180'000;
-  thirty_mib.max_iterations = 16;
+  thirty_mib.SetMaxTets(180'000);
+  thirty_mib.refine.max_iterations = 16;
   absl::StatusOr<client::ClientResult> waits =
       client::RefineViaService(server.NewChannel(), Small().volume, Small().mesh, thirty_mib);
   EXPECT_EQ(waits.status().code(), absl::StatusCode::kResourceExhausted);
