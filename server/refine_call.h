@@ -13,8 +13,8 @@
 #include "server/call_gate.h"
 #include "server/refiner_service.h"
 #include "server/watchdog.h"
-#include "wire/request_reader.h"
 #include "tetrefine/v1/tetrefine.pb.h"
+#include "wire/request_reader.h"
 
 namespace tetrefine::server {
 

@@ -5,9 +5,9 @@
 #include "grpcpp/grpcpp.h"
 #include "server/call_gate.h"
 #include "server/identity.h"
-#include "wire/service_limits.h"
 #include "server/watchdog.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
+#include "wire/service_limits.h"
 
 namespace tetrefine::server {
 

@@ -177,9 +177,9 @@ absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& i
   if (r.norm_coeff.has_value() && !std::isnormal(*r.norm_coeff)) {
     // A subnormal normalisation turns every error into inf (5e-324 did); the bound that depends
     // on the volume's range follows once the volume has arrived (wire/request_reader.cc).
-    return Invalid("norm_coeff", absl::StrCat("must be a normal number (>= ",
-                                              std::numeric_limits<double>::min(), "), got ",
-                                              *r.norm_coeff));
+    return Invalid("norm_coeff",
+                   absl::StrCat("must be a normal number (>= ", std::numeric_limits<double>::min(),
+                                "), got ", *r.norm_coeff));
   }
   if (r.max_iterations > limits.max_iterations) {
     return absl::ResourceExhaustedError(absl::StrCat(
@@ -198,13 +198,13 @@ absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& i
   const int64_t sampled = r.lattice_max_tets == 0 ? budget : std::min(r.lattice_max_tets, budget);
   const int64_t per_tet = LatticePointsPerTet(r.lattice_n);
   if (r.lattice_n > 0 && sampled > limits.max_lattice_points / per_tet) {
-    return absl::ResourceExhaustedError(absl::StrCat(
-        "options.lattice_n = ", r.lattice_n, " (", per_tet, " points a tet) on up to ", sampled,
-        " tets (lattice_max_tets = ", r.lattice_max_tets,
-        r.lattice_max_tets == 0 ? ": every tet, up to max_tets" : "", ") may sample ",
-        static_cast<double>(per_tet) * static_cast<double>(sampled),
-        " points, above this server's limit of ", limits.max_lattice_points,
-        " (--max_lattice_points); lower lattice_n, lattice_max_tets or max_tets"));
+    return absl::ResourceExhaustedError(
+        absl::StrCat("options.lattice_n = ", r.lattice_n, " (", per_tet, " points a tet) on up to ",
+                     sampled, " tets (lattice_max_tets = ", r.lattice_max_tets,
+                     r.lattice_max_tets == 0 ? ": every tet, up to max_tets" : "", ") may sample ",
+                     static_cast<double>(per_tet) * static_cast<double>(sampled),
+                     " points, above this server's limit of ", limits.max_lattice_points,
+                     " (--max_lattice_points); lower lattice_n, lattice_max_tets or max_tets"));
   }
   o.stream_every_iteration = in.stream_every_iteration();
   o.skip_final_mesh = in.skip_final_mesh();

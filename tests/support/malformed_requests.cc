@@ -532,21 +532,24 @@ std::vector<MalformedRequest> MalformedRequests() {
            {"options.norm_coeff: 1e-300 is too small for the volume's value range",
             "must be at least range / 1e+280"}),
       // Per-call work caps, answered with the options.
-      Edit("MaxIterationsAboveTheCap", [](Requests& r) { Options(r).set_max_iterations(101); },
-           {"options.max_iterations: 101 exceeds this server's limit of 100 iterations"},
-           kExhausted),
-      Edit("LatticeNAboveTheCap", [](Requests& r) { Options(r).set_lattice_n(17); },
-           {"options.lattice_n: 17 exceeds this server's limit of 16 (--max_lattice_n)"},
-           kExhausted),
-      Edit("LatticeOfEveryTetUpToTheBudget",
-           [](Requests& r) {
-             Options(r).set_lattice_n(8);
-             Options(r).set_lattice_max_tets(0);
-           },
-           {"options.lattice_n = 8 (165 points a tet) on up to 50000000 tets",
-            "every tet, up to max_tets", "above this server's limit of 200000000",
-            "--max_lattice_points"},
-           kExhausted),
+      Edit(
+          "MaxIterationsAboveTheCap", [](Requests& r) { Options(r).set_max_iterations(101); },
+          {"options.max_iterations: 101 exceeds this server's limit of 100 iterations"},
+          kExhausted),
+      Edit(
+          "LatticeNAboveTheCap", [](Requests& r) { Options(r).set_lattice_n(17); },
+          {"options.lattice_n: 17 exceeds this server's limit of 16 (--max_lattice_n)"},
+          kExhausted),
+      Edit(
+          "LatticeOfEveryTetUpToTheBudget",
+          [](Requests& r) {
+            Options(r).set_lattice_n(8);
+            Options(r).set_lattice_max_tets(0);
+          },
+          {"options.lattice_n = 8 (165 points a tet) on up to 50000000 tets",
+           "every tet, up to max_tets", "above this server's limit of 200000000",
+           "--max_lattice_points"},
+          kExhausted),
       Edit("SpacingInfinite", [](Requests& r) { VolumeHeader(r).mutable_spacing()->set_y(kInf); },
            {"volume_header.spacing.y: must be finite and > 0, got inf"}),
       Edit("OriginNaN", [](Requests& r) { VolumeHeader(r).mutable_origin()->set_z(kNaN); },
