@@ -1,4 +1,4 @@
-#include "bench/reproduce/phantoms.h"
+#include "tools/reproduce/phantoms.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "bench/reproduce/case_meshes.h"
+#include "tools/reproduce/case_meshes.h"
 
 #include <cstdint>
 

@@ -1,4 +1,4 @@
-#include "bench/reproduce/uniform_refine.h"
+#include "tools/reproduce/uniform_refine.h"
 
 #include <array>
 #include <cstdint>

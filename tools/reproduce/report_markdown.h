@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "bench/reproduce/results.h"
+#include "tools/reproduce/results.h"
 
 namespace tetrefine::reproduce {
 

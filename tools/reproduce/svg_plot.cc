@@ -1,4 +1,4 @@
-#include "bench/reproduce/svg_plot.h"
+#include "tools/reproduce/svg_plot.h"
 
 #include <algorithm>
 #include <cmath>

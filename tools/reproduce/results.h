@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "bench/reproduce/max_location_study.h"
 #include "core/refine.h"
+#include "tools/reproduce/max_location_study.h"
 
 namespace tetrefine::reproduce {
 

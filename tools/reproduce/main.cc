@@ -1,7 +1,7 @@
 // tetrefine_reproduce: runs the paper's experiments (section 5) on the real volumes in the shared
 // data directory and on generated phantoms, against a uniform 1:8 baseline, and writes
 // report.md, results.json and plots/*.svg into --out_dir.
-// Run: build/bench/reproduce/tetrefine_reproduce --out_dir=docs/results
+// Run: build/tools/reproduce/tetrefine_reproduce --out_dir=docs/results
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -14,12 +14,12 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/strings/str_cat.h"
-#include "bench/reproduce/case_runner.h"
-#include "bench/reproduce/cases.h"
-#include "bench/reproduce/report_markdown.h"
-#include "bench/reproduce/results_json.h"
-#include "bench/reproduce/svg_plot.h"
 #include "core/refine.h"
+#include "tools/reproduce/case_runner.h"
+#include "tools/reproduce/cases.h"
+#include "tools/reproduce/report_markdown.h"
+#include "tools/reproduce/results_json.h"
+#include "tools/reproduce/svg_plot.h"
 
 ABSL_FLAG(std::string, out_dir, TETREFINE_SOURCE_DIR "/docs/results",
           "where report.md, results.json and plots/ go");

@@ -3,8 +3,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "bench/reproduce/cases.h"
-#include "bench/reproduce/results.h"
+#include "tools/reproduce/cases.h"
+#include "tools/reproduce/results.h"
 
 namespace tetrefine::reproduce {
 

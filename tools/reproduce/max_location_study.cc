@@ -1,14 +1,14 @@
-#include "bench/reproduce/max_location_study.h"
+#include "tools/reproduce/max_location_study.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <random>
 
-#include "bench/reproduce/uniform_refine.h"
 #include "core/lattice.h"
 #include "tbb/blocked_range.h"
 #include "tbb/parallel_reduce.h"
+#include "tools/reproduce/uniform_refine.h"
 
 namespace tetrefine::reproduce {
 namespace {

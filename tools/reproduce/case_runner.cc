@@ -1,14 +1,14 @@
-#include "bench/reproduce/case_runner.h"
+#include "tools/reproduce/case_runner.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <string>
 
-#include "bench/reproduce/uniform_refine.h"
 #include "bench/support/process_memory.h"
 #include "core/lattice.h"
 #include "core/quality.h"
+#include "tools/reproduce/uniform_refine.h"
 
 namespace tetrefine::reproduce {
 namespace {

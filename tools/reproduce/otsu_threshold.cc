@@ -1,4 +1,4 @@
-#include "bench/reproduce/otsu_threshold.h"
+#include "tools/reproduce/otsu_threshold.h"
 
 #include <array>
 #include <cstdint>

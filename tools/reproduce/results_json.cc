@@ -1,4 +1,4 @@
-#include "bench/reproduce/results_json.h"
+#include "tools/reproduce/results_json.h"
 
 #include "client/io/json_writer.h"
 #include "core/configuration.h"

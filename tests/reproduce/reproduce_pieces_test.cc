@@ -1,4 +1,4 @@
-// The pieces of bench/reproduce whose mistakes would not show in the report: the uniform
+// The pieces of tools/reproduce whose mistakes would not show in the report: the uniform
 // baseline (conformal, volume-preserving 1:8), the masked block mesh and the JSON quoting.
 #include <array>
 #include <cmath>
@@ -7,14 +7,14 @@
 #include <set>
 #include <vector>
 
-#include "bench/reproduce/case_meshes.h"
-#include "bench/reproduce/uniform_refine.h"
 #include "bench/support/field_volume.h"
 #include "bench/support/five_tet_lattice.h"
 #include "core/mesh_validation.h"
 #include "core/quality.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
+#include "tools/reproduce/case_meshes.h"
+#include "tools/reproduce/uniform_refine.h"
 
 namespace tetrefine::reproduce {
 namespace {

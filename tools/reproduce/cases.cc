@@ -1,4 +1,4 @@
-#include "bench/reproduce/cases.h"
+#include "tools/reproduce/cases.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -8,12 +8,12 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "bench/reproduce/case_meshes.h"
-#include "bench/reproduce/otsu_threshold.h"
-#include "bench/reproduce/phantoms.h"
 #include "bench/support/field_volume.h"
 #include "client/io/mesh_io.h"
 #include "client/io/read_volume.h"
+#include "tools/reproduce/case_meshes.h"
+#include "tools/reproduce/otsu_threshold.h"
+#include "tools/reproduce/phantoms.h"
 
 namespace tetrefine::reproduce {
 namespace {
@@ -101,7 +101,7 @@ void AddHeart(const std::string& name, const GridGeometry& grid, const Mesh& she
        .volume_name = volume_name,
        .mesh_kind = "shell",
        .description = absl::StrCat(
-           "Left-ventricle perfusion phantom (bench/reproduce/phantoms.h) sampled on the paper's ",
+           "Left-ventricle perfusion phantom (tools/reproduce/phantoms.h) sampled on the paper's ",
            name, " grid: ", GridText(*volume), ", float32. Mesh: world cells of ", kHeartCellMm,
            " mm, 5 tets each, kept when the cell centre lies in the wall below the base plane "
            "(the same mesh on both heart grids)."),
