@@ -40,14 +40,18 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 
-import numpy as np
+try:
+    import numpy as np
+except ImportError:  # python3-dolfinx needs numpy: without it there is no peer to run (main says so)
+    np = None
 
 # Statuses of the refinement loop, named like core's StopReason where they mean the same.
 CONVERGED = "converged"
 MAX_ROUNDS = "max_rounds"
 TET_BUDGET = "tet_budget"
 
-# Exit status when python3-dolfinx does not import (tools/reproduce/plaza_peer.cc knows it).
+# Exit status when python3-dolfinx (or numpy) does not import (tools/reproduce/plaza_peer.cc
+# knows it).
 EXIT_DOLFINX_MISSING = 3
 
 LATTICE_N = 8
@@ -427,6 +431,10 @@ def main(argv=None):
         parser.error("--case and --epsilon are required")
     if not args.check and (not args.epsilon > 0 or args.max_rounds < 0 or args.max_tets < 1):
         parser.error("--epsilon must be > 0, --max-rounds >= 0, --max-tets >= 1")
+    if np is None:
+        print(f"{sys.argv[0]}: python3-numpy is missing for {sys.executable} "
+              "(bash bench/peers/install-peers.sh)", file=sys.stderr)
+        return EXIT_DOLFINX_MISSING
     if not args.score_only and not dolfinx_available():
         print(f"{sys.argv[0]}: python3-dolfinx is missing for {sys.executable} "
               "(bash bench/peers/install-peers.sh)", file=sys.stderr)

@@ -1,19 +1,31 @@
 // The pieces of tools/reproduce whose mistakes would not show in the report: the uniform
-// baseline (conformal, volume-preserving 1:8), the masked block mesh and the JSON quoting.
+// baseline (conformal, volume-preserving 1:8), the masked block mesh, the Plaza driver's scoring
+// against core's and the child process runner.
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <set>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "bench/support/field_volume.h"
 #include "bench/support/five_tet_lattice.h"
+#include "client/io/mesh_io.h"
+#include "core/lattice.h"
 #include "core/mesh_validation.h"
 #include "core/quality.h"
+#include "google/protobuf/struct.pb.h"
+#include "google/protobuf/util/json_util.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
 #include "tools/reproduce/case_meshes.h"
+#include "tools/reproduce/mesh_scores.h"
+#include "tools/reproduce/plaza_peer.h"
+#include "tools/reproduce/subprocess.h"
 #include "tools/reproduce/uniform_refine.h"
 
 namespace tetrefine::reproduce {
@@ -90,6 +102,102 @@ TEST(MaskedBlockMeshTest, KeepsBlocksWhoseCornersAllExceedTheThreshold) {
   EXPECT_EQ(m.tets.size(), 5u * 2 * 4 * 2);  // 2 of 4 blocks in x, 4 in y, 2 in z
   for (const Vec3& p : m.points) EXPECT_LE(p[0], 4.0);
   EXPECT_TRUE(CheckFaces(m.points, m.tets).ok());
+}
+
+// The Plaza driver is a separate implementation (numpy) of core's sampling and of the
+// reproduction's scores; a difference would make Plaza's marks or figures differ from what core
+// would compute. Scored on an exported case with rough data and off-grid vertices, including
+// vertices on the volume's boundary (the clamp), it must agree with core.
+TEST(PlazaExportTest, ScriptScoresTheExportedCaseAsCoreDoes) {
+  const std::string python = "/usr/bin/python3";
+  const std::string script = TETREFINE_SOURCE_DIR "/bench/peers/plaza_refine.py";
+  const absl::StatusOr<int> numpy = RunProcess({python, "-c", "import numpy"});
+  if (!numpy.ok() || *numpy != 0) GTEST_SKIP() << python << " has no numpy";
+
+  const uint64_t seed = 20261123;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> value(-3000.0, 12000.0);
+  GridGeometry g;
+  g.dims = {7, 6, 5};
+  g.origin = {-3.0, 1.0, 2.0};
+  g.spacing = {1.5, 2.0, 0.75};
+  const Volume volume =
+      bench::SampleField(g, VoxelType::kInt16, [&](const Vec3&) { return value(rng); });
+  const auto [lo, hi] = volume.ValueRange();
+  const double norm = hi - lo;
+  bench::CellLattice lattice;  // spans the whole box: boundary vertices, cells across voxels
+  lattice.origin = g.origin;
+  lattice.cells = {3, 4, 2};
+  for (int a = 0; a < 3; ++a) {
+    lattice.size[a] = static_cast<double>(g.dims[a] - 1) * g.spacing[a] / lattice.cells[a];
+  }
+  Mesh mesh = bench::FiveTetLatticeMesh(lattice);
+  // Interior vertices off the lattice, so that interpolation weights are generic fractions.
+  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  for (Vec3& p : mesh.points) {
+    for (int a = 0; a < 3; ++a) {
+      const double box_hi = g.origin[a] + static_cast<double>(g.dims[a] - 1) * g.spacing[a];
+      if (p[a] > g.origin[a] + 1e-9 && p[a] < box_hi - 1e-9) p[a] += jitter(rng) * lattice.size[a];
+    }
+  }
+
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / "plaza_export_test";
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(ExportPlazaCase(volume, mesh, norm, dir).ok());
+  const std::string out = (dir / "scores.json").string();
+  const std::string sampled = (dir / "sampled.vtu").string();
+  const double epsilon = 0.05;
+  const absl::StatusOr<int> status =
+      RunProcess({python, script, "--case", dir.string(), "--epsilon", "0.05", "--score-only",
+                  "--output", out, "--mesh-out", sampled, "--quiet"});
+  ASSERT_TRUE(status.ok()) << status.status();
+  ASSERT_EQ(*status, 0);
+  std::ifstream f(out);
+  std::stringstream text;
+  text << f.rdbuf();
+  google::protobuf::Struct json;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(text.str(), &json).ok()) << text.str();
+  const auto& root = json.fields();
+  const auto number = [](const google::protobuf::Struct& o, const char* key) {
+    return o.fields().at(key).number_value();
+  };
+
+  SampleValues(volume, mesh);
+  // The mesh came back as it went (ids, order, coordinates), with the script's vertex samples.
+  const absl::StatusOr<io::MeshFile> back = io::ReadMesh(sampled);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->mesh.points, mesh.points);
+  EXPECT_EQ(back->mesh.tets, mesh.tets);
+  EXPECT_EQ(back->mesh.values, mesh.values);
+  const MidpointErrorStats mid = MidpointErrors(volume, mesh, norm);
+  const LatticeStats lat = SampleLattice(volume, mesh, 8, 0, 1, norm, epsilon, /*clamp=*/false);
+  const QualityStats q = MeshQuality(mesh);
+  ASSERT_GT(mid.max_error, epsilon);  // the data is rough enough to mean something
+  EXPECT_EQ(number(json, "tets"), static_cast<double>(mesh.tets.size()));
+  EXPECT_EQ(number(json, "vertices"), static_cast<double>(mesh.points.size()));
+  // Maxima are single evaluations in the same operation order: the same bits.
+  EXPECT_EQ(number(json, "midpoint_max"), mid.max_error);
+  const google::protobuf::Struct& l = root.at("lattice").struct_value();
+  EXPECT_EQ(number(l, "max_error"), lat.max_error);
+  EXPECT_EQ(number(l, "points_sampled"), static_cast<double>(lat.points_sampled));
+  EXPECT_EQ(number(l, "share_above_epsilon"), lat.share_above_epsilon);
+  // Means are summed in another order; cube roots may differ in the last bit.
+  EXPECT_NEAR(number(json, "midpoint_mean"), mid.mean_error, 1e-12);
+  EXPECT_NEAR(number(l, "mean_error"), lat.mean_error, 1e-12);
+  const google::protobuf::Struct& quality = root.at("quality").struct_value();
+  EXPECT_NEAR(number(quality, "min"), q.min, 1e-12);
+  EXPECT_NEAR(number(quality, "mean"), q.mean, 1e-12);
+}
+
+TEST(RunProcessTest, ReturnsTheExitStatusAndNamesAProgramThatCannotStart) {
+  const absl::StatusOr<int> three = RunProcess({"/bin/sh", "-c", "exit 3"});
+  ASSERT_TRUE(three.ok()) << three.status();
+  EXPECT_EQ(*three, 3);
+  const absl::StatusOr<int> missing = RunProcess({"/nonexistent/program"});
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("/nonexistent/program"), std::string::npos);
 }
 
 }  // namespace

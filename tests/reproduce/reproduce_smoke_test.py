@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """Smoke test of tetrefine_reproduce: runs it with --quick and checks that report.md,
 results.json and the plots are written, parse, and agree with each other and with the invariants
-of the statistics they report (e.g. tets by configuration add up to the tets of the iteration)."""
+of the statistics they report (e.g. tets by configuration add up to the tets of the iteration),
+and that every method has its row per case and epsilon. Plaza runs when python3-dolfinx is
+installed; its script's own scores must then match core's on the same mesh."""
 
 import argparse
 import json
@@ -64,6 +66,58 @@ def check_case(case, report):
                   f"{name}: a uniform level matched but was not reported")
 
 
+def close(a, b, rel=1e-9):
+    return abs(a - b) <= rel * max(abs(a), abs(b), 1e-300)
+
+
+def check_methods(case, results):
+    """One row per method and epsilon; Plaza either ran (and scored its result as core did) or
+    says why not, the same reason in every row."""
+    name = case["name"]
+    expected = ["tetrefine " + s for s in results["schemes"]] + ["Plaza (DOLFINx)", "uniform 1:8"]
+    rows = case["methods"]
+    check([r["method"] for r in rows] == expected * len(results["epsilons"]),
+          f"{name}: methods {[r['method'] for r in rows]}")
+    check([r["epsilon"] for r in rows] ==
+          [e for e in results["epsilons"] for _ in expected], f"{name}: method epsilons")
+    levels = {l["tets"]: l for l in case["uniform_levels"]}
+    for row in rows:
+        label = f"{name} {row['method']} eps={row['epsilon']}"
+        if row["method"] == "Plaza (DOLFINx)":
+            if results["plaza"].startswith("not run: "):
+                check(not row["ran"] and "not run: " + row["not_run"] == results["plaza"],
+                      f"{label}: should say {results['plaza']}")
+                continue
+            check(row["ran"], f"{label}: {row.get('not_run')}")
+            mine = row["self_report"]
+            check(mine["tets"] == row["tets"], f"{label}: the script's tets")
+            check(row["stop_reason"] in ("converged", "max_rounds", "tet_budget"), label)
+            check(row["rounds"] <= results["max_iterations"], f"{label}: rounds over the cap")
+            if row["stop_reason"] == "converged":
+                check(row["midpoint_max_error"] <= row["epsilon"], f"{label}: not converged")
+            # The script's numpy scores against core's, on the same mesh.
+            for mine_key, core in (("midpoint_max_error", row["midpoint_max_error"]),
+                                   ("lattice_max_error", row["lattice"]["max_error"]),
+                                   ("lattice_mean_error", row["lattice"]["mean_error"]),
+                                   ("quality_min", row["quality"]["min"]),
+                                   ("quality_mean", row["quality"]["mean"])):
+                check(close(mine[mine_key], core), f"{label}: {mine_key} {mine[mine_key]} "
+                      f"(script) against {core} (core)")
+            continue
+        check(row["ran"], f"{label}: {row.get('not_run')}")
+        check(0 < row["quality"]["min"] <= row["quality"]["mean"] <= 1, f"{label}: quality")
+        check(0 <= row["lattice"]["mean_error"] <= row["lattice"]["max_error"], f"{label}")
+        if row["method"] == "uniform 1:8":
+            check(row["tets"] in levels, f"{label}: not a uniform level")
+            reached = row["lattice"]["max_error"] <= row["epsilon"]
+            check(row["stop_reason"] == ("lattice_reached" if reached else "tet_cap"), label)
+        else:
+            run = [r for r in case["runs"] if "tetrefine " + r["scheme"] == row["method"] and
+                   r["epsilon"] == row["epsilon"]][-1]
+            check(run["final_tets"] == row["tets"] and run["stop_reason"] == row["stop_reason"],
+                  f"{label}: the row is not the scheme's run to convergence")
+
+
 def check_study(study):
     meshes = study["meshes"]
     check(meshes, "the section 5.1 study is empty")
@@ -86,9 +140,9 @@ def main():
     shutil.rmtree(args.out_dir, ignore_errors=True)
     try:
         proc = subprocess.run([args.tool, "--quick", "--out_dir=" + args.out_dir],
-                              capture_output=True, text=True, timeout=240)
+                              capture_output=True, text=True, timeout=540)
     except subprocess.TimeoutExpired:
-        fail("tetrefine_reproduce --quick took more than 240 s")
+        fail("tetrefine_reproduce --quick took more than 540 s")
     sys.stderr.write(proc.stderr)
     check(proc.returncode == 0, f"exit status {proc.returncode}")
 
@@ -96,15 +150,17 @@ def main():
         results = json.load(f)
     with open(os.path.join(args.out_dir, "report.md"), encoding="utf-8") as f:
         report = f.read()
-    check(results["schema"] == "tetrefine.reproduce/1", "schema")
+    check(results["schema"] == "tetrefine.reproduce/2", "schema")
+    check(results["schemes"] and results["schemes"][0] == "paper", "the paper scheme comes first")
     check(results["quick"] is True, "quick flag not recorded")
     check(results["epsilons"] == [0.1, 0.05], f"epsilons {results['epsilons']}")
-    for heading in ("# tetrefine", "## Summary", "## Section 5.1", "## Cases"):
+    for heading in ("# tetrefine", "## Methods side by side", "## Section 5.1", "## Cases"):
         check(heading in report, f"report.md lacks '{heading}'")
     cases = results["cases"]
     check(len(cases) >= 2, "expected the quick cases")
     for case in cases:
         check_case(case, report)
+        check_methods(case, results)
         svg = os.path.join(args.out_dir, "plots", case["name"] + ".svg")
         check(f"plots/{case['name']}.svg" in report, f"report.md does not link {svg}")
         root = ET.parse(svg).getroot()
@@ -112,7 +168,8 @@ def main():
         check(len(root.findall("{http://www.w3.org/2000/svg}polyline")) >= 4,
               f"{svg}: expected error and tet polylines per epsilon")
     check_study(results["max_location_study"])
-    print(f"OK: {len(cases)} cases, {len(results['max_location_study']['meshes'])} study meshes")
+    print(f"OK: {len(cases)} cases, {len(results['max_location_study']['meshes'])} study meshes, "
+          f"Plaza {results['plaza']}")
 
 
 if __name__ == "__main__":

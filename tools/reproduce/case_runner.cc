@@ -3,11 +3,16 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <iterator>
 #include <string>
+#include <utility>
 
+#include "absl/strings/str_cat.h"
 #include "bench/support/process_memory.h"
 #include "core/lattice.h"
 #include "core/quality.h"
+#include "tools/reproduce/mesh_scores.h"
+#include "tools/reproduce/schemes.h"
 #include "tools/reproduce/uniform_refine.h"
 
 namespace tetrefine::reproduce {
@@ -22,28 +27,16 @@ double Since(Clock::time_point t) {
 constexpr int kLatticeN = 8;
 constexpr uint64_t kLatticeSeed = 1;
 
-QualityStats MeshQuality(const Mesh& m) {
-  QualityStats q;
-  q.min = 1.0;
-  double sum = 0.0;
-  for (const Tet& t : m.tets) {
-    const double eta = MeanRatio(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]);
-    q.min = std::min(q.min, eta);
-    sum += eta;
-  }
-  q.count = static_cast<int64_t>(m.tets.size());
-  q.mean = m.tets.empty() ? 0.0 : sum / static_cast<double>(q.count);
-  return q;
-}
-
-RunRecord RunOnce(const CaseInput& input, double epsilon, int max_iterations, double norm,
-                  const RunOptions& options) {
+RunRecord RunOnce(const CaseInput& input, const Scheme& scheme, double epsilon, int max_iterations,
+                  double norm, const RunOptions& options) {
   RefineOptions o;
   o.epsilon = epsilon;
   o.max_iterations = max_iterations;
   o.max_tets = options.max_tets;
   o.lattice_n = 0;  // scored below, outside the timed call
+  scheme.apply(o);
   RunRecord run;
+  run.scheme = scheme.name;
   run.epsilon = epsilon;
   run.max_iterations = max_iterations;
   absl::StatusOr<RefineResult> r;
@@ -75,11 +68,98 @@ BaselineLevel ScoreLevel(const Volume& volume, const Mesh& mesh, int level, doub
                          const RunOptions& options) {
   const LatticeStats s = SampleLattice(volume, mesh, kLatticeN, options.lattice_max_tets,
                                        kLatticeSeed, norm, /*epsilon=*/1.0, /*clamp=*/false);
+  const MidpointErrorStats mid = MidpointErrors(volume, mesh, norm);
   return {.level = level,
           .tets = static_cast<int64_t>(mesh.tets.size()),
           .lattice_max = s.max_error,
           .lattice_mean = s.mean_error,
+          .midpoint_max = mid.max_error,
+          .midpoint_mean = mid.mean_error,
           .quality = MeshQuality(mesh)};
+}
+
+MethodRow NewRow(std::string method, double epsilon) {
+  MethodRow row;
+  row.method = std::move(method);
+  row.epsilon = epsilon;
+  return row;
+}
+
+MethodRow RowOf(const RunRecord& r) {
+  MethodRow row = NewRow(absl::StrCat("tetrefine ", r.scheme), r.epsilon);
+  if (r.final_tets == 0) {
+    row.not_run = r.stop_reason;  // the Refine call failed; its message
+    return row;
+  }
+  row.tets = r.final_tets;
+  row.rounds = static_cast<int>(r.iterations.size());
+  row.midpoint_max = r.final_max_error;
+  row.midpoint_mean = r.final_mean_error;
+  row.lattice = r.lattice;
+  row.quality = r.final_quality;
+  row.stop_reason = r.stop_reason;
+  row.seconds = r.seconds;
+  return row;
+}
+
+// Plaza on the case at `epsilon`, scored by core like the other methods.
+MethodRow PlazaRow(const CaseInput& input, const std::filesystem::path& case_dir, double epsilon,
+                   double norm, const RunOptions& options) {
+  MethodRow row = NewRow(kPlazaMethod, epsilon);
+  if (options.plaza == nullptr) {
+    row.not_run = options.plaza_not_run;
+    return row;
+  }
+  std::fprintf(stderr, "  %s: Plaza, epsilon %.2f\n", input.name.c_str(), epsilon);
+  absl::StatusOr<PlazaResult> r = RunPlaza(*options.plaza, case_dir, epsilon);
+  if (!r.ok()) {
+    row.not_run = absl::StrCat("failed: ", r.status().message());
+    std::fprintf(stderr, "  %s\n", row.not_run.c_str());
+    return row;
+  }
+  const Volume& volume = *input.volume;
+  SampleValues(volume, r->mesh);
+  row.tets = static_cast<int64_t>(r->mesh.tets.size());
+  row.rounds = r->report.rounds;
+  const MidpointErrorStats mid = MidpointErrors(volume, r->mesh, norm);
+  row.midpoint_max = mid.max_error;
+  row.midpoint_mean = mid.mean_error;
+  row.lattice = SampleLattice(volume, r->mesh, kLatticeN, options.lattice_max_tets, kLatticeSeed,
+                              norm, epsilon, /*clamp=*/false);
+  row.quality = MeshQuality(r->mesh);
+  row.stop_reason = r->report.stop_reason;
+  row.seconds = r->report.seconds;
+  row.has_self_report = true;
+  row.self_report = r->report;
+  return row;
+}
+
+// Uniform 1:8 as a method at `epsilon`: the first level whose lattice max error is at most
+// epsilon ("lattice_reached"), else the last level built ("tet_cap").
+MethodRow UniformRow(const CaseRecord& c, double epsilon) {
+  MethodRow row = NewRow(kUniformMethod, epsilon);
+  const BaselineLevel* chosen = &c.uniform.back();
+  row.stop_reason = "tet_cap";
+  for (const BaselineLevel& l : c.uniform) {
+    if (l.lattice_max <= epsilon) {
+      chosen = &l;
+      row.stop_reason = "lattice_reached";
+      break;
+    }
+  }
+  row.tets = chosen->tets;
+  row.rounds = chosen->level;
+  row.midpoint_max = chosen->midpoint_max;
+  row.midpoint_mean = chosen->midpoint_mean;
+  row.lattice.n = kLatticeN;
+  row.lattice.tets_sampled = chosen->tets;
+  row.lattice.max_error = chosen->lattice_max;
+  row.lattice.mean_error = chosen->lattice_mean;
+  row.quality = chosen->quality;
+  for (const BaselineLevel& l : c.uniform) {
+    if (l.level <= chosen->level) row.seconds += l.seconds;
+  }
+  return row;
 }
 
 BaselineMatch FirstLevel(const std::vector<BaselineLevel>& levels, bool by_max, double target) {
@@ -111,23 +191,51 @@ CaseRecord RunCase(const CaseInput& input, const RunOptions& options) {
   c.input_tets = static_cast<int64_t>(input.mesh.tets.size());
   c.uniform_cap_tets = options.uniform_cap_tets;
 
-  std::vector<int> caps = {options.max_iterations};
-  if (options.max_iterations > 4) caps.insert(caps.begin(), 4);
+  std::vector<RunRecord> full;  // per epsilon, per scheme: the runs to convergence
   for (double epsilon : options.epsilons) {
-    for (int cap : caps) {
-      std::fprintf(stderr, "  %s: epsilon %.2f, up to %d iterations\n", c.name.c_str(), epsilon,
-                   cap);
-      c.runs.push_back(RunOnce(input, epsilon, cap, c.norm_coeff, options));
+    for (const Scheme& scheme : kSchemes) {
+      std::vector<int> caps = {options.max_iterations};
+      if (&scheme == &kPaperScheme && options.max_iterations > 4) caps.insert(caps.begin(), 4);
+      for (int cap : caps) {
+        std::fprintf(stderr, "  %s: %s, epsilon %.2f, up to %d iterations\n", c.name.c_str(),
+                     scheme.name, epsilon, cap);
+        c.runs.push_back(RunOnce(input, scheme, epsilon, cap, c.norm_coeff, options));
+      }
+      full.push_back(c.runs.back());
     }
   }
 
-  // Uniform levels until one matches every run on both lattice measures, or the cap.
+  std::vector<MethodRow> plaza;
+  const std::filesystem::path case_dir = options.peer_dir / c.name;
+  std::string export_error;
+  if (options.plaza != nullptr) {
+    if (absl::Status s = ExportPlazaCase(volume, input.mesh, c.norm_coeff, case_dir); !s.ok()) {
+      export_error = absl::StrCat("failed: ", s.message());
+    }
+  }
+  for (double epsilon : options.epsilons) {
+    if (!export_error.empty()) {
+      plaza.push_back(NewRow(kPlazaMethod, epsilon));
+      plaza.back().not_run = export_error;
+      continue;
+    }
+    plaza.push_back(PlazaRow(input, case_dir, epsilon, c.norm_coeff, options));
+  }
+
+  // Uniform levels until one matches every result on both lattice measures and reaches the
+  // smallest epsilon on the lattice, or the cap.
   double target_max = 1e300, target_mean = 1e300;
   for (const RunRecord& r : c.runs) {
     if (r.final_tets == 0) continue;
     target_max = std::min(target_max, r.lattice.max_error);
     target_mean = std::min(target_mean, r.lattice.mean_error);
   }
+  for (const MethodRow& p : plaza) {
+    if (!p.not_run.empty()) continue;
+    target_max = std::min(target_max, p.lattice.max_error);
+    target_mean = std::min(target_mean, p.lattice.mean_error);
+  }
+  for (double epsilon : options.epsilons) target_max = std::min(target_max, epsilon);
   Mesh level = input.mesh;
   SampleValues(volume, level);
   c.uniform.push_back(ScoreLevel(volume, level, 0, c.norm_coeff, options));
@@ -147,6 +255,18 @@ CaseRecord RunCase(const CaseInput& input, const RunOptions& options) {
     if (r.final_tets == 0) continue;
     r.uniform_at_max = FirstLevel(c.uniform, true, r.lattice.max_error);
     r.uniform_at_mean = FirstLevel(c.uniform, false, r.lattice.mean_error);
+  }
+
+  const size_t schemes = std::size(kSchemes);
+  for (size_t e = 0; e < options.epsilons.size(); ++e) {
+    for (size_t s = 0; s < schemes; ++s) c.methods.push_back(RowOf(full[e * schemes + s]));
+    c.methods.push_back(plaza[e]);
+    c.methods.push_back(UniformRow(c, options.epsilons[e]));
+  }
+  for (MethodRow& row : c.methods) {
+    if (row.not_run.empty() && row.method != kUniformMethod) {
+      row.uniform_at_max = FirstLevel(c.uniform, true, row.lattice.max_error);
+    }
   }
   return c;
 }

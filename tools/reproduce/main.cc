@@ -1,7 +1,10 @@
 // tetrefine_reproduce: runs the paper's experiments (section 5) on the real volumes in the shared
-// data directory and on generated phantoms, against a uniform 1:8 baseline, and writes
+// data directory and on generated phantoms with every tetrefine scheme, against DOLFINx's Plaza
+// refinement (when python3-dolfinx is installed) and a uniform 1:8 baseline, and writes
 // report.md, results.json and plots/*.svg into --out_dir.
 // Run: build/tools/reproduce/tetrefine_reproduce --out_dir=docs/results
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -17,8 +20,10 @@
 #include "core/refine.h"
 #include "tools/reproduce/case_runner.h"
 #include "tools/reproduce/cases.h"
+#include "tools/reproduce/plaza_peer.h"
 #include "tools/reproduce/report_markdown.h"
 #include "tools/reproduce/results_json.h"
+#include "tools/reproduce/schemes.h"
 #include "tools/reproduce/svg_plot.h"
 
 ABSL_FLAG(std::string, out_dir, TETREFINE_SOURCE_DIR "/docs/results",
@@ -26,11 +31,22 @@ ABSL_FLAG(std::string, out_dir, TETREFINE_SOURCE_DIR "/docs/results",
 ABSL_FLAG(std::string, data_dir, TETREFINE_SHARED_DATA_DIR,
           "directory of the real volumes and unit_cube_1782tets.mesh");
 ABSL_FLAG(bool, quick, false, "two tiny generated cases, small caps (for the smoke test)");
-ABSL_FLAG(int, max_iterations, 16, "iteration cap of the runs 'to convergence'");
+ABSL_FLAG(int, max_iterations, 32,
+          "iteration cap (tetrefine) and round cap (Plaza) of the runs 'to convergence'");
 ABSL_FLAG(int64_t, max_tets, 2'000'000,
           "RefineOptions::max_tets of every run: keeps the cases that do not converge bounded");
 ABSL_FLAG(int64_t, uniform_cap_tets, 3'000'000, "largest uniform level built (tets)");
 ABSL_FLAG(int64_t, study_max_tets, 100'000, "tets examined per mesh in the section 5.1 study");
+ABSL_FLAG(bool, peers, false,
+          "run Plaza and fail if python3-dolfinx is missing (default: run it when it imports)");
+ABSL_FLAG(bool, skip_peers, false, "do not run Plaza");
+ABSL_FLAG(std::string, python, "/usr/bin/python3",
+          "the Python interpreter python3-dolfinx is installed for");
+ABSL_FLAG(std::string, plaza_script, TETREFINE_SOURCE_DIR "/bench/peers/plaza_refine.py",
+          "the Plaza driver script");
+ABSL_FLAG(std::string, peer_dir, "",
+          "keep Plaza's inputs and results here, one directory per case (default: a temporary "
+          "directory, removed at the end)");
 
 namespace tetrefine::reproduce {
 namespace {
@@ -79,6 +95,36 @@ int Main(int argc, char** argv) {
     std::fprintf(stderr, "--max_iterations, --max_tets and --uniform_cap_tets must be positive\n");
     return 2;
   }
+  if (absl::GetFlag(FLAGS_peers) && absl::GetFlag(FLAGS_skip_peers)) {
+    std::fprintf(stderr, "--peers and --skip_peers contradict each other\n");
+    return 2;
+  }
+  PlazaPeer plaza{.python = absl::GetFlag(FLAGS_python),
+                  .script = absl::GetFlag(FLAGS_plaza_script),
+                  .max_rounds = run.max_iterations,
+                  .max_tets = run.max_tets};
+  std::filesystem::path temporary_peer_dir;
+  if (absl::GetFlag(FLAGS_skip_peers)) {
+    run.plaza_not_run = "--skip_peers";
+  } else if (const absl::Status s = CheckPlaza(plaza); !s.ok()) {
+    if (absl::GetFlag(FLAGS_peers)) {
+      std::fprintf(stderr, "--peers: cannot run Plaza: %s (bash bench/peers/install-peers.sh)\n",
+                   std::string(s.message()).c_str());
+      return 2;
+    }
+    run.plaza_not_run = std::string(s.message());
+    std::fprintf(stderr, "note: Plaza not run: %s\n", run.plaza_not_run.c_str());
+  } else {
+    run.plaza = &plaza;
+    run.peer_dir = absl::GetFlag(FLAGS_peer_dir);
+    if (run.peer_dir.empty()) {
+      temporary_peer_dir = std::filesystem::temp_directory_path() /
+                           absl::StrCat("tetrefine_reproduce_peers_", getpid());
+      run.peer_dir = temporary_peer_dir;
+    }
+  }
+  data.plaza_status = run.plaza != nullptr ? "run" : absl::StrCat("not run: ", run.plaza_not_run);
+  for (const Scheme& scheme : kSchemes) data.schemes.emplace_back(scheme.name);
   data.epsilons = run.epsilons;
   data.max_iterations = run.max_iterations;
   data.max_tets = run.max_tets;
@@ -120,6 +166,15 @@ int Main(int argc, char** argv) {
                           data.study_thresholds, data.study_max_tets, /*seed=*/20261122)});
   }
   data.total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (!temporary_peer_dir.empty()) std::filesystem::remove_all(temporary_peer_dir, ignored);
+  // The version the script reported, once any Plaza run succeeded.
+  for (const CaseRecord& c : data.cases) {
+    for (const MethodRow& m : c.methods) {
+      if (m.has_self_report && data.plaza_status == "run") {
+        data.plaza_status = absl::StrCat("run with ", m.self_report.version);
+      }
+    }
+  }
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir / "plots", ec);

@@ -11,6 +11,7 @@
 #include "core/configuration.h"
 #include "core/lattice.h"
 #include "tools/reproduce/paper_tables.h"
+#include "tools/reproduce/schemes.h"
 
 namespace tetrefine::reproduce {
 namespace {
@@ -34,43 +35,79 @@ std::string Match(const BaselineMatch& m, int64_t ours, const CaseRecord& c) {
       static_cast<double>(m.tets) / static_cast<double>(std::max<int64_t>(1, ours)));
 }
 
-// The last run of each epsilon (the one to convergence).
-std::vector<const RunRecord*> ConvergedRuns(const CaseRecord& c) {
-  std::vector<const RunRecord*> out;
-  for (const RunRecord& r : c.runs) {
-    if (!out.empty() && out.back()->epsilon == r.epsilon) {
-      out.back() = &r;
-    } else {
-      out.push_back(&r);
+std::string Sorted3(std::vector<double> v) {
+  if (v.empty()) return "-";
+  std::sort(v.begin(), v.end());
+  return absl::StrFormat("%.3g / %.3g / %.3g", v.front(), v[v.size() / 2], v.back());
+}
+
+// The method names in row order (the first case that has rows decides).
+std::vector<std::string> MethodNames(const ReportData& d) {
+  std::vector<std::string> names;
+  for (const CaseRecord& c : d.cases) {
+    for (const MethodRow& m : c.methods) {
+      if (std::find(names.begin(), names.end(), m.method) == names.end()) {
+        names.push_back(m.method);
+      }
     }
   }
-  return out;
+  return names;
+}
+
+std::vector<const MethodRow*> RowsOf(const ReportData& d, const std::string& method) {
+  std::vector<const MethodRow*> rows;
+  for (const CaseRecord& c : d.cases) {
+    for (const MethodRow& m : c.methods) {
+      if (m.method == method) rows.push_back(&m);
+    }
+  }
+  return rows;
 }
 
 void Method(const ReportData& d, std::string& s) {
+  absl::StrAppend(&s, "## How these numbers were made\n\n",
+                  "- **Methods**, each run at ε = ", absl::StrJoin(d.epsilons, " and "),
+                  " on every case and scored the same way (below):\n");
+  for (const Scheme& scheme : kSchemes) {
+    absl::StrAppend(&s, "  - **tetrefine ", scheme.name, "**: ", scheme.description, ".\n");
+  }
   absl::StrAppend(
-      &s, "## How these numbers were made\n\n",
-      "- **Refinement**: core `Refine` with default options except epsilon (",
-      absl::StrJoin(d.epsilons, " and "), "), `max_iterations` (4, then ", d.max_iterations,
-      " for \"to convergence\"), `max_tets` (", d.max_tets,
-      ": runs that would exceed it stop with `tet_budget`) and `lattice_n = 0`; each result is "
-      "then scored by core "
-      "`SampleLattice` (n = 8: the 165 barycentric points of the paper's section 5.1 per tet; "
-      "every "
-      "tet of meshes up to 3,000,000 tets, a seeded sample beyond). The normalisation is the "
-      "volume's value range (Refine's default).\n",
-      "- **Tables 3-7** per case below come from `RefineResult::iterations`: tets by "
-      "configuration (Tables 3/4), Schönhardt prisms given a Steiner point (SP), INT/FNT/NTwE and "
-      "the maximum and mean edge-midpoint error at the start of each iteration (Tables 5/6), and "
-      "mean-ratio quality before and after (Table 7).\n",
-      "- **Uniform baseline**: regular 1:8 refinement of every tet (all six edges split, the "
+      &s, "  - **Plaza (DOLFINx)**: `bench/peers/plaza_refine.py` under Debian's python3-dolfinx (",
+      d.plaza_status,
+      "): each round samples the volume at every vertex, marks the edges whose midpoint error "
+      "(eq. 3, computed as core computes it) exceeds ε and calls `dolfinx.mesh.refine(mesh, "
+      "edges, redistribute=False)`, which is Plaza and Carey's skeleton refinement: it also "
+      "splits the longest edge of every face that has a split edge, to a fixpoint, so tets are "
+      "bisected along their longest edges. Rounds stop when no edge is marked (`converged`), "
+      "after the round cap (`max_rounds`) or before a round that would exceed `max_tets` "
+      "(`tet_budget`). The tool passes it the case as files (volume samples, grid, mesh; "
+      "`--peer_dir` keeps them) and reads the refined mesh back; install it with "
+      "`bash bench/peers/install-peers.sh`.\n",
+      "  - **uniform 1:8**: regular 1:8 refinement of every tet (all six edges split, the "
       "octahedron cut by its shortest diagonal: core's subdivision table entry for pattern 63; "
-      "`tools/reproduce/uniform_refine.h`), new vertices valued from the volume as in the paper, "
-      "repeated until a level's lattice max (and, separately, mean) error is at most the "
-      "tetrefine result's, or until the next level would exceed the cap of ",
+      "`tools/reproduce/uniform_refine.h`), new vertices valued from the volume, level after "
+      "level until the lattice max and mean error are at most every other result's and the "
+      "lattice max at most the smallest ε, or until the next level would exceed ",
       d.uniform_cap_tets,
-      " tets. \"Uniform tets at equal error\" is the first level that gets there; the factor is "
-      "its tet count over tetrefine's.\n",
+      " tets. Its row gives the first level whose lattice max error is at most ε "
+      "(`lattice_reached`), else the last level built (`tet_cap`); \"uniform tets at equal "
+      "lattice max\" in the other rows is the first level whose lattice max error is at most "
+      "that row's, and the factor its tets over the row's.\n",
+      "- **Caps**: tetrefine's `max_iterations` and Plaza's rounds ", d.max_iterations,
+      "; `max_tets` ", d.max_tets,
+      " for both (a run that would exceed it stops with `tet_budget`). The paper scheme also "
+      "runs 4 iterations per ε for the paper's four-iteration tables. tetrefine runs with "
+      "default options otherwise and `lattice_n = 0`.\n",
+      "- **Scores**, the same code for every method's result: the edge-midpoint error over its "
+      "unique edges (what a next round would mark), core `SampleLattice` (n = 8: the 165 "
+      "barycentric points of the paper's section 5.1 per tet; every tet of meshes up to "
+      "3,000,000 tets, a seeded sample beyond) and mean-ratio quality over every tet. The "
+      "normalisation is the volume's value range. Plaza's script scores its result itself as "
+      "well (in numpy); results.json keeps its figures beside core's.\n",
+      "- **Tables 3-7** per case below come from `RefineResult::iterations` of each tetrefine "
+      "scheme: tets by configuration (Tables 3/4), Schönhardt prisms given a Steiner point (SP), "
+      "INT/FNT/NTwE and the maximum and mean edge-midpoint error at the start of each iteration "
+      "(Tables 5/6), and mean-ratio quality before and after (Table 7).\n",
       "- **Real volumes** (`/work/shared/data`, read with `io::ReadVolume`): meshes are 5-tet "
       "blocks masked like the paper's liver: a block is kept when all 8 corner samples exceed "
       "Otsu's threshold of the volume (256 bins), blocks of the smallest size in {2, 3, 4, 5, 6, "
@@ -84,31 +121,45 @@ void Method(const ReportData& d, std::string& s) {
       "(Table 2). Its mesh is one shell of 8 mm world cells (5 tets each) whose centres lie in "
       "the wall, used on both grids as the paper used one surface pair. The Marschner-Lobb signal "
       "is sampled on 41^3.\n",
-      "- **Time and memory**: wall time of the `Refine` call alone (all ", d.hardware_threads,
-      " hardware threads). Peak memory is the resident high-water mark the call adds (VmHWM "
-      "reset through /proc/self/clear_refs just before it, after returning free heap with "
-      "malloc_trim), measured inside this long-running tool: heap the allocator kept from "
-      "earlier cases can hide part of it, so read it as a lower bound (bench/peak_memory measures "
-      "in a fresh process).\n\n");
+      "- **Time and memory**: tetrefine: wall time of the `Refine` call alone (all ",
+      d.hardware_threads,
+      " hardware threads). Plaza: wall time of its rounds (sampling, marking, refining) in one "
+      "Python process on one core, without interpreter start-up and the mesh's construction. "
+      "Uniform: the levels' refinement up to the level shown. Peak memory (tetrefine only) is the "
+      "resident high-water mark the call adds (VmHWM reset through /proc/self/clear_refs just "
+      "before it, after returning free heap with malloc_trim), measured inside this "
+      "long-running tool: heap the allocator kept from earlier cases can hide part of it, so "
+      "read it as a lower bound (bench/peak_memory measures in a fresh process).\n\n");
 }
 
-void Summary(const ReportData& d, std::string& s) {
+std::string RowUniform(const MethodRow& m, const CaseRecord& c) {
+  if (m.method == kUniformMethod) return "";
+  return Match(m.uniform_at_max, m.tets, c);
+}
+
+void MethodsTable(const ReportData& d, std::string& s) {
   absl::StrAppend(
-      &s, "## Summary: tetrefine against uniform refinement at equal error\n\n",
-      "Runs to convergence (at most ", d.max_iterations,
-      " iterations). Lattice errors are over "
-      "the n = 8 lattice of every tet of the result.\n\n",
-      "| case | ε | iterations (stop) | tets in → out | lattice max | lattice mean | uniform tets "
-      "at equal max | uniform tets at equal mean | time (s) | peak (MiB) |\n",
-      "|---|---|---|---|---|---|---|---|---|---|\n");
+      &s, "## Methods side by side\n\n", "Per case and ε, every method to convergence (at most ",
+      d.max_iterations,
+      " iterations or rounds), scored the same way. Midpoint: the largest edge-midpoint error of "
+      "the result; lattice: over the n = 8 lattice of every tet; quality: mean ratio.\n\n",
+      "| case | ε | method | tets | rounds | midpoint max | lattice max / mean | quality min / "
+      "mean | stop | time (s) | uniform tets at equal lattice max |\n",
+      "|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const CaseRecord& c : d.cases) {
-    for (const RunRecord* r : ConvergedRuns(c)) {
-      absl::StrAppendFormat(
-          &s, "| [%s](#%s) | %g | %d (%s) | %d → %d | %s | %s | %s | %s | %.3f | %s |\n", c.name,
-          c.name, r->epsilon, r->iterations.size(), r->stop_reason, r->initial_tets, r->final_tets,
-          Err(r->lattice.max_error), Err(r->lattice.mean_error),
-          Match(r->uniform_at_max, r->final_tets, c), Match(r->uniform_at_mean, r->final_tets, c),
-          r->seconds, MiB(r->peak_added_bytes));
+    for (const MethodRow& m : c.methods) {
+      if (!m.not_run.empty()) {
+        absl::StrAppendFormat(&s, "| [%s](#%s) | %g | %s | not run: %s | | | | | | | |\n", c.name,
+                              c.name, m.epsilon, m.method, m.not_run);
+        continue;
+      }
+      absl::StrAppendFormat(&s,
+                            "| [%s](#%s) | %g | %s | %d | %d | %s | %s / %s | %.4f / %.4f | %s | "
+                            "%.3f | %s |\n",
+                            c.name, c.name, m.epsilon, m.method, m.tets, m.rounds,
+                            Err(m.midpoint_max), Err(m.lattice.max_error),
+                            Err(m.lattice.mean_error), m.quality.min, m.quality.mean, m.stop_reason,
+                            m.seconds, RowUniform(m, c));
     }
   }
   s += "\n";
@@ -119,7 +170,7 @@ std::string UniformLine(const ReportData& d, bool by_max) {
   int more = 0, fewer = 0, missed = 0;
   std::vector<double> factors;
   for (const CaseRecord& c : d.cases) {
-    for (const RunRecord* r : ConvergedRuns(c)) {
+    for (const RunRecord* r : RunsToConvergence(c, kPaperScheme.name)) {
       const BaselineMatch& m = by_max ? r->uniform_at_max : r->uniform_at_mean;
       if (r->final_tets == 0) continue;
       if (!m.reached) {
@@ -133,27 +184,66 @@ std::string UniformLine(const ReportData& d, bool by_max) {
   std::sort(factors.begin(), factors.end());
   const double median = factors.empty() ? 0.0 : factors[factors.size() / 2];
   return absl::StrFormat(
-      "- At equal lattice %s error, uniform 1:8 refinement needed more tets than tetrefine in %d "
-      "runs and fewer (or as many) in %d; in %d it did not get there within the cap. Median "
-      "factor (uniform / tetrefine tets) where it did: %.2f.\n",
+      "- At equal lattice %s error, uniform 1:8 refinement needed more tets than tetrefine's "
+      "paper scheme in %d runs and fewer (or as many) in %d; in %d it did not get there within "
+      "the cap. Median factor (uniform / tetrefine tets) where it did: %.2f.\n",
       by_max ? "max" : "mean", more, fewer, missed, median);
 }
 
-void Findings(const ReportData& d, std::string& s) {
-  std::map<std::string, int> stops;
-  int total = 0;
-  for (const CaseRecord& c : d.cases) {
-    for (const RunRecord* r : ConvergedRuns(c)) {
-      ++stops[r->stop_reason];
-      ++total;
+// One line per method: how its runs stopped, its tets against Plaza's where both reached ε at
+// every midpoint, and its quality.
+void MethodFindings(const ReportData& d, std::string& s) {
+  const std::vector<const MethodRow*> plaza = RowsOf(d, kPlazaMethod);
+  for (const std::string& name : MethodNames(d)) {
+    const std::vector<const MethodRow*> rows = RowsOf(d, name);
+    std::map<std::string, int> stops;
+    int ran = 0;
+    std::vector<double> qmin, qmean;
+    for (const MethodRow* m : rows) {
+      if (!m->not_run.empty()) continue;
+      ++ran;
+      ++stops[m->stop_reason];
+      qmin.push_back(m->quality.min);
+      qmean.push_back(m->quality.mean);
     }
+    if (ran == 0) {
+      absl::StrAppend(&s, "- **", name, "**: not run (",
+                      rows.empty() ? "no cases" : rows.front()->not_run, ").\n");
+      continue;
+    }
+    std::vector<std::string> parts;
+    for (const auto& [reason, n] : stops) parts.push_back(absl::StrCat(n, " ", reason));
+    absl::StrAppend(&s, "- **", name, "**: ", ran, " runs; stopped: ", absl::StrJoin(parts, ", "),
+                    ". Quality min ", Sorted3(qmin), ", mean ", Sorted3(qmean),
+                    " (least / median / largest over runs)");
+    if (name != kPlazaMethod && name != kUniformMethod && rows.size() == plaza.size()) {
+      // Rows line up: the same cases and epsilons in the same order.
+      std::vector<double> ratio;
+      int fewer = 0;
+      for (size_t i = 0; i < rows.size(); ++i) {
+        const MethodRow& a = *rows[i];
+        const MethodRow& p = *plaza[i];
+        if (!a.not_run.empty() || !p.not_run.empty()) continue;
+        if (a.stop_reason != "converged" || p.stop_reason != "converged") continue;
+        ratio.push_back(static_cast<double>(a.tets) / static_cast<double>(p.tets));
+        if (a.tets <= p.tets) ++fewer;
+      }
+      if (!ratio.empty()) {
+        absl::StrAppend(&s, "; where it and Plaza both reached ε at every midpoint (", ratio.size(),
+                        " runs) its tets over Plaza's: ", Sorted3(ratio), ", at most Plaza's in ",
+                        fewer);
+      } else if (!plaza.empty() && plaza.front()->not_run.empty()) {
+        s += "; no run where it and Plaza both reached ε at every midpoint";
+      }
+    }
+    s += ".\n";
   }
-  std::vector<std::string> parts;
-  for (const auto& [reason, n] : stops) parts.push_back(absl::StrCat(n, " ", reason));
-  absl::StrAppend(&s, "## Findings (computed from the tables below)\n\n",
-                  "- Runs to convergence: ", total,
-                  " (cases x epsilons); they stopped: ", absl::StrJoin(parts, ", "), ".\n",
-                  UniformLine(d, true), UniformLine(d, false));
+}
+
+void Findings(const ReportData& d, std::string& s) {
+  absl::StrAppend(&s, "## Findings (computed from the tables below)\n\n");
+  MethodFindings(d, s);
+  absl::StrAppend(&s, UniformLine(d, true), UniformLine(d, false));
   std::map<std::pair<std::string, double>, std::array<int64_t, 3>> pooled;  // counted, mid, near
   for (const StudyRecord& r : d.study) {
     for (const LocationCounts& c : r.study.counts) {
@@ -228,6 +318,7 @@ void PaperComparison(const ReportData& d, std::string& s) {
     if (c.mesh_kind != "shell") continue;
     const std::string heart = c.name.substr(0, c.name.find('_'));
     for (const RunRecord& r : c.runs) {
+      if (r.scheme != kPaperScheme.name) continue;
       // The paper reports four iterations: prefer the 4-iteration run (its quality is after 4).
       auto [it, inserted] = ours.try_emplace({heart, r.epsilon}, &r);
       if (!inserted && r.max_iterations == 4) it->second = &r;
@@ -301,15 +392,15 @@ void CaseSection(const CaseRecord& c, std::string& s) {
   absl::StrAppendFormat(&s, "### %s\n\n%s Input: %d vertices, %d tets. normCoeff %.6g.\n\n", c.name,
                         c.description, c.input_vertices, c.input_tets, c.norm_coeff);
   absl::StrAppendFormat(&s, "![%s](plots/%s.svg)\n\n", c.name, c.name);
-  s += "| run | stop | tets | midpoint max / mean | lattice max / mean | lattice points > ε | "
-       "quality mean (min): before → after | uniform tets at equal lattice max / mean | time (s) "
-       "| peak (MiB) |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  s += "| tetrefine run | stop | tets | midpoint max / mean | lattice max / mean | lattice points "
+       "> ε | quality mean (min): before → after | uniform tets at equal lattice max / mean | "
+       "time (s) | peak (MiB) |\n|---|---|---|---|---|---|---|---|---|---|\n";
   for (const RunRecord& r : c.runs) {
     absl::StrAppendFormat(
         &s,
-        "| ε %g, ≤ %d it. | %s after %d | %d → %d | %s / %s | %s / %s | %s | %.4f (%.4f) → "
+        "| %s, ε %g, ≤ %d it. | %s after %d | %d → %d | %s / %s | %s / %s | %s | %.4f (%.4f) → "
         "%.4f (%.4f) | %s / %s | %.3f | %s |\n",
-        r.epsilon, r.max_iterations, r.stop_reason, r.iterations.size(), r.initial_tets,
+        r.scheme, r.epsilon, r.max_iterations, r.stop_reason, r.iterations.size(), r.initial_tets,
         r.final_tets, Err(r.final_max_error), Err(r.final_mean_error), Err(r.lattice.max_error),
         Err(r.lattice.mean_error), Pct(r.lattice.share_above_epsilon), r.initial_quality.mean,
         r.initial_quality.min, r.final_quality.mean, r.final_quality.min,
@@ -317,22 +408,26 @@ void CaseSection(const CaseRecord& c, std::string& s) {
         r.seconds, MiB(r.peak_added_bytes));
   }
   s += "\n";
-  for (const RunRecord* r : ConvergedRuns(c)) {
-    absl::StrAppendFormat(&s,
-                          "**ε = %g** (to convergence; the 4-iteration run is its first four "
-                          "rows): tets by configuration (Tables 3/4)\n\n",
-                          r->epsilon);
-    ConfigurationTable(*r, s);
-    s += "Discrepancy by iteration (Tables 5/6; errors at the start of each iteration, quality "
-         "after it)\n\n";
-    IterationTable(*r, s);
+  for (const Scheme& scheme : kSchemes) {
+    for (const RunRecord* r : RunsToConvergence(c, scheme.name)) {
+      absl::StrAppendFormat(
+          &s,
+          "**tetrefine %s, ε = %g** (to convergence%s): tets by "
+          "configuration (Tables 3/4)\n\n",
+          scheme.name, r->epsilon,
+          &scheme == &kPaperScheme ? "; the 4-iteration run is its first four rows" : "");
+      ConfigurationTable(*r, s);
+      s += "Discrepancy by iteration (Tables 5/6; errors at the start of each iteration, quality "
+           "after it)\n\n";
+      IterationTable(*r, s);
+    }
   }
-  s += "Uniform 1:8 levels\n\n| level | tets | lattice max | lattice mean | quality min / mean | s "
-       "|\n|---|---|---|---|---|---|\n";
+  s += "Uniform 1:8 levels\n\n| level | tets | midpoint max | lattice max | lattice mean | "
+       "quality min / mean | s |\n|---|---|---|---|---|---|---|\n";
   for (const BaselineLevel& l : c.uniform) {
-    absl::StrAppendFormat(&s, "| %d | %d | %s | %s | %.4f / %.4f | %.3f |\n", l.level, l.tets,
-                          Err(l.lattice_max), Err(l.lattice_mean), l.quality.min, l.quality.mean,
-                          l.seconds);
+    absl::StrAppendFormat(&s, "| %d | %d | %s | %s | %s | %.4f / %.4f | %.3f |\n", l.level, l.tets,
+                          Err(l.midpoint_max), Err(l.lattice_max), Err(l.lattice_mean),
+                          l.quality.min, l.quality.mean, l.seconds);
   }
   s += "\n";
 }
@@ -355,7 +450,7 @@ std::string ReportMarkdown(const ReportData& d) {
   }
   Findings(d, s);
   Method(d, s);
-  Summary(d, s);
+  MethodsTable(d, s);
   Study(d, s);
   PaperComparison(d, s);
   s += "## Cases\n\n";

@@ -50,8 +50,60 @@ void WriteIteration(JsonWriter& w, const IterationStats& s) {
   w.EndObject();
 }
 
+void WriteLattice(JsonWriter& w, const LatticeStats& l) {
+  w.Key("lattice");
+  w.BeginObject();
+  w.Field("n", l.n);
+  w.Field("tets_sampled", l.tets_sampled);
+  w.Field("points_sampled", l.points_sampled);
+  w.Field("max_error", l.max_error);
+  w.Field("mean_error", l.mean_error);
+  w.Field("share_above_epsilon", l.share_above_epsilon);
+  w.EndObject();
+}
+
+void WriteMethod(JsonWriter& w, const MethodRow& m) {
+  w.BeginObject();
+  w.Field("method", m.method);
+  w.Field("epsilon", m.epsilon);
+  w.Field("ran", m.not_run.empty());
+  if (!m.not_run.empty()) {
+    w.Field("not_run", m.not_run);
+    w.EndObject();
+    return;
+  }
+  w.Field("tets", m.tets);
+  w.Field("rounds", m.rounds);
+  w.Field("midpoint_max_error", m.midpoint_max);
+  w.Field("midpoint_mean_error", m.midpoint_mean);
+  WriteLattice(w, m.lattice);
+  WriteQuality(w, "quality", m.quality);
+  w.Field("stop_reason", m.stop_reason);
+  w.Field("seconds", m.seconds);
+  if (m.method != kUniformMethod) WriteMatch(w, "uniform_at_lattice_max", m.uniform_at_max);
+  if (m.has_self_report) {
+    const PeerSelfReport& r = m.self_report;
+    w.Key("self_report");
+    w.BeginObject();
+    w.Field("version", r.version);
+    w.Field("rounds", r.rounds);
+    w.Field("stop_reason", r.stop_reason);
+    w.Field("seconds", r.seconds);
+    w.Field("setup_seconds", r.setup_seconds);
+    w.Field("tets", r.tets);
+    w.Field("midpoint_max_error", r.midpoint_max);
+    w.Field("lattice_max_error", r.lattice_max);
+    w.Field("lattice_mean_error", r.lattice_mean);
+    w.Field("quality_min", r.quality_min);
+    w.Field("quality_mean", r.quality_mean);
+    w.EndObject();
+  }
+  w.EndObject();
+}
+
 void WriteRun(JsonWriter& w, const RunRecord& r) {
   w.BeginObject();
+  w.Field("scheme", r.scheme);
   w.Field("epsilon", r.epsilon);
   w.Field("max_iterations", r.max_iterations);
   w.Field("stop_reason", r.stop_reason);
@@ -61,15 +113,7 @@ void WriteRun(JsonWriter& w, const RunRecord& r) {
   WriteQuality(w, "final_quality", r.final_quality);
   w.Field("final_max_error", r.final_max_error);
   w.Field("final_mean_error", r.final_mean_error);
-  w.Key("lattice");
-  w.BeginObject();
-  w.Field("n", r.lattice.n);
-  w.Field("tets_sampled", r.lattice.tets_sampled);
-  w.Field("points_sampled", r.lattice.points_sampled);
-  w.Field("max_error", r.lattice.max_error);
-  w.Field("mean_error", r.lattice.mean_error);
-  w.Field("share_above_epsilon", r.lattice.share_above_epsilon);
-  w.EndObject();
+  WriteLattice(w, r.lattice);
   w.Field("seconds", r.seconds);
   w.Field("peak_added_bytes", r.peak_added_bytes);
   WriteMatch(w, "uniform_at_lattice_max", r.uniform_at_max);
@@ -112,10 +156,16 @@ void WriteCase(JsonWriter& w, const CaseRecord& c) {
     w.Field("tets", l.tets);
     w.Field("lattice_max_error", l.lattice_max);
     w.Field("lattice_mean_error", l.lattice_mean);
+    w.Field("midpoint_max_error", l.midpoint_max);
+    w.Field("midpoint_mean_error", l.midpoint_mean);
     WriteQuality(w, "quality", l.quality);
     w.Field("seconds", l.seconds);
     w.EndObject();
   }
+  w.EndArray();
+  w.Key("methods");
+  w.BeginArray();
+  for (const MethodRow& m : c.methods) WriteMethod(w, m);
   w.EndArray();
   w.EndObject();
 }
@@ -149,7 +199,7 @@ void WriteStudy(JsonWriter& w, const StudyRecord& s) {
 std::string ResultsJson(const ReportData& d) {
   JsonWriter w;
   w.BeginObject();
-  w.Field("schema", "tetrefine.reproduce/1");
+  w.Field("schema", "tetrefine.reproduce/2");
   w.Field("generated_at", d.generated_at);
   w.Field("command", d.command);
   w.Field("quick", d.quick);
@@ -161,6 +211,11 @@ std::string ResultsJson(const ReportData& d) {
   w.Field("max_iterations", d.max_iterations);
   w.Field("max_tets", d.max_tets);
   w.Field("uniform_cap_tets", d.uniform_cap_tets);
+  w.Key("schemes");
+  w.BeginArray();
+  for (const std::string& scheme : d.schemes) w.String(scheme);
+  w.EndArray();
+  w.Field("plaza", d.plaza_status);
   w.Field("total_seconds", d.total_seconds);
   w.Key("notes");
   w.BeginArray();

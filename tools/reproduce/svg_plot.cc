@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "tools/reproduce/schemes.h"
 
 namespace tetrefine::reproduce {
 namespace {
@@ -95,15 +96,8 @@ std::string Axes(const Panel& p, const std::string& title, const std::string& y_
 }  // namespace
 
 std::string CasePlotSvg(const CaseRecord& c) {
-  // The run to convergence of each epsilon: the last run listed for it.
-  std::vector<const RunRecord*> runs;
-  for (const RunRecord& r : c.runs) {
-    if (!runs.empty() && runs.back()->epsilon == r.epsilon) {
-      runs.back() = &r;
-    } else {
-      runs.push_back(&r);
-    }
-  }
+  // The paper scheme's run to convergence of each epsilon.
+  const std::vector<const RunRecord*> runs = RunsToConvergence(c, kPaperScheme.name);
   double x_max = 1, err_max = 0, tets_lo = 1e300, tets_hi = 1;
   std::vector<Series> max_err, mean_err, tets;
   for (const RunRecord* r : runs) {
