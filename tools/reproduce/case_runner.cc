@@ -59,6 +59,7 @@ RunRecord RunOnce(const CaseInput& input, const Scheme& scheme, double epsilon, 
   run.final_quality = r->final_quality;
   run.final_max_error = r->final_max_error;
   run.final_mean_error = r->final_mean_error;
+  run.certified_max_error = r->certified_max_error;
   run.lattice = SampleLattice(*input.volume, r->mesh, kLatticeN, options.lattice_max_tets,
                               kLatticeSeed, norm, epsilon, /*clamp=*/false);
   return run;

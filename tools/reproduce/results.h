@@ -43,10 +43,11 @@ struct RunRecord {
   LatticeStats lattice;
   double final_max_error = 0.0;  // edge-midpoint error of the returned mesh
   double final_mean_error = 0.0;
-  double seconds = 0.0;           // wall time of the Refine call
-  int64_t peak_added_bytes = -1;  // peak RSS added during the call (-1: not measurable)
-  BaselineMatch uniform_at_max;   // uniform level reaching this run's lattice max error
-  BaselineMatch uniform_at_mean;  // ... and its lattice mean error
+  double certified_max_error = -1.0;  // RefineResult's (certified runs that converged), else < 0
+  double seconds = 0.0;               // wall time of the Refine call
+  int64_t peak_added_bytes = -1;      // peak RSS added during the call (-1: not measurable)
+  BaselineMatch uniform_at_max;       // uniform level reaching this run's lattice max error
+  BaselineMatch uniform_at_mean;      // ... and its lattice mean error
 };
 
 // What a peer's own script said about its run: its counts and timing, and its own scores of the

@@ -38,6 +38,10 @@ void WriteIteration(JsonWriter& w, const IterationStats& s) {
   w.Field("short_edges_kept", s.short_edges_kept);
   w.Field("max_error", s.max_error);
   w.Field("mean_error", s.mean_error);
+  w.Field("max_segment_error", s.max_segment_error);
+  w.Field("closure_edges", s.closure_edges);
+  w.Field("guard_edges", s.guard_edges);
+  w.Field("failing_tets", s.failing_tets);
   w.Key("configurations");
   w.BeginObject();
   for (int c = 0; c < kNumConfigurations; ++c) {
@@ -113,6 +117,7 @@ void WriteRun(JsonWriter& w, const RunRecord& r) {
   WriteQuality(w, "final_quality", r.final_quality);
   w.Field("final_max_error", r.final_max_error);
   w.Field("final_mean_error", r.final_mean_error);
+  w.Field("certified_max_error", r.certified_max_error);
   WriteLattice(w, r.lattice);
   w.Field("seconds", r.seconds);
   w.Field("peak_added_bytes", r.peak_added_bytes);
