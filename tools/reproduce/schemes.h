@@ -1,6 +1,6 @@
 #pragma once
 
-#include "core/refine.h"
+#include "core/refine_options.h"
 
 namespace tetrefine::reproduce {
 
@@ -22,12 +22,12 @@ inline constexpr Scheme kSchemes[] = {
      "the 64-case table (`RefineScheme::kPaper`)",
      [](RefineOptions& o) { o.scheme = RefineScheme::kPaper; }},
     {"longest-edge",
-     "core's default (`RefineScheme::kLongestEdge`, docs/schemes.md): the paper's midpoint marks, "
-     "then the longest edge of every tet with a split edge, and regular 1:8 refinement where a "
-     "split would make a much flatter child",
+     "`RefineScheme::kLongestEdge` (docs/schemes.md; core's default is still the paper's): the "
+     "paper's midpoint marks, then the longest edge of every tet with a split edge, and regular "
+     "1:8 refinement where a split would make a much flatter child",
      [](RefineOptions& o) { o.scheme = RefineScheme::kLongestEdge; }},
     {"certify",
-     "the default with `certify`: edges judged by their exact maximum discrepancy and every tet "
+     "longest-edge with `certify`: edges judged by their exact maximum discrepancy and every tet "
      "refined until its 165-point lattice is within ε; the call includes the lattice passes and "
      "core's final lattice verification (`lattice_n` 8, its default)",
      [](RefineOptions& o) {
