@@ -22,6 +22,7 @@
 #include "google/protobuf/util/json_util.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
 #include "tools/reproduce/case_meshes.h"
 #include "tools/reproduce/mesh_scores.h"
 #include "tools/reproduce/plaza_peer.h"
@@ -38,14 +39,6 @@ Volume LinearVolume() {
                             [](const Vec3& p) { return p[0] + 2 * p[1] - p[2]; });
 }
 
-double TotalVolume(const Mesh& m) {
-  double v = 0.0;
-  for (const Tet& t : m.tets) {
-    v += SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]);
-  }
-  return v / 6.0;
-}
-
 TEST(UniformRefineTest, SplitsEveryTetIntoEightConformally) {
   const Volume volume = LinearVolume();
   bench::CellLattice lattice;
@@ -58,12 +51,8 @@ TEST(UniformRefineTest, SplitsEveryTetIntoEightConformally) {
   const auto edges = testing::UniqueEdges(mesh.tets);
   // One new vertex per edge: shared midpoints.
   EXPECT_EQ(fine.points.size(), mesh.points.size() + edges.size());
-  EXPECT_NEAR(TotalVolume(fine), TotalVolume(mesh), 1e-9 * TotalVolume(mesh));
-  for (const Tet& t : fine.tets) {
-    EXPECT_GT(
-        SignedVolume6(fine.points[t[0]], fine.points[t[1]], fine.points[t[2]], fine.points[t[3]]),
-        0.0);
-  }
+  // Positive tets, matching faces, same volume and boundary area.
+  EXPECT_EQ(testing::ConformityProblem(mesh, fine), "");
   EXPECT_TRUE(CheckFaces(fine.points, fine.tets).ok());
   // On a linear field every new vertex is the average of its edge's values.
   ASSERT_EQ(fine.values.size(), fine.points.size());
@@ -84,11 +73,13 @@ TEST(UniformRefineTest, RandomTetsKeepTheirVolume) {
     for (int c = 0; c < 4; ++c) m.points.push_back({u(rng), u(rng), u(rng)});
     m.tets.push_back({0, 1, 2, 3});
     if (MeanRatio(m.points[0], m.points[1], m.points[2], m.points[3]) < 0.05) continue;
-    if (TotalVolume(m) < 0) std::swap(m.tets[0][2], m.tets[0][3]);
+    if (SignedVolume6(m.points[0], m.points[1], m.points[2], m.points[3]) < 0) {
+      std::swap(m.tets[0][2], m.tets[0][3]);
+    }
     SampleValues(volume, m);
     const Mesh fine = UniformRefine(volume, UniformRefine(volume, m));
     ASSERT_EQ(fine.tets.size(), 64u);
-    EXPECT_NEAR(TotalVolume(fine), TotalVolume(m), 1e-9 * TotalVolume(m)) << "trial " << trial;
+    EXPECT_EQ(testing::ConformityProblem(m, fine), "") << "trial " << trial;
   }
 }
 
