@@ -324,7 +324,8 @@ grpc::Status RefineCall::Refine() {
   if (!request_options.skip_final_mesh &&
       !writer.WriteMesh(iterations_, /*final=*/true, result->mesh,
                         std::span<const int32_t>(result->tet_iteration),
-                        std::span<const float>(result->tet_quality))) {
+                        std::span<const float>(result->tet_quality),
+                        std::span<const uint32_t>(result->tet_parent))) {
     return InterruptedStatus("output");
   }
   const wire::ServiceSummary service{.max_tets = options.max_tets,

@@ -75,6 +75,7 @@ std::vector<std::vector<uint32_t>> PartitionTets(const Mesh& mesh, int parts) {
 std::vector<MeshPart> ExtractParts(const Mesh& mesh,
                                    const std::vector<std::vector<uint32_t>>& groups) {
   const bool has_values = !mesh.values.empty() && mesh.values.size() == mesh.points.size();
+  const bool has_labels = !mesh.labels.empty() && mesh.labels.size() == mesh.tets.size();
   std::vector<uint32_t> local(mesh.points.size(), kNone);
   std::vector<MeshPart> parts(groups.size());
   for (size_t p = 0; p < groups.size(); ++p) {
@@ -99,7 +100,9 @@ std::vector<MeshPart> ExtractParts(const Mesh& mesh,
     for (uint32_t t : groups[p]) {
       const Tet& tet = mesh.tets[t];
       part.mesh.tets.push_back({local[tet[0]], local[tet[1]], local[tet[2]], local[tet[3]]});
+      if (has_labels) part.mesh.labels.push_back(mesh.labels[t]);
     }
+    part.input_tet = groups[p];
     if (!part.mesh.points.empty()) {
       part.box_lo = part.box_hi = part.mesh.points[0];
       for (const Vec3& q : part.mesh.points) {

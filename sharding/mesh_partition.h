@@ -18,9 +18,10 @@ std::vector<std::vector<uint32_t>> PartitionTets(const Mesh& mesh, int parts);
 // One part as a mesh of its own.
 struct MeshPart {
   // The part's tets (corner order kept) over its own vertices, numbered in ascending input order.
-  // `values` is filled only when the input mesh has values.
+  // `values` and `labels` are filled only when the input mesh has them.
   Mesh mesh;
   std::vector<uint32_t> input_vertex;  // local vertex -> vertex of the input mesh
+  std::vector<uint32_t> input_tet;     // local tet -> tet of the input mesh (its group)
   Vec3 box_lo{0.0, 0.0, 0.0};          // bounding box of the part's vertices (world)
   Vec3 box_hi{0.0, 0.0, 0.0};
 };

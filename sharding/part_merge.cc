@@ -102,6 +102,14 @@ absl::StatusOr<MergedMesh> MergeParts(const Mesh& input, const Volume& volume,
                              results[p]->tet_iteration.end());
     out.tet_quality.insert(out.tet_quality.end(), results[p]->tet_quality.begin(),
                            results[p]->tet_quality.end());
+    merged.labels.insert(merged.labels.end(), refined.labels.begin(), refined.labels.end());
+    for (uint32_t parent : results[p]->tet_parent) {
+      if (parent >= part.input_tet.size()) {
+        return absl::InternalError(
+            absl::StrCat("part ", p, ": tet parent ", parent, " is not a tet of the part sent"));
+      }
+      out.tet_parent.push_back(part.input_tet[parent]);
+    }
   }
   for (size_t v = 0; v < num_input; ++v) {
     if (assigned[v] != 0) continue;

@@ -17,6 +17,7 @@ struct MergedMesh {
   Mesh mesh;
   std::vector<int32_t> tet_iteration;
   std::vector<float> tet_quality;
+  std::vector<uint32_t> tet_parent;  // input tet of each tet, when the parts' results have it
 };
 
 // Merges the refined `results` of `parts` (one each, in part order) of `input`.
@@ -27,7 +28,7 @@ struct MergedMesh {
 // the coordinates: a boundary midpoint is computed from the same two endpoints in every part that
 // has the edge, so it has the same bits; Steiner points lie inside one tet and are never shared.
 // Only new vertices inside another part's box are looked up, as only those can be shared.
-// Tets (with their iteration and quality) follow part by part.
+// Tets (with their iteration, quality, label and input parent) follow part by part.
 //
 // Input vertices used by no tet are in no part: their values are sampled from `volume` here, the
 // way the core samples them (`outside` says whether to clamp).

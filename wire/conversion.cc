@@ -57,6 +57,16 @@ absl::StatusOr<StopReason> StopReasonFromWire(int r) {
   }
 }
 
+v1::RefineScheme RefineSchemeToWire(RefineScheme s) {
+  switch (s) {
+    case RefineScheme::kPaper:
+      return v1::REFINE_SCHEME_PAPER;
+    case RefineScheme::kLongestEdge:
+      return v1::REFINE_SCHEME_LONGEST_EDGE;
+  }
+  return v1::REFINE_SCHEME_UNSPECIFIED;
+}
+
 }  // namespace
 
 RequestOptions RequestOptionsFromCore(const RefineOptions& options) {
@@ -123,6 +133,9 @@ void RequestOptionsToWire(const RequestOptions& o, v1::RefineOptions* out) {
   out->set_lattice_seed(r.lattice_seed);
   if (r.min_edge_length.has_value()) out->set_min_edge_length(*r.min_edge_length);
   out->set_min_quality(r.min_quality);
+  out->set_scheme(RefineSchemeToWire(r.scheme));
+  out->set_certify(r.certify);
+  out->set_track_parents(r.track_parents);
   out->set_stream_every_iteration(o.stream_every_iteration);
   out->set_skip_final_mesh(o.skip_final_mesh);
   out->set_response_chunk_bytes(o.response_chunk_bytes);
@@ -172,6 +185,20 @@ absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& i
   if (in.has_lattice_seed()) r.lattice_seed = in.lattice_seed();
   if (in.has_min_edge_length()) r.min_edge_length = in.min_edge_length();
   if (in.has_min_quality()) r.min_quality = in.min_quality();
+  switch (in.scheme()) {
+    case v1::REFINE_SCHEME_UNSPECIFIED:
+      break;  // the core's default
+    case v1::REFINE_SCHEME_PAPER:
+      r.scheme = RefineScheme::kPaper;
+      break;
+    case v1::REFINE_SCHEME_LONGEST_EDGE:
+      r.scheme = RefineScheme::kLongestEdge;
+      break;
+    default:
+      return Invalid("scheme", absl::StrCat("unknown value ", in.scheme()));
+  }
+  r.certify = in.certify();
+  r.track_parents = in.track_parents();
   if (absl::Status valid = ValidateRefineOptions(r); !valid.ok()) return valid;
   // This server's own bounds, beyond the core's: a normal norm_coeff, and the work caps.
   if (r.norm_coeff.has_value() && !std::isnormal(*r.norm_coeff)) {
@@ -232,6 +259,10 @@ void IterationStatsToWire(const IterationStats& s, v1::IterationStats* out) {
   out->set_schonhardt_prisms(s.schonhardt_prisms);
   QualityToWire(s.quality, out->mutable_quality());
   out->set_seconds(s.seconds);
+  out->set_max_segment_error(s.max_segment_error);
+  out->set_closure_edges(s.closure_edges);
+  out->set_guard_edges(s.guard_edges);
+  out->set_failing_tets(s.failing_tets);
 }
 
 absl::StatusOr<IterationStats> IterationStatsFromWire(const v1::IterationStats& in) {
@@ -254,6 +285,10 @@ absl::StatusOr<IterationStats> IterationStatsFromWire(const v1::IterationStats& 
   s.schonhardt_prisms = in.schonhardt_prisms();
   s.quality = QualityFromWire(in.quality());
   s.seconds = in.seconds();
+  s.max_segment_error = in.max_segment_error();
+  s.closure_edges = in.closure_edges();
+  s.guard_edges = in.guard_edges();
+  s.failing_tets = in.failing_tets();
   return s;
 }
 
@@ -281,6 +316,7 @@ void SummaryToWire(const RefineResult& r, const ServiceSummary& service, int64_t
   out->set_next_iteration_min_quality(r.next_iteration_min_quality);
   out->set_final_max_error(r.final_max_error);
   out->set_final_mean_error(r.final_mean_error);
+  out->set_certified_max_error(r.certified_max_error);
   out->set_max_tets(service.max_tets);
   out->set_refine_seconds(r.seconds);
   out->set_input_seconds(service.input_seconds);
@@ -295,6 +331,7 @@ absl::Status SummaryFromWire(const v1::Summary& in, RefineResult* r, ServiceSumm
   r->next_iteration_min_quality = in.next_iteration_min_quality();
   r->final_max_error = in.final_max_error();
   r->final_mean_error = in.final_mean_error();
+  r->certified_max_error = in.certified_max_error();
   r->norm_coeff = in.norm_coeff();
   r->initial_quality = QualityFromWire(in.initial_quality());
   r->final_quality = QualityFromWire(in.final_quality());

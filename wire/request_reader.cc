@@ -66,6 +66,9 @@ absl::Status RequestReader::Add(const v1::RefineRequest& request) {
         case R::kTetChunk:
           status = AddTetChunk(request.tet_chunk());
           break;
+        case R::kTetLabelChunk:
+          status = AddTetLabelChunk(request.tet_label_chunk());
+          break;
         case R::kEndOfInput:
           status = AddEndOfInput();
           break;
@@ -104,7 +107,8 @@ absl::Status RequestReader::Unexpected(const v1::RefineRequest& request) const {
       expected = "mesh_header";
       break;
     case Stage::kMeshData:
-      expected = "vertex_chunk, tet_chunk or end_of_input";
+      expected = has_labels_ ? "vertex_chunk, tet_chunk, tet_label_chunk or end_of_input"
+                             : "vertex_chunk, tet_chunk or end_of_input";
       break;
     case Stage::kDone:
       expected = "nothing after end_of_input";
@@ -290,9 +294,11 @@ absl::Status RequestReader::AddMeshHeader(const v1::MeshHeader& header) {
         "mesh_header.has_values: must be false: this server samples every vertex value from the "
         "volume (client values are not used), so send no value_chunk");
   }
+  has_labels_ = header.has_labels();
   try {  // as for the volume
     mesh_.points.reserve(static_cast<size_t>(vertex_count_));
     mesh_.tets.reserve(static_cast<size_t>(tet_count_));
+    if (has_labels_) mesh_.labels.reserve(static_cast<size_t>(tet_count_));
   } catch (const std::bad_alloc&) {
     mesh_ = Mesh{};
     return absl::ResourceExhaustedError(absl::StrCat("mesh_header: this server cannot allocate ",
@@ -367,6 +373,30 @@ absl::Status RequestReader::AddTetChunk(const v1::TetChunk& chunk) {
   return absl::OkStatus();
 }
 
+absl::Status RequestReader::AddTetLabelChunk(const v1::TetLabelChunk& chunk) {
+  if (!has_labels_) {
+    return Invalid(absl::StrCat("request message ", message_index_,
+                                ": tet_label_chunk without mesh_header.has_labels"));
+  }
+  const int64_t received = static_cast<int64_t>(mesh_.labels.size());
+  if (chunk.start_index() != received) {
+    return Invalid(absl::StrCat("tet_label_chunk.start_index: expected ", received,
+                                " (the labels received so far), got ", chunk.start_index()));
+  }
+  const int size = chunk.labels_size();
+  if (size == 0) {
+    return Invalid(
+        absl::StrCat("tet_label_chunk.labels: empty at start_index ", chunk.start_index()));
+  }
+  if (size > tet_count_ - received) {
+    return Invalid(absl::StrCat("tet_label_chunk.labels: ", size, " labels at start_index ",
+                                chunk.start_index(),
+                                " run past mesh_header.tet_count = ", tet_count_));
+  }
+  mesh_.labels.insert(mesh_.labels.end(), chunk.labels().begin(), chunk.labels().end());
+  return absl::OkStatus();
+}
+
 absl::Status RequestReader::AddEndOfInput() {
   if (static_cast<int64_t>(mesh_.points.size()) != vertex_count_) {
     return Invalid(absl::StrCat("vertex_chunk: received ", mesh_.points.size(),
@@ -376,13 +406,18 @@ absl::Status RequestReader::AddEndOfInput() {
     return Invalid(absl::StrCat("tet_chunk: received ", mesh_.tets.size(),
                                 " tets, mesh_header.tet_count = ", tet_count_));
   }
+  if (has_labels_ && static_cast<int64_t>(mesh_.labels.size()) != tet_count_) {
+    return Invalid(absl::StrCat("tet_label_chunk: received ", mesh_.labels.size(),
+                                " labels, mesh_header.tet_count = ", tet_count_,
+                                " (mesh_header.has_labels)"));
+  }
   stage_ = Stage::kDone;
   return absl::OkStatus();
 }
 
 int64_t RequestReader::DeclaredInputBytes() const {
   return static_cast<int64_t>(total_bytes_) + vertex_count_ * static_cast<int64_t>(sizeof(Vec3)) +
-         tet_count_ * static_cast<int64_t>(sizeof(Tet));
+         tet_count_ * static_cast<int64_t>(sizeof(Tet) + (has_labels_ ? sizeof(int32_t) : 0));
 }
 
 RefineInput RequestReader::Take() {

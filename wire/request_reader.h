@@ -58,6 +58,7 @@ class RequestReader {
   absl::Status AddMeshHeader(const v1::MeshHeader& header);
   absl::Status AddVertexChunk(const v1::VertexChunk& chunk);
   absl::Status AddTetChunk(const v1::TetChunk& chunk);
+  absl::Status AddTetLabelChunk(const v1::TetLabelChunk& chunk);
   absl::Status AddEndOfInput();
   absl::Status Unexpected(const v1::RefineRequest& request) const;
 
@@ -77,6 +78,7 @@ class RequestReader {
 
   int64_t vertex_count_ = 0;
   int64_t tet_count_ = 0;
+  bool has_labels_ = false;
   Mesh mesh_;
 };
 

@@ -54,7 +54,9 @@ bool WriteMesh(const Mesh& mesh, size_t chunk_bytes, const RequestSink& sink) {
   header->set_vertex_count(static_cast<int64_t>(mesh.points.size()));
   header->set_tet_count(static_cast<int64_t>(mesh.tets.size()));
   // Values are never sent: the server samples the volume at every vertex (tetrefine.proto,
-  // MeshHeader.has_values).
+  // MeshHeader.has_values). Labels are sent when the mesh has them; the server checks their count.
+  const bool has_labels = !mesh.labels.empty();
+  header->set_has_labels(has_labels);
   if (!sink(request)) return false;
 
   const size_t vertex_step = PerChunk(chunk_bytes, 3 * sizeof(double));
@@ -79,6 +81,17 @@ bool WriteMesh(const Mesh& mesh, size_t chunk_bytes, const RequestSink& sink) {
     for (size_t t = start; t < end; ++t) {
       for (uint32_t i : mesh.tets[t]) chunk->add_indices(i);
     }
+    if (!sink(request)) return false;
+  }
+  if (!has_labels) return true;
+  const size_t label_step = PerChunk(chunk_bytes, sizeof(int32_t));
+  for (size_t start = 0; start < mesh.labels.size(); start += label_step) {
+    const size_t end = std::min(mesh.labels.size(), start + label_step);
+    request.Clear();
+    v1::TetLabelChunk* chunk = request.mutable_tet_label_chunk();
+    chunk->set_start_index(static_cast<int64_t>(start));
+    chunk->mutable_labels()->Add(mesh.labels.begin() + static_cast<std::ptrdiff_t>(start),
+                                 mesh.labels.begin() + static_cast<std::ptrdiff_t>(end));
     if (!sink(request)) return false;
   }
   return true;

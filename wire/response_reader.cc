@@ -121,6 +121,22 @@ absl::Status ResponseReader::Add(const v1::RefineResponse& response) {
       tet_quality_.insert(tet_quality_.end(), chunk.qualities().begin(), chunk.qualities().end());
       break;
     }
+    case R::kTetLabelChunk: {
+      const v1::TetLabelChunk& chunk = response.tet_label_chunk();
+      absl::Status s = CheckRun("tet_label_chunk", chunk.start_index(), mesh_.labels.size(),
+                                chunk.labels_size(), header_->tet_label_count());
+      if (!s.ok()) return s;
+      mesh_.labels.insert(mesh_.labels.end(), chunk.labels().begin(), chunk.labels().end());
+      break;
+    }
+    case R::kTetParentChunk: {
+      const v1::TetParentChunk& chunk = response.tet_parent_chunk();
+      absl::Status s = CheckRun("tet_parent_chunk", chunk.start_index(), tet_parent_.size(),
+                                chunk.parents_size(), header_->tet_parent_count());
+      if (!s.ok()) return s;
+      tet_parent_.insert(tet_parent_.end(), chunk.parents().begin(), chunk.parents().end());
+      break;
+    }
     case R::kSummary:
       return AddSummary(response.summary());
     default:
@@ -136,18 +152,23 @@ absl::Status ResponseReader::AddMeshHeader(const v1::ResultMeshHeader& header) {
   const int64_t t = header.tet_count();
   if (v < 0 || t < 0 || (header.value_count() != 0 && header.value_count() != v) ||
       (header.tet_iteration_count() != 0 && header.tet_iteration_count() != t) ||
-      (header.tet_quality_count() != 0 && header.tet_quality_count() != t)) {
+      (header.tet_quality_count() != 0 && header.tet_quality_count() != t) ||
+      (header.tet_label_count() != 0 && header.tet_label_count() != t) ||
+      (header.tet_parent_count() != 0 && header.tet_parent_count() != t)) {
     return Malformed("mesh_header: inconsistent counts");
   }
   header_ = header;
   mesh_ = Mesh{};
   tet_iteration_.clear();
   tet_quality_.clear();
+  tet_parent_.clear();
   ReserveUpTo(mesh_.points, v);
   ReserveUpTo(mesh_.tets, t);
   ReserveUpTo(mesh_.values, header.value_count());
   ReserveUpTo(tet_iteration_, header.tet_iteration_count());
   ReserveUpTo(tet_quality_, header.tet_quality_count());
+  ReserveUpTo(mesh_.labels, header.tet_label_count());
+  ReserveUpTo(tet_parent_, header.tet_parent_count());
   FinishMeshIfComplete();
   return absl::OkStatus();
 }
@@ -158,13 +179,16 @@ void ResponseReader::FinishMeshIfComplete() {
       static_cast<int64_t>(mesh_.values.size()) != h.value_count() ||
       static_cast<int64_t>(mesh_.tets.size()) != h.tet_count() ||
       static_cast<int64_t>(tet_iteration_.size()) != h.tet_iteration_count() ||
-      static_cast<int64_t>(tet_quality_.size()) != h.tet_quality_count()) {
+      static_cast<int64_t>(tet_quality_.size()) != h.tet_quality_count() ||
+      static_cast<int64_t>(mesh_.labels.size()) != h.tet_label_count() ||
+      static_cast<int64_t>(tet_parent_.size()) != h.tet_parent_count()) {
     return;
   }
   if (h.final()) {
     reply_.result.mesh = std::move(mesh_);
     reply_.result.tet_iteration = std::move(tet_iteration_);
     reply_.result.tet_quality = std::move(tet_quality_);
+    reply_.result.tet_parent = std::move(tet_parent_);
     final_mesh_received_ = true;
   } else if (on_mesh_) {
     on_mesh_(h.iteration(), mesh_);
@@ -172,6 +196,7 @@ void ResponseReader::FinishMeshIfComplete() {
   mesh_ = Mesh{};
   tet_iteration_ = {};
   tet_quality_ = {};
+  tet_parent_ = {};
   header_.reset();
 }
 

@@ -56,6 +56,7 @@ class ResponseReader {
   Mesh mesh_;
   std::vector<int32_t> tet_iteration_;
   std::vector<float> tet_quality_;
+  std::vector<uint32_t> tet_parent_;
 
   RefineReply reply_;
 };

@@ -35,7 +35,8 @@ bool ResponseWriter::WriteIterationStats(const IterationStats& stats) {
 
 bool ResponseWriter::WriteMesh(int iteration, bool final, const Mesh& mesh,
                                std::span<const int32_t> tet_iteration,
-                               std::span<const float> tet_quality) {
+                               std::span<const float> tet_quality,
+                               std::span<const uint32_t> tet_parent) {
   response_.Clear();
   v1::ResultMeshHeader* header = response_.mutable_mesh_header();
   header->set_iteration(iteration);
@@ -45,6 +46,8 @@ bool ResponseWriter::WriteMesh(int iteration, bool final, const Mesh& mesh,
   header->set_value_count(static_cast<int64_t>(mesh.values.size()));
   header->set_tet_iteration_count(static_cast<int64_t>(tet_iteration.size()));
   header->set_tet_quality_count(static_cast<int64_t>(tet_quality.size()));
+  header->set_tet_label_count(static_cast<int64_t>(mesh.labels.size()));
+  header->set_tet_parent_count(static_cast<int64_t>(tet_parent.size()));
   if (!sink_(response_)) return false;
 
   const bool ok =
@@ -90,13 +93,32 @@ bool ResponseWriter::WriteMesh(int iteration, bool final, const Mesh& mesh,
                                                          tet_iteration.begin() + end);
                      return sink_(response_);
                    }) &&
-      ForEachChunk(tet_quality.size(), sizeof(float), chunk_bytes_, [&](size_t start, size_t end) {
-        response_.Clear();
-        v1::TetQualityChunk* chunk = response_.mutable_tet_quality_chunk();
-        chunk->set_start_index(static_cast<int64_t>(start));
-        chunk->mutable_qualities()->Assign(tet_quality.begin() + start, tet_quality.begin() + end);
-        return sink_(response_);
-      });
+      ForEachChunk(tet_quality.size(), sizeof(float), chunk_bytes_,
+                   [&](size_t start, size_t end) {
+                     response_.Clear();
+                     v1::TetQualityChunk* chunk = response_.mutable_tet_quality_chunk();
+                     chunk->set_start_index(static_cast<int64_t>(start));
+                     chunk->mutable_qualities()->Assign(tet_quality.begin() + start,
+                                                        tet_quality.begin() + end);
+                     return sink_(response_);
+                   }) &&
+      ForEachChunk(mesh.labels.size(), sizeof(int32_t), chunk_bytes_,
+                   [&](size_t start, size_t end) {
+                     response_.Clear();
+                     v1::TetLabelChunk* chunk = response_.mutable_tet_label_chunk();
+                     chunk->set_start_index(static_cast<int64_t>(start));
+                     chunk->mutable_labels()->Assign(mesh.labels.begin() + start,
+                                                     mesh.labels.begin() + end);
+                     return sink_(response_);
+                   }) &&
+      ForEachChunk(
+          tet_parent.size(), sizeof(uint32_t), chunk_bytes_, [&](size_t start, size_t end) {
+            response_.Clear();
+            v1::TetParentChunk* chunk = response_.mutable_tet_parent_chunk();
+            chunk->set_start_index(static_cast<int64_t>(start));
+            chunk->mutable_parents()->Assign(tet_parent.begin() + start, tet_parent.begin() + end);
+            return sink_(response_);
+          });
   return ok;
 }
 

@@ -23,10 +23,11 @@ class ResponseWriter {
   ResponseWriter(size_t chunk_bytes, ResponseSink sink);
 
   bool WriteIterationStats(const IterationStats& stats);
-  // A result_mesh_header and the mesh's chunks. The per-tet arrays may be empty (intermediate
-  // meshes have none).
+  // A result_mesh_header and the mesh's chunks (its labels too, when it has them). The per-tet
+  // arrays may be empty (intermediate meshes have none; tet_parent only when asked for).
   bool WriteMesh(int iteration, bool final, const Mesh& mesh,
-                 std::span<const int32_t> tet_iteration, std::span<const float> tet_quality);
+                 std::span<const int32_t> tet_iteration, std::span<const float> tet_quality,
+                 std::span<const uint32_t> tet_parent = {});
   bool WriteSummary(const RefineResult& result, const ServiceSummary& service, int64_t input_tets);
 
  private:

@@ -54,6 +54,20 @@ absl::Status CheckInput(const std::vector<std::shared_ptr<grpc::Channel>>& targe
         absl::StrCat("max_attempts = ", shard.max_attempts, ": must be >= 0 (0: default)"));
   }
   if (mesh.tets.empty()) return absl::InvalidArgumentError("mesh.tets is empty");
+  // Parts refine to the unsharded result only when every decision is local to an edge or a face
+  // (core/refine.h, "Locality"): the paper's scheme. The longest-edge closure and certified mode
+  // read neighbouring tets, so a part would decide differently near its boundary.
+  if (options.refine.scheme != RefineScheme::kPaper || options.refine.certify) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "options.scheme: sharded refinement needs the paper scheme without certify (got ",
+        std::string(RefineSchemeName(options.refine.scheme)),
+        options.refine.certify ? " with certify" : "",
+        "): the other schemes read neighbouring tets across part boundaries"));
+  }
+  if (!mesh.labels.empty() && mesh.labels.size() != mesh.tets.size()) {
+    return absl::InvalidArgumentError(absl::StrCat("mesh.labels: ", mesh.labels.size(),
+                                                   " labels for ", mesh.tets.size(), " tets"));
+  }
   const size_t nv = mesh.points.size();
   for (size_t t = 0; t < mesh.tets.size(); ++t) {
     for (int k = 0; k < 4; ++k) {
@@ -282,6 +296,7 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   result.mesh = std::move(merged->mesh);
   result.tet_iteration = std::move(merged->tet_iteration);
   result.tet_quality = std::move(merged->tet_quality);
+  result.tet_parent = std::move(merged->tet_parent);
   out.reply.service.max_tets = budget;
   for (int p = 0; p < num_parts; ++p) {
     const client::ClientResult& reply = *replies[p];

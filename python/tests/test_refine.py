@@ -77,6 +77,48 @@ def test_a_numpy_mesh_in_a_float_volume_matches_the_cli(server, cli_binary, tmp_
     assert_same_as_cli_output(result, tmp_path / "cli.vtu")
 
 
+@pytest.mark.parametrize("scheme", ["paper", "longest-edge"])
+def test_each_scheme_matches_the_cli(server, cli_binary, tmp_path, scheme):
+    """scheme= sends the scheme the CLI's --scheme names: the same mesh, bit for bit."""
+    data = smooth_volume((13, 11, 9))
+    points, tets = box_mesh((0.5, 0.5, 0.5), (11.5, 9.5, 7.5), (3, 3, 2))
+    nibabel.save(nibabel.Nifti1Image(data, np.eye(4)), tmp_path / "v.nii")
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(points, [("tetra", tets)]))
+    run_cli(cli_binary, "refine", "--server", server.target, "--volume", str(tmp_path / "v.nii"),
+            "--mesh", str(tmp_path / "m.vtu"), "--epsilon", "0.02", "--scheme", scheme,
+            "--quiet", "--output", str(tmp_path / "cli.vtu"))
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(data, (1, 1, 1), (0, 0, 0), points, tets, 0.02, scheme=scheme)
+    assert_same_as_cli_output(result, tmp_path / "cli.vtu")
+
+
+def test_certify_labels_and_parents(server):
+    """certify=True bounds the lattice error of every tet; labels and parents follow each child
+    (every region and every input tet keeps its volume)."""
+    data = smooth_volume((13, 11, 9))
+    points, tets = box_mesh((0.5, 0.5, 0.5), (11.5, 9.5, 7.5), (3, 3, 2))
+    labels = np.arange(len(tets)) % 3 + 10
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(data, (1, 1, 1), (0, 0, 0), points, tets, 0.05, certify=True,
+                               labels=labels, track_parents=True)
+    assert result.stop_reason == "converged"
+    assert result.certified_max_error is not None and result.certified_max_error <= 0.05
+    assert len(result.parent) == len(result.tets) == len(result.labels)
+    np.testing.assert_array_equal(result.labels, labels[result.parent])
+
+    def volumes(p, t):
+        a, b, c, d = (p[t[:, k]] for k in range(4))
+        return np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) / 6.0
+
+    before, after = volumes(points, tets), volumes(result.points, result.tets)
+    assert (after > 0).all()
+    np.testing.assert_allclose(np.bincount(result.parent, weights=after, minlength=len(tets)),
+                               before, rtol=1e-9)
+    with tetrefine.Client(server.target) as client:
+        plain = client.refine(data, (1, 1, 1), (0, 0, 0), points, tets, 0.05)
+    assert plain.certified_max_error is None and plain.parent is None
+
+
 def test_volume_axes_are_x_y_z(server):
     """On a volume linear along one axis the vertex values are that coordinate: any axis or
     memory-order mix-up would give another axis's coordinate."""

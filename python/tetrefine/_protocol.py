@@ -6,7 +6,7 @@ client asks the generated message descriptors: a feature works as soon as its fi
 asking for it before that raises a TetrefineError with code UNIMPLEMENTED naming the field.
 
 Expected field names (what the detection looks for):
-  RefineOptions.scheme       an enum (values named like SCHEME_PAPER) or a string
+  RefineOptions.scheme       an enum (values named like REFINE_SCHEME_PAPER) or a string
   RefineOptions.certify      bool
   VolumeHeader.direction     9 doubles (repeated double), row-major 3x3, columns = unit axes
   labels                     a request oneof field with "label" in its name whose message has
@@ -77,7 +77,8 @@ class Protocol:
             (name for name in mesh_header if name.endswith("label_count")), None)
 
     def scheme_names(self):
-        """The scheme names the protocol knows, lower case ('paper', ...); None for a string."""
+        """The scheme names the protocol knows, as the CLI spells them ('paper',
+        'longest-edge', ...); None for a string field."""
         field = self.scheme_field
         if field is None or field.enum_type is None:
             return None
@@ -94,15 +95,16 @@ class Protocol:
         if field.enum_type is None:
             return scheme
         for value in field.enum_type.values:
-            if value.number != 0 and _scheme_suffix(value.name,
-                                                    field.enum_type.name) == scheme.lower():
+            wanted = scheme.lower().replace("_", "-")
+            if value.number != 0 and _scheme_suffix(value.name, field.enum_type.name) == wanted:
                 return value.number
         return None
 
 
 def _scheme_suffix(value_name, enum_name):
-    """SCHEME_PAPER of enum Scheme -> 'paper' (the enum name's upper-snake prefix dropped)."""
+    """REFINE_SCHEME_LONGEST_EDGE of enum RefineScheme -> 'longest-edge' (the enum name's
+    upper-snake prefix dropped, words joined by '-' as on the command line)."""
     prefix = "".join("_" + c if c.isupper() and i else c for i, c in enumerate(enum_name))
     prefix = prefix.upper() + "_"
     name = value_name[len(prefix):] if value_name.startswith(prefix) else value_name
-    return name.lower()
+    return name.lower().replace("_", "-")

@@ -157,7 +157,8 @@ def _direction(direction):
 
 
 def build_options(pb, protocol, epsilon, *, max_iterations=None, max_tets=None, scheme=None,
-                  certify=False, norm_coeff=None, clamp=False, fix_orientation=False):
+                  certify=False, norm_coeff=None, clamp=False, fix_orientation=False,
+                  track_parents=False):
     """The RefineOptions message; an unset argument leaves the server's default."""
     options = pb.RefineOptions(epsilon=float(epsilon))
     if max_iterations is not None:
@@ -182,6 +183,10 @@ def build_options(pb, protocol, epsilon, *, max_iterations=None, max_tets=None, 
         if protocol.certify_field is None:
             raise unsupported("certify", "RefineOptions.certify field")
         setattr(options, "certify", True)
+    if track_parents:
+        if "track_parents" not in pb.RefineOptions.DESCRIPTOR.fields_by_name:
+            raise unsupported("track_parents", "RefineOptions.track_parents field")
+        setattr(options, "track_parents", True)
     return options
 
 

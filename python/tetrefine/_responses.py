@@ -13,6 +13,7 @@ _CHUNKS = {
     "tet_chunk": ("indices", np.uint32, 4, "tets"),
     "tet_iteration_chunk": ("iterations", np.int32, 1, "iteration"),
     "tet_quality_chunk": ("qualities", np.float32, 1, "quality"),
+    "tet_parent_chunk": ("parents", np.uint32, 1, "parent"),
 }
 
 
@@ -31,6 +32,8 @@ class _MeshParts:
             "points": header.vertex_count, "values": header.value_count,
             "tets": header.tet_count, "iteration": header.tet_iteration_count,
             "quality": header.tet_quality_count,
+            # A protocol without parents announces none.
+            "parent": getattr(header, "tet_parent_count", 0),
         }
         self.arrays = {name: [] for name in self.sizes}
         self.filled = {name: 0 for name in self.sizes}
@@ -117,4 +120,5 @@ class ResponseReader:
         return RefineResult(
             points=mesh["points"], tets=mesh["tets"].astype(np.int64), values=mesh["values"],
             iteration=mesh["iteration"], quality=mesh["quality"], labels=labels,
-            iterations=self.iterations, summary=self.summary)
+            iterations=self.iterations, summary=self.summary,
+            parent=mesh["parent"].astype(np.int64) if len(mesh["parent"]) else None)

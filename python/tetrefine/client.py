@@ -126,7 +126,7 @@ class Client:
     def refine(self, volume, spacing, origin, points, tets, epsilon, *, direction=None,
                labels=None, scheme=None, certify=False, max_iterations=None, max_tets=None,
                on_iteration=None, timeout=None, norm_coeff=None, clamp=False,
-               fix_orientation=False):
+               fix_orientation=False, track_parents=False):
         """Refines the tet mesh (points, tets) immersed in a voxel volume.
 
         Args:
@@ -144,8 +144,11 @@ class Client:
           direction: 3x3 matrix whose columns are the world directions of the volume's x, y, z
             index axes (for an oblique volume); None or the identity for an axis-aligned one.
           labels: (m,) integer label per tet, inherited by every child tet.
-          scheme: refinement scheme name (e.g. "paper"); None: the server's default.
-          certify: refine until the lattice error of every tet is at most epsilon.
+          scheme: "longest-edge" (reaches epsilon with bounded quality) or "paper" (the
+            published scheme, unchanged); None: the server's default (longest-edge).
+          certify: refine until the lattice error of every tet is at most epsilon; the result's
+            certified_max_error gives the maximum over every tet.
+          track_parents: also return, per output tet, the input tet it lies in (result.parent).
           max_iterations: iterations at most (server default 16).
           max_tets: stop before an iteration that would exceed this many tets.
           on_iteration: called with each IterationStats as soon as that iteration has finished
@@ -158,8 +161,8 @@ class Client:
         direction, labels, scheme and certify need a protocol that has them: without it they
         raise TetrefineError with code UNIMPLEMENTED naming the missing field.
 
-        Returns: a RefineResult (points, tets, values, iteration, quality, labels, iterations,
-          stop_reason, lattice, summary).
+        Returns: a RefineResult (points, tets, values, iteration, quality, labels, parent,
+          iterations, stop_reason, lattice, certified_max_error, summary).
         Raises: TetrefineError with the gRPC status code and the server's message (or ours, for
           input refused before sending: INVALID_ARGUMENT naming the argument).
         """
@@ -169,7 +172,7 @@ class Client:
         options = _requests.build_options(
             pb, self._protocol, epsilon, max_iterations=max_iterations, max_tets=max_tets,
             scheme=scheme, certify=certify, norm_coeff=norm_coeff, clamp=clamp,
-            fix_orientation=fix_orientation)
+            fix_orientation=fix_orientation, track_parents=track_parents)
         # One deadline for the whole call, the server-info round trip included.
         deadline = None if timeout is None else time.monotonic() + timeout
         chunk_bytes = self._request_chunk_bytes(timeout)

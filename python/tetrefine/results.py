@@ -86,6 +86,10 @@ class RefineResult:
     quality:    (m,) float32, mean-ratio quality of each tet (1 regular, towards 0 flat).
     labels:     (m,) int32 per-tet labels inherited from the input tets, or None when the call
                 sent no labels.
+    parent:     (m,) int64 index of the input tet each tet lies in (track_parents=True), else
+                None.
+    certified_max_error: certify=True and converged: the largest lattice error over every tet
+                (<= epsilon); else None.
     iterations: list of IterationStats, one per completed iteration.
     stop_reason: "converged", "max_iterations", "tet_budget", "cancelled" or "quality_floor".
     lattice:    Record of the error sampled on the barycentric lattice inside the tets (n,
@@ -94,13 +98,17 @@ class RefineResult:
                 final_max_error, timings, ...).
     """
 
-    def __init__(self, points, tets, values, iteration, quality, labels, iterations, summary):
+    def __init__(self, points, tets, values, iteration, quality, labels, iterations, summary,
+                 parent=None):
         self.points = points
         self.tets = tets
         self.values = values
         self.iteration = iteration
         self.quality = quality
         self.labels = labels
+        self.parent = parent
+        certified = getattr(summary, "certified_max_error", -1.0)
+        self.certified_max_error = certified if certified is not None and certified >= 0 else None
         self.iterations = iterations
         self.summary = summary
         self.stop_reason = summary.stop_reason

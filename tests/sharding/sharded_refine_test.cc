@@ -3,9 +3,12 @@
 
 #include "client/sharding/sharded_refine.h"
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -109,6 +112,8 @@ client::RefineRequestOptions Options(double epsilon, int max_iterations) {
   o.refine.max_iterations = max_iterations;
   o.refine.lattice_max_tets = 100'000'000;  // every tet: the lattice maxima are then exact too
   o.refine.lattice_n = 4;
+  // Sharding needs edge-local decisions: the paper's scheme (ShardedRefine refuses the others).
+  o.refine.scheme = RefineScheme::kPaper;
   return o;
 }
 
@@ -282,6 +287,51 @@ TEST_F(ShardedRefineTest, VertexOutsideTheVolumeIsRefusedBeforeSending) {
       sharding::ShardedRefine(channels_, c.volume, c.mesh, Options(0.004, 5), Shards(2));
   ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << r.status();
   EXPECT_NE(r.status().message().find("mesh.points[7]"), absl::string_view::npos) << r.status();
+}
+
+// The longest-edge closure and certify read neighbouring tets: a part would decide differently
+// near its boundary, so they are refused by name rather than merged into a different mesh.
+TEST_F(ShardedRefineTest, SchemesThatReadNeighboursAreRefusedByName) {
+  const StructuredCase c;
+  for (const bool certify : {false, true}) {
+    client::RefineRequestOptions options = Options(0.004, 5);
+    options.refine.scheme = certify ? RefineScheme::kPaper : RefineScheme::kLongestEdge;
+    options.refine.certify = certify;
+    absl::StatusOr<sharding::ShardedResult> r =
+        sharding::ShardedRefine(channels_, c.volume, c.mesh, options, Shards(2));
+    ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << r.status();
+    EXPECT_NE(r.status().message().find("options.scheme"), absl::string_view::npos) << r.status();
+  }
+}
+
+// Labels and input parents travel with each part and come back as the unsharded run gives them.
+TEST_F(ShardedRefineTest, LabelsAndParentsMatchTheUnshardedRun) {
+  StructuredCase c;
+  for (size_t t = 0; t < c.mesh.tets.size(); ++t) c.mesh.labels.push_back(static_cast<int>(t % 7));
+  client::RefineRequestOptions options = Options(0.004, 3);
+  options.refine.track_parents = true;
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+  ASSERT_EQ(whole.result.mesh.labels.size(), whole.result.mesh.tets.size());
+  ASSERT_EQ(whole.result.tet_parent.size(), whole.result.mesh.tets.size());
+  // Per tet, by its sorted corner positions: (label, parent).
+  auto keyed = [](const RefineResult& r) {
+    std::map<std::array<Vec3, 4>, std::pair<int32_t, uint32_t>> out;
+    for (size_t t = 0; t < r.mesh.tets.size(); ++t) {
+      std::array<Vec3, 4> q;
+      for (int k = 0; k < 4; ++k) q[k] = r.mesh.points[r.mesh.tets[t][k]];
+      std::sort(q.begin(), q.end());
+      out[q] = {r.mesh.labels[t], r.tet_parent[t]};
+    }
+    return out;
+  };
+  const auto want = keyed(whole.result);
+  for (int k : {2, 3}) {
+    SCOPED_TRACE(::testing::Message() << "shards = " << k);
+    const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
+    ASSERT_EQ(sharded.reply.result.mesh.labels.size(), sharded.reply.result.mesh.tets.size());
+    ASSERT_EQ(sharded.reply.result.tet_parent.size(), sharded.reply.result.mesh.tets.size());
+    EXPECT_EQ(keyed(sharded.reply.result), want);
+  }
 }
 
 TEST_F(ShardedRefineTest, ShouldCancelStopsEveryPart) {

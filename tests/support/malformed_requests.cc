@@ -358,6 +358,47 @@ std::vector<MalformedRequest> MalformedRequests() {
          r.insert(r.end() - 1, values);
        },
        {"mesh_header.has_values: must be false"}},
+      {"LabelsNotAnnounced",
+       [](Requests& r) {
+         v1::RefineRequest labels;
+         labels.mutable_tet_label_chunk()->add_labels(3);
+         r.insert(r.end() - 1, labels);
+       },
+       {"tet_label_chunk without mesh_header.has_labels"}},
+      {"LabelsMissing",
+       [](Requests& r) {
+         MeshHeader(r).set_has_labels(true);
+         v1::RefineRequest labels;
+         for (int i = 0; i < 39; ++i) labels.mutable_tet_label_chunk()->add_labels(i);
+         r.insert(r.end() - 1, labels);
+       },
+       {"tet_label_chunk: received 39 labels, mesh_header.tet_count = 40"}},
+      {"LabelsRunPastTheTets",
+       [](Requests& r) {
+         MeshHeader(r).set_has_labels(true);
+         v1::RefineRequest labels;
+         for (int i = 0; i < 41; ++i) labels.mutable_tet_label_chunk()->add_labels(i);
+         r.insert(r.end() - 1, labels);
+       },
+       {"tet_label_chunk.labels: 41 labels at start_index 0 run past mesh_header.tet_count = 40"}},
+      {"LabelChunkGap",
+       [](Requests& r) {
+         MeshHeader(r).set_has_labels(true);
+         v1::RefineRequest labels;
+         labels.mutable_tet_label_chunk()->set_start_index(5);
+         labels.mutable_tet_label_chunk()->add_labels(1);
+         r.insert(r.end() - 1, labels);
+       },
+       {"tet_label_chunk.start_index: expected 0", "got 5"}},
+      {"UnknownScheme",
+       [](Requests& r) { r[0].mutable_options()->set_scheme(static_cast<v1::RefineScheme>(7)); },
+       {"options.scheme: unknown value 7"}},
+      {"CertifyWithoutLattice",
+       [](Requests& r) {
+         r[0].mutable_options()->set_certify(true);
+         r[0].mutable_options()->set_lattice_n(0);
+       },
+       {"options.lattice_n", "certify needs a lattice"}},
       {"TetChunkAfterEndOfInput",
        [](Requests& r) { r.push_back(r[Find(r, Kind::kTetChunk)]); },
        {"expected nothing after end_of_input, got tet_chunk"}},

@@ -35,6 +35,7 @@ void ExpectSameMesh(const Mesh& expected, const Mesh& actual) {
   EXPECT_TRUE(SameBits(expected.points, actual.points)) << "points differ";
   EXPECT_TRUE(SameBits(expected.tets, actual.tets)) << "tets differ";
   EXPECT_TRUE(SameBits(expected.values, actual.values)) << "values differ";
+  EXPECT_EQ(expected.labels, actual.labels) << "labels differ";
 }
 
 void ExpectSameStats(const IterationStats& e, const IterationStats& a) {
@@ -49,6 +50,10 @@ void ExpectSameStats(const IterationStats& e, const IterationStats& a) {
   ExpectSameDouble(e.mean_error, a.mean_error, "mean_error");
   EXPECT_EQ(e.configurations, a.configurations);
   EXPECT_EQ(e.schonhardt_prisms, a.schonhardt_prisms);
+  ExpectSameDouble(e.max_segment_error, a.max_segment_error, "max_segment_error");
+  EXPECT_EQ(e.closure_edges, a.closure_edges);
+  EXPECT_EQ(e.guard_edges, a.guard_edges);
+  EXPECT_EQ(e.failing_tets, a.failing_tets);
   ExpectSameQuality(e.quality, a.quality, "quality");
 }
 
@@ -56,6 +61,8 @@ void ExpectSameResult(const RefineResult& e, const RefineResult& a) {
   ExpectSameMesh(e.mesh, a.mesh);
   EXPECT_TRUE(SameBits(e.tet_iteration, a.tet_iteration)) << "tet_iteration differs";
   EXPECT_TRUE(SameBits(e.tet_quality, a.tet_quality)) << "tet_quality differs";
+  EXPECT_EQ(e.tet_parent, a.tet_parent) << "tet_parent differs";
+  ExpectSameDouble(e.certified_max_error, a.certified_max_error, "certified_max_error");
   ASSERT_EQ(e.iterations.size(), a.iterations.size());
   for (size_t i = 0; i < e.iterations.size(); ++i)
     ExpectSameStats(e.iterations[i], a.iterations[i]);

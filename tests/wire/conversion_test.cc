@@ -53,6 +53,9 @@ RequestOptions RandomOptions(std::mt19937_64& rng) {
   r.lattice_seed = rng();
   if (coin()) r.min_edge_length = unit(rng);
   r.min_quality = 0.5 * unit(rng);
+  r.scheme = coin() ? RefineScheme::kPaper : RefineScheme::kLongestEdge;
+  r.certify = r.lattice_n > 0 && coin();
+  r.track_parents = coin();
   o.stream_every_iteration = coin();
   o.skip_final_mesh = coin();
   o.response_chunk_bytes = static_cast<uint32_t>(rng());
@@ -76,6 +79,9 @@ void ExpectSameOptions(const RequestOptions& expected, const RequestOptions& act
   EXPECT_EQ(e.lattice_seed, a.lattice_seed);
   EXPECT_EQ(e.min_edge_length, a.min_edge_length);
   EXPECT_EQ(std::bit_cast<uint64_t>(e.min_quality), std::bit_cast<uint64_t>(a.min_quality));
+  EXPECT_EQ(e.scheme, a.scheme);
+  EXPECT_EQ(e.certify, a.certify);
+  EXPECT_EQ(e.track_parents, a.track_parents);
   EXPECT_EQ(expected.stream_every_iteration, actual.stream_every_iteration);
   EXPECT_EQ(expected.skip_final_mesh, actual.skip_final_mesh);
   EXPECT_EQ(expected.response_chunk_bytes, actual.response_chunk_bytes);

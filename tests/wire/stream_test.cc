@@ -258,6 +258,48 @@ TEST(WireResponseStream, RoundTripsAtTheSmallestAndDefaultChunk) {
   }
 }
 
+// Labels sent with the mesh reach the reader; labels and parents of a result (certified, the
+// longest-edge scheme's statistics) come back through the response stream.
+TEST(WireStreams, LabelsParentsAndCertifiedResultsRoundTrip) {
+  Mesh mesh = TestMesh(/*with_values=*/false);
+  for (size_t t = 0; t < mesh.tets.size(); ++t) mesh.labels.push_back(static_cast<int>(t) - 5);
+  RequestOptions options;
+  options.refine.scheme = RefineScheme::kLongestEdge;
+  options.refine.certify = true;
+  options.refine.track_parents = true;
+  const Volume volume = TestSlab({10, 10, 10}, {0, 0, 0}, {10, 10, 10});
+  for (size_t chunk_bytes : {size_t{1}, kDefaultChunkBytes}) {
+    RequestReader reader(ServiceLimits{});
+    ASSERT_TRUE(Read(Requests(options, volume, mesh, chunk_bytes), reader).ok());
+    const RefineInput input = reader.Take();
+    EXPECT_EQ(input.mesh.labels, mesh.labels);
+    EXPECT_EQ(input.options.refine.scheme, RefineScheme::kLongestEdge);
+    EXPECT_TRUE(input.options.refine.certify);
+    EXPECT_TRUE(input.options.refine.track_parents);
+  }
+
+  RefineOptions core = options.refine;
+  core.epsilon = 0.05;
+  core.max_iterations = 6;
+  absl::StatusOr<RefineResult> result = Refine(volume, mesh, core);
+  ASSERT_TRUE(result.ok()) << result.status();
+  ASSERT_EQ(result->mesh.labels.size(), result->mesh.tets.size());
+  ASSERT_EQ(result->tet_parent.size(), result->mesh.tets.size());
+  std::vector<v1::RefineResponse> responses;
+  ResponseWriter writer(256, [&](const v1::RefineResponse& r) {
+    responses.push_back(r);
+    return true;
+  });
+  for (const IterationStats& s : result->iterations) ASSERT_TRUE(writer.WriteIterationStats(s));
+  ASSERT_TRUE(writer.WriteMesh(static_cast<int>(result->iterations.size()), true, result->mesh,
+                               result->tet_iteration, result->tet_quality, result->tet_parent));
+  ASSERT_TRUE(writer.WriteSummary(*result, {}, static_cast<int64_t>(mesh.tets.size())));
+  ResponseReader response_reader(nullptr, nullptr, /*expect_final_mesh=*/true);
+  for (const v1::RefineResponse& r : responses) ASSERT_TRUE(response_reader.Add(r).ok());
+  ASSERT_TRUE(response_reader.complete());
+  ExpectSameResult(*result, response_reader.Take().result);
+}
+
 TEST(WireResponseStream, ReaderRefusesABrokenStreamNamingTheField) {
   const RefineResult result = SmallResult();
   std::vector<v1::RefineResponse> responses;
