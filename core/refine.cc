@@ -319,26 +319,6 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
 
 }  // namespace
 
-std::string_view RefineSchemeName(RefineScheme s) {
-  switch (s) {
-    case RefineScheme::kPaper:
-      return "paper";
-    case RefineScheme::kLongestEdge:
-      return "longest-edge";
-  }
-  return "unknown";
-}
-
-bool ParseRefineScheme(std::string_view name, RefineScheme* out) {
-  for (RefineScheme s : {RefineScheme::kPaper, RefineScheme::kLongestEdge}) {
-    if (RefineSchemeName(s) == name) {
-      *out = s;
-      return true;
-    }
-  }
-  return false;
-}
-
 std::string_view StopReasonName(StopReason r) {
   switch (r) {
     case StopReason::kConverged:

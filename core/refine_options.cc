@@ -17,6 +17,26 @@ bool FiniteNonNegative(double x) { return x >= 0.0 && std::isfinite(x); }
 
 }  // namespace
 
+std::string_view RefineSchemeName(RefineScheme s) {
+  switch (s) {
+    case RefineScheme::kPaper:
+      return "paper";
+    case RefineScheme::kLongestEdge:
+      return "longest-edge";
+  }
+  return "unknown";
+}
+
+bool ParseRefineScheme(std::string_view name, RefineScheme* out) {
+  for (RefineScheme s : {RefineScheme::kPaper, RefineScheme::kLongestEdge}) {
+    if (RefineSchemeName(s) == name) {
+      *out = s;
+      return true;
+    }
+  }
+  return false;
+}
+
 absl::Status ValidateRefineOptions(const RefineOptions& o) {
   if (!FinitePositive(o.epsilon)) return Invalid("epsilon", o.epsilon, "must be finite and > 0");
   if (o.max_iterations < 0) return Invalid("max_iterations", o.max_iterations, "must be >= 0");

@@ -51,10 +51,10 @@ struct RefineSettings {
 // The flag of each RefineOptions field the command line sets, so that the core's message
 // ("options.max_iterations: must be >= 0, got -1") names the flag the user typed.
 constexpr std::pair<absl::string_view, absl::string_view> kFlagOfField[] = {
-    {"epsilon", "epsilon"},
-    {"max_iterations", "max-iterations"},
-    {"max_tets", "max-tets"},
-    {"norm_coeff", "norm-coeff"},
+    {"epsilon", "epsilon"},     {"max_iterations", "max-iterations"},
+    {"max_tets", "max-tets"},   {"norm_coeff", "norm-coeff"},
+    {"scheme", "scheme"},       {"certify", "certify"},
+    {"lattice_n", "lattice-n"},
 };
 
 absl::Status AsFlagError(const absl::Status& status) {
@@ -97,6 +97,20 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
     if (!n.ok()) return n.status();
     s->threads = static_cast<int>(*n);
   }
+  if (auto text = args.Get("scheme")) {
+    if (!ParseRefineScheme(*text, &s->options.refine.scheme)) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--scheme: unknown scheme \"", *text,
+                       "\" (known: ", std::string(RefineSchemeName(RefineScheme::kLongestEdge)),
+                       ", ", std::string(RefineSchemeName(RefineScheme::kPaper)), ")"));
+    }
+  }
+  s->options.refine.certify = args.Has("certify");
+  if (auto text = args.Get("lattice-n")) {
+    absl::StatusOr<int64_t> n = ParseInteger("lattice-n", *text, 0, 64);
+    if (!n.ok()) return n.status();
+    s->options.refine.lattice_n = static_cast<int>(*n);
+  }
   if (args.Has("clamp")) s->options.refine.outside = OutsidePolicy::kClamp;
   if (args.Has("fix-orientation")) s->options.refine.orientation = OrientationPolicy::kNormalize;
   if (absl::Status valid = ValidateRefineOptions(s->options.refine); !valid.ok()) {
@@ -122,6 +136,16 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
     }
   } else if (server_list) {
     s->shards = static_cast<int>(std::count(s->server.begin(), s->server.end(), ',')) + 1;
+  }
+  if (s->shards > 0 &&
+      (s->options.refine.scheme != RefineScheme::kPaper || s->options.refine.certify)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--shards: a sharded refinement (--shards or several --server addresses) needs --scheme "
+        "paper without --certify, got --scheme ",
+        std::string(RefineSchemeName(s->options.refine.scheme)),
+        s->options.refine.certify ? " --certify" : "",
+        ": the other schemes read neighbouring tets across part boundaries, so parts would not "
+        "give the unsharded mesh"));
   }
   if (s->shards > 0 && args.Has("every-iteration")) {
     return absl::InvalidArgumentError(
@@ -357,6 +381,19 @@ const CommandSpec& RefineSpec() {
                  absl::StrCat("stop before an iteration that would exceed N tets (default: the "
                               "service's limit, ",
                               wire::ServiceLimits{}.max_output_tets, ")")},
+                {"scheme", "NAME",
+                 absl::StrCat("which edges are split: longest-edge (the midpoint test, then "
+                              "each marked tet's longest edge, and 1:8 where a split would "
+                              "flatten a tet: reaches epsilon with bounded quality) or paper (the "
+                              "midpoint test alone, as published). Default ",
+                              std::string(RefineSchemeName(RefineOptions{}.scheme)))},
+                {"certify", "",
+                 "also refine until every lattice point of every tet is within epsilon; the "
+                 "report gives the certified maximum (about 4x the time)"},
+                {"lattice-n", "N",
+                 absl::StrCat("order of the verification lattice, (N+1)(N+2)(N+3)/6 points a "
+                              "tet; 0 skips the check (default ",
+                              RefineOptions{}.lattice_n, ", the paper's 165 points)")},
                 {"output", "FILE",
                  "refined mesh, .vtu .vtk .msh .mesh (default <mesh name>.refined.vtu "
                  "in the working directory)"},

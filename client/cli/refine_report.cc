@@ -103,6 +103,12 @@ std::string FormatRefineReport(const RefineResult& result, double epsilon) {
   }
   absl::StrAppend(&out, absl::StrFormat("Edge-midpoint error of the result: max %.6f, mean %.6f\n",
                                         result.final_max_error, result.final_mean_error));
+  if (result.certified_max_error >= 0.0) {
+    absl::StrAppend(&out,
+                    absl::StrFormat("Certified: lattice error at most %.6f in every one of "
+                                    "the %d tets (n = %d)\n",
+                                    result.certified_max_error, result.mesh.tets.size(), l.n));
+  }
   if (result.tets_reoriented > 0) {
     absl::StrAppend(&out, "Inverted input tets reoriented: ", result.tets_reoriented, "\n");
   }

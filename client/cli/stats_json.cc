@@ -48,6 +48,14 @@ void WriteIteration(JsonWriter& json, const IterationStats& s) {
   json.EndObject();
   json.Key("schonhardt_prisms");
   json.Int(s.schonhardt_prisms);
+  json.Key("max_segment_error");
+  json.Number(s.max_segment_error);
+  json.Key("closure_edges");
+  json.Int(s.closure_edges);
+  json.Key("guard_edges");
+  json.Int(s.guard_edges);
+  json.Key("failing_tets");
+  json.Int(s.failing_tets);
   json.Key("quality");
   WriteQuality(json, s.quality);
   json.Key("seconds");
@@ -74,6 +82,12 @@ void WriteOptions(JsonWriter& json, const RunDescription& run) {
   } else {
     json.Null();
   }
+  json.Key("scheme");
+  json.String(RefineSchemeName(o.refine.scheme));
+  json.Key("certify");
+  json.Bool(o.refine.certify);
+  json.Key("lattice_n");
+  json.Int(o.refine.lattice_n);
   json.Key("clamp");
   json.Bool(o.refine.outside == OutsidePolicy::kClamp);
   json.Key("fix_orientation");
@@ -140,6 +154,12 @@ std::string RefineStatsJson(const RunDescription& run, const client::ClientResul
   json.Key("share_above_epsilon");
   json.Number(r.lattice.share_above_epsilon);
   json.EndObject();
+  json.Key("certified_max_error");  // null unless certify converged
+  if (r.certified_max_error >= 0.0) {
+    json.Number(r.certified_max_error);
+  } else {
+    json.Null();
+  }
   json.Key("final_max_error");
   json.Number(r.final_max_error);
   json.Key("final_mean_error");

@@ -80,8 +80,9 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   ASSERT_TRUE(started.ok()) << started.status();
   const ServerProcess& second = **started;
   const std::string embedded = dir_.File("embedded.vtu");
-  const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
-                                           mesh_,    "--epsilon", "0.05"};
+  // Sharding is for the paper's scheme (edge-local decisions); the default is refused below.
+  const std::vector<std::string> common = {"refine",    "--volume", volume_,    "--mesh", mesh_,
+                                           "--epsilon", "0.05",     "--scheme", "paper"};
   std::vector<std::string> args = common;
   args.insert(args.end(), {"--output", embedded});
   ASSERT_EQ(RunTetrefine(args).exit_code, 0);
@@ -110,6 +111,11 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
     ASSERT_TRUE(got.ok());
     EXPECT_EQ(sorted_tets(got->mesh), sorted_tets(want->mesh)) << shards << " shards";
   }
+  const ProcessResult not_paper = RunTetrefine(
+      {"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.05", "--server",
+       server_->target() + "," + second.target(), "--output", dir_.File("refused.vtu")});
+  EXPECT_EQ(not_paper.exit_code, 2) << not_paper.err;
+  EXPECT_TRUE(absl::StrContains(not_paper.err, "--scheme paper")) << not_paper.err;
   // Sharding merges finished parts, so per-iteration meshes cannot be streamed.
   args = common;
   args.insert(args.end(), {"--server", server_->target() + "," + second.target(),

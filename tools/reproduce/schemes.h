@@ -22,7 +22,7 @@ inline constexpr Scheme kSchemes[] = {
      "the 64-case table (`RefineScheme::kPaper`)",
      [](RefineOptions& o) { o.scheme = RefineScheme::kPaper; }},
     {"longest-edge",
-     "`RefineScheme::kLongestEdge` (docs/schemes.md; core's default is still the paper's): the "
+     "`RefineScheme::kLongestEdge` (the default; docs/schemes.md): the "
      "paper's midpoint marks, then the longest edge of every tet with a split edge, and regular "
      "1:8 refinement where a split would make a much flatter child",
      [](RefineOptions& o) { o.scheme = RefineScheme::kLongestEdge; }},
