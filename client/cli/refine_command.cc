@@ -137,16 +137,6 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   } else if (server_list) {
     s->shards = static_cast<int>(std::count(s->server.begin(), s->server.end(), ',')) + 1;
   }
-  if (s->shards > 0 &&
-      (s->options.refine.scheme != RefineScheme::kPaper || s->options.refine.certify)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "--shards: a sharded refinement (--shards or several --server addresses) needs --scheme "
-        "paper without --certify, got --scheme ",
-        std::string(RefineSchemeName(s->options.refine.scheme)),
-        s->options.refine.certify ? " --certify" : "",
-        ": the other schemes read neighbouring tets across part boundaries, so parts would not "
-        "give the unsharded mesh"));
-  }
   if (s->shards > 0 && args.Has("every-iteration")) {
     return absl::InvalidArgumentError(
         "--every-iteration: not available with a sharded refinement (--shards or several "

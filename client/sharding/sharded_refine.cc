@@ -10,7 +10,9 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "core/quality.h"
 #include "grpcpp/create_channel.h"
+#include "sharding/halo_parts.h"
 #include "sharding/mesh_partition.h"
 #include "sharding/part_merge.h"
 #include "sharding/result_combine.h"
@@ -49,21 +51,15 @@ absl::Status CheckInput(const std::vector<std::shared_ptr<grpc::Channel>>& targe
   if (shard.shards < 1) {
     return absl::InvalidArgumentError(absl::StrCat("shards = ", shard.shards, ": must be >= 1"));
   }
+  if (shard.halo_rings < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("halo_rings = ", shard.halo_rings, ": must be >= 0"));
+  }
   if (shard.max_attempts < 0) {
     return absl::InvalidArgumentError(
         absl::StrCat("max_attempts = ", shard.max_attempts, ": must be >= 0 (0: default)"));
   }
   if (mesh.tets.empty()) return absl::InvalidArgumentError("mesh.tets is empty");
-  // Parts refine to the unsharded result only when every decision is local to an edge or a face
-  // (core/refine.h, "Locality"): the paper's scheme. The longest-edge closure and certified mode
-  // read neighbouring tets, so a part would decide differently near its boundary.
-  if (options.refine.scheme != RefineScheme::kPaper || options.refine.certify) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "options.scheme: sharded refinement needs the paper scheme without certify (got ",
-        std::string(RefineSchemeName(options.refine.scheme)),
-        options.refine.certify ? " with certify" : "",
-        "): the other schemes read neighbouring tets across part boundaries"));
-  }
   if (!mesh.labels.empty() && mesh.labels.size() != mesh.tets.size()) {
     return absl::InvalidArgumentError(absl::StrCat("mesh.labels: ", mesh.labels.size(),
                                                    " labels for ", mesh.tets.size(), " tets"));
@@ -230,6 +226,235 @@ class PartRunner {
   std::mutex callback_mu_;
 };
 
+QualityStats QualityOf(const std::vector<float>& q) {
+  QualityStats s;
+  if (q.empty()) return s;
+  s.min = 1.0;
+  double sum = 0.0;
+  for (float x : q) {
+    s.min = std::min(s.min, static_cast<double>(x));
+    sum += x;
+  }
+  s.count = static_cast<int64_t>(q.size());
+  s.mean = sum / static_cast<double>(q.size());
+  return s;
+}
+
+// The schemes whose decisions read neighbouring tets (longest-edge, certify): one round per
+// iteration, every part sent with kHaloRings rings of tets around the tets it owns and refined
+// one iteration; the children of owned tets make the next whole mesh (sharding/halo_parts.h).
+// The stops that look at the whole mesh (tet budget, quality floor) are taken here, on the
+// merged iteration, before it is applied, as core Refine takes them. A last round without halos
+// and without iterations measures the result (edge errors, the lattice, certify's bound) and says
+// whether it converged.
+absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
+    const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+    const Mesh& mesh, const client::RefineRequestOptions& options,
+    const ShardOptions& shard_options, const ShardCallbacks& callbacks) {
+  const Clock::time_point start = Clock::now();
+  const bool clamp = options.refine.outside == OutsidePolicy::kClamp;
+  ShardedResult out;
+  RefineResult& result = out.reply.result;
+  result.norm_coeff = options.refine.norm_coeff.value_or(WholeRange(volume));
+
+  WholeMesh whole;
+  whole.mesh.points = mesh.points;
+  whole.mesh.tets = mesh.tets;
+  whole.mesh.labels = mesh.labels;
+  // Reoriented here, as the core would, so that every part sees positive tets.
+  if (options.refine.orientation == OrientationPolicy::kNormalize) {
+    for (Tet& t : whole.mesh.tets) {
+      const auto& p = whole.mesh.points;
+      if (SignedVolume6(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) < 0.0) {
+        std::swap(t[2], t[3]);
+        ++result.tets_reoriented;
+      }
+    }
+  }
+  whole.mesh.values.reserve(mesh.points.size());
+  for (const Vec3& p : mesh.points) {
+    Vec3 u = volume.ContinuousIndex(p);
+    if (clamp) u = volume.ClampToGrid(u);
+    whole.mesh.values.push_back(volume.SampleIndex(u));
+  }
+  const size_t nt0 = whole.mesh.tets.size();
+  whole.tet_iteration.assign(nt0, 0);
+  whole.tet_parent.resize(nt0);
+  whole.tet_quality.resize(nt0);
+  for (size_t t = 0; t < nt0; ++t) {
+    const Tet& tet = whole.mesh.tets[t];
+    const auto& p = whole.mesh.points;
+    whole.tet_parent[t] = static_cast<uint32_t>(t);
+    whole.tet_quality[t] =
+        static_cast<float>(MeanRatio(p[tet[0]], p[tet[1]], p[tet[2]], p[tet[3]]));
+  }
+  result.initial_quality = QualityOf(whole.tet_quality);
+
+  // Each round: one iteration, every part under the server's own tet limit and with only
+  // degenerate tets refused (the floor is judged here on the owned tets); no verification unless
+  // certify needs the lattice, and then on one tet.
+  client::RefineRequestOptions round = options;
+  round.refine.norm_coeff = result.norm_coeff;
+  round.refine.orientation = OrientationPolicy::kReject;
+  round.refine.max_iterations = 1;
+  round.refine.min_quality = 0.0;
+  round.refine.track_parents = true;
+  round.send_max_tets = false;
+  if (options.refine.certify) {
+    round.refine.lattice_max_tets = 1;
+  } else {
+    round.refine.lattice_n = 0;
+  }
+  round.stream_every_iteration = false;
+  round.skip_final_mesh = false;
+
+  // The caller's budget, or the smallest server limit a part met (as for the paper scheme).
+  int64_t server_budget = 0;
+  auto budget = [&] { return options.send_max_tets ? options.refine.max_tets : server_budget; };
+  std::optional<StopReason> stopped;
+  std::vector<ShardReport> reports;
+  int rounds = 0;
+  for (int iteration = 1; iteration <= options.refine.max_iterations; ++iteration) {
+    const std::vector<HaloPart> parts = ExtractHaloParts(
+        whole.mesh, PartitionTets(whole.mesh, shard_options.shards), shard_options.halo_rings);
+    std::vector<MeshPart> meshes;
+    for (const HaloPart& h : parts) meshes.push_back(h.part);
+    PartRunner runner(targets, volume, meshes, clamp, shard_options, callbacks);
+    std::vector<std::optional<client::ClientResult>> replies(parts.size());
+    reports.assign(parts.size(), ShardReport{});
+    std::vector<int> all(parts.size());
+    for (size_t p = 0; p < parts.size(); ++p) all[p] = static_cast<int>(p);
+    if (absl::Status s = runner.Run(all, round, replies, reports); !s.ok()) return s;
+    ++rounds;
+    std::vector<const RefineResult*> results;
+    bool any_split = false;
+    IterationStats stats;
+    double error_sum = 0.0;
+    int64_t part_edges = 0;
+    for (size_t p = 0; p < parts.size(); ++p) {
+      const RefineResult& r = replies[p]->result;
+      results.push_back(&r);
+      const int64_t limit = replies[p]->service.max_tets;
+      server_budget = server_budget == 0 ? limit : std::min(server_budget, limit);
+      if (r.stop_reason == StopReason::kQualityFloor && r.iterations.empty()) {
+        // A degenerate tet in this part's first iteration, owned or in its halo: the whole
+        // iteration is refused as the core would refuse it.
+        stopped = StopReason::kQualityFloor;
+        result.next_iteration_min_quality = r.next_iteration_min_quality;
+      }
+      if (r.stop_reason == StopReason::kTetBudget && r.iterations.empty()) {
+        return absl::ResourceExhaustedError(absl::StrCat("part ", p, ": its iteration ", iteration,
+                                                         " would exceed the server's tet limit"));
+      }
+      if (r.iterations.empty()) continue;
+      any_split = true;
+      const IterationStats& x = r.iterations[0];
+      stats.max_error = std::max(stats.max_error, x.max_error);
+      stats.max_segment_error = std::max(stats.max_segment_error, x.max_segment_error);
+      error_sum += x.mean_error * static_cast<double>(x.edges);
+      part_edges += x.edges;
+      stats.short_edges_kept += x.short_edges_kept;
+      stats.closure_edges += x.closure_edges;
+      stats.guard_edges += x.guard_edges;
+      stats.failing_tets += x.failing_tets;
+      stats.seconds = std::max(stats.seconds, x.seconds);
+    }
+    if (stopped.has_value() || !any_split) break;
+    absl::StatusOr<MergedIteration> merged = MergeOwnedChildren(whole, parts, results, iteration);
+    if (!merged.ok()) return merged.status();
+    const int64_t next_tets = static_cast<int64_t>(merged->whole.mesh.tets.size());
+    if (next_tets > budget()) {
+      stopped = StopReason::kTetBudget;
+      result.next_iteration_tets = next_tets;
+      break;
+    }
+    if (merged->worst_new_quality <= 0.0 ||
+        merged->worst_new_quality < options.refine.min_quality) {
+      stopped = StopReason::kQualityFloor;
+      result.next_iteration_min_quality = merged->worst_new_quality;
+      break;
+    }
+    stats.iteration = iteration;
+    stats.initial_tets = static_cast<int64_t>(whole.mesh.tets.size());
+    stats.final_tets = next_tets;
+    stats.tets_with_error = merged->split_tets;
+    stats.edges = CountEdges(whole.mesh);
+    stats.split_edges = merged->split_edges;
+    stats.configurations = merged->configurations;
+    stats.schonhardt_prisms = merged->steiner_points;
+    // Each part evaluates its halo's edges too: the mean is over the parts' edges.
+    stats.mean_error = part_edges > 0 ? error_sum / static_cast<double>(part_edges) : 0.0;
+    whole = std::move(merged->whole);
+    stats.quality = QualityOf(whole.tet_quality);
+    result.iterations.push_back(stats);
+  }
+
+  // The measuring round: the final mesh in parts without halos, no iteration.
+  const Clock::time_point merge_start = Clock::now();
+  std::vector<MeshPart> parts =
+      ExtractParts(whole.mesh, PartitionTets(whole.mesh, shard_options.shards));
+  client::RefineRequestOptions measure = options;
+  measure.refine.norm_coeff = result.norm_coeff;
+  measure.refine.orientation = OrientationPolicy::kReject;
+  measure.refine.max_iterations = 0;
+  measure.refine.track_parents = false;
+  measure.send_max_tets = false;
+  measure.stream_every_iteration = false;
+  measure.skip_final_mesh = true;
+  PartRunner runner(targets, volume, parts, clamp, shard_options, callbacks);
+  std::vector<std::optional<client::ClientResult>> replies(parts.size());
+  std::vector<ShardReport> measured(parts.size());
+  std::vector<int> all(parts.size());
+  for (size_t p = 0; p < parts.size(); ++p) all[p] = static_cast<int>(p);
+  if (absl::Status s = runner.Run(all, measure, replies, measured); !s.ok()) return s;
+  std::vector<const RefineResult*> results;
+  bool converged = true;
+  double certified = 0.0;
+  for (const auto& reply : replies) {
+    results.push_back(&reply->result);
+    converged = converged && reply->result.stop_reason == StopReason::kConverged;
+    certified = std::max(certified, reply->result.certified_max_error);
+    if (reply->result.certified_max_error < 0.0) certified = -1.0;
+  }
+  std::vector<double> volumes;
+  for (const MeshPart& part : parts) volumes.push_back(MeshVolume(part.mesh));
+  const int64_t reoriented = result.tets_reoriented;
+  const QualityStats initial = result.initial_quality;
+  CombineSummary(results, volumes, &result);
+  result.tets_reoriented = reoriented;
+  result.initial_quality = initial;
+  result.final_quality = QualityOf(whole.tet_quality);
+  result.stop_reason =
+      stopped.value_or(converged ? StopReason::kConverged : StopReason::kMaxIterations);
+  result.certified_max_error =
+      options.refine.certify && result.stop_reason == StopReason::kConverged && converged
+          ? certified
+          : -1.0;
+  result.mesh = std::move(whole.mesh);
+  result.tet_iteration = std::move(whole.tet_iteration);
+  result.tet_quality = std::move(whole.tet_quality);
+  if (options.refine.track_parents) result.tet_parent = std::move(whole.tet_parent);
+  for (const auto& reply : replies) {
+    server_budget = server_budget == 0 ? reply->service.max_tets
+                                       : std::min(server_budget, reply->service.max_tets);
+  }
+  out.reply.service.max_tets = budget();
+  for (size_t p = 0; p < measured.size(); ++p) {
+    measured[p].rounds = rounds + 1;
+    measured[p].iterations = static_cast<int>(result.iterations.size());
+    measured[p].stop_reason = result.stop_reason;
+    measured[p].output_tets = replies[p]->result.final_quality.count;
+    measured[p].server_seconds = replies[p]->service.total_seconds;
+    out.reply.service.input_seconds =
+        std::max(out.reply.service.input_seconds, replies[p]->service.input_seconds);
+  }
+  out.shards = std::move(measured);
+  out.merge_seconds = SecondsSince(merge_start);
+  result.seconds = SecondsSince(start);
+  out.reply.service.total_seconds = result.seconds;
+  return out;
+}
+
 }  // namespace
 
 absl::StatusOr<ShardedResult> ShardedRefine(
@@ -239,6 +464,9 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   const Clock::time_point start = Clock::now();
   if (absl::Status s = CheckInput(targets, volume, mesh, options, shard_options); !s.ok()) {
     return s;
+  }
+  if (options.refine.scheme != RefineScheme::kPaper || options.refine.certify) {
+    return ShardedRefineWithHalos(targets, volume, mesh, options, shard_options, callbacks);
   }
   client::RefineRequestOptions sent = options;
   sent.refine.norm_coeff = options.refine.norm_coeff.value_or(WholeRange(volume));

@@ -2,6 +2,11 @@
 
 // Sharded refinement: one mesh refined as K parts on several tetrefine servers at once.
 //
+// Under the paper's scheme every part is refined to the end in one call. The longest-edge scheme
+// and certify read the tets around an edge, so their parts go one iteration at a time, each with
+// a halo of neighbouring tets (sharding/halo_parts.h), and the merged mesh is cut again for the
+// next iteration: more calls, the same result.
+//
 // Every decision of the method is local to an edge or a face, so a mesh can be cut into parts
 // that are refined independently and put back together into exactly the mesh the unsharded
 // refinement gives (same vertex positions and values to the bit, same tets). Each part travels
@@ -21,6 +26,7 @@
 #include "core/volume.h"
 #include "grpcpp/channel.h"
 #include "grpcpp/security/credentials.h"
+#include "sharding/halo_parts.h"
 
 namespace tetrefine::sharding {
 
@@ -32,6 +38,10 @@ struct ShardOptions {
   std::chrono::milliseconds retry_backoff{100};  // before try n + 1: n times this, at most 2 s
   // Per call: chunk size and wait_for_ready; the deadline bounds the whole sharded run.
   client::CallOptions call;
+  // Schemes that read neighbouring tets (longest-edge, certify): rings of tets sent around each
+  // part's own tets. The default is what the scheme reads (sharding/halo_parts.h); a narrower
+  // halo gives a different mesh, and exists for the test that shows it.
+  int halo_rings = kHaloRings;
 };
 
 struct ShardCallbacks {
@@ -83,6 +93,15 @@ struct ShardedResult {
 // would change the decisions). Parts that refine further than the whole run would stop (a tet
 // budget summed over the parts, or another part's quality floor) are refined a second time with
 // fewer iterations, so the result is the unsharded one also then.
+//
+// Schemes that read neighbouring tets (longest-edge, certify) run one round per iteration: the
+// current mesh cut again, each part sent with shard_options.halo_rings rings of tets around its
+// own and refined one iteration (with track_parents), the children of owned tets merged; the tet
+// budget and the quality floor are judged here on the merged iteration, as the core judges them.
+// A last round of parts without halos and without iterations measures the result. Per-iteration
+// counts (NTwE, edges, split edges, configurations, SP) are then the whole mesh's, quality and
+// max error exact; mean_error, short_edges_kept, closure_edges, guard_edges and failing_tets are
+// over the parts' tets and edges, halos included.
 //
 // Errors: INVALID_ARGUMENT for bad input (checked here for what splitting needs, by the servers
 // for the rest, prefixed with "part k: " and naming the part's own indices); a part's

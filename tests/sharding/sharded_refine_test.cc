@@ -289,48 +289,85 @@ TEST_F(ShardedRefineTest, VertexOutsideTheVolumeIsRefusedBeforeSending) {
   EXPECT_NE(r.status().message().find("mesh.points[7]"), absl::string_view::npos) << r.status();
 }
 
-// The longest-edge closure and certify read neighbouring tets: a part would decide differently
-// near its boundary, so they are refused by name rather than merged into a different mesh.
-TEST_F(ShardedRefineTest, SchemesThatReadNeighboursAreRefusedByName) {
+// The longest-edge scheme and certify read the tets around an edge: parts go one iteration at a
+// time with a halo, and the merged mesh is still the unsharded one.
+TEST_F(ShardedRefineTest, LongestEdgeEqualsUnsharded) {
+  const UnitCubeCase c;
+  client::RefineRequestOptions options = Options(0.01, 6);
+  options.refine.orientation = OrientationPolicy::kNormalize;
+  options.refine.scheme = RefineScheme::kLongestEdge;
+  ExpectShardedEqualsUnsharded(c.volume, c.mesh, options, {2, 3, 4});
+}
+
+TEST_F(ShardedRefineTest, CertifyEqualsUnsharded) {
   const StructuredCase c;
-  for (const bool certify : {false, true}) {
-    client::RefineRequestOptions options = Options(0.004, 5);
-    options.refine.scheme = certify ? RefineScheme::kPaper : RefineScheme::kLongestEdge;
-    options.refine.certify = certify;
-    absl::StatusOr<sharding::ShardedResult> r =
-        sharding::ShardedRefine(channels_, c.volume, c.mesh, options, Shards(2));
-    ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << r.status();
-    EXPECT_NE(r.status().message().find("options.scheme"), absl::string_view::npos) << r.status();
+  client::RefineRequestOptions options = Options(0.01, 8);
+  options.refine.scheme = RefineScheme::kLongestEdge;
+  options.refine.certify = true;
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+  ASSERT_EQ(whole.result.stop_reason, StopReason::kConverged);
+  ASSERT_GE(whole.result.certified_max_error, 0.0);
+  for (int k : {2, 4}) {
+    SCOPED_TRACE(::testing::Message() << "shards = " << k);
+    const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
+    ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+    EXPECT_EQ(sharded.reply.result.certified_max_error, whole.result.certified_max_error);
   }
+}
+
+// A mesh much longer than the halo: each part then sees only part of it, and a halo of one ring
+// gives a different mesh (the closure reaches further), which the default halo does not.
+TEST_F(ShardedRefineTest, TheHaloIsWideEnoughAndANarrowOneIsNot) {
+  const Volume volume = TestVolume({66, 10, 8}, VoxelType::kInt16);
+  const Mesh mesh = FiveTetMesh({0.5, 0.5, 0.5}, {64.5, 8.5, 6.5}, {48, 6, 4});
+  client::RefineRequestOptions options = Options(0.004, 4);
+  options.refine.scheme = RefineScheme::kLongestEdge;
+  const client::ClientResult whole = Unsharded(volume, mesh, options);
+  ASSERT_GE(whole.result.iterations.size(), 2u);
+  sharding::ShardOptions shard = Shards(2);
+  absl::StatusOr<sharding::ShardedResult> wide =
+      sharding::ShardedRefine(channels_, volume, mesh, options, shard);
+  ASSERT_TRUE(wide.ok()) << wide.status();
+  ExpectSameRefinement(mesh, whole.result, wide->reply.result);
+  shard.halo_rings = 1;
+  absl::StatusOr<sharding::ShardedResult> narrow =
+      sharding::ShardedRefine(channels_, volume, mesh, options, shard);
+  ASSERT_TRUE(narrow.ok()) << narrow.status();
+  EXPECT_NE(narrow->reply.result.mesh.tets.size(), whole.result.mesh.tets.size())
+      << "a one-ring halo gave the unsharded mesh: this case does not exercise the halo";
 }
 
 // Labels and input parents travel with each part and come back as the unsharded run gives them.
 TEST_F(ShardedRefineTest, LabelsAndParentsMatchTheUnshardedRun) {
   StructuredCase c;
   for (size_t t = 0; t < c.mesh.tets.size(); ++t) c.mesh.labels.push_back(static_cast<int>(t % 7));
-  client::RefineRequestOptions options = Options(0.004, 3);
-  options.refine.track_parents = true;
-  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
-  ASSERT_EQ(whole.result.mesh.labels.size(), whole.result.mesh.tets.size());
-  ASSERT_EQ(whole.result.tet_parent.size(), whole.result.mesh.tets.size());
-  // Per tet, by its sorted corner positions: (label, parent).
-  auto keyed = [](const RefineResult& r) {
-    std::map<std::array<Vec3, 4>, std::pair<int32_t, uint32_t>> out;
-    for (size_t t = 0; t < r.mesh.tets.size(); ++t) {
-      std::array<Vec3, 4> q;
-      for (int k = 0; k < 4; ++k) q[k] = r.mesh.points[r.mesh.tets[t][k]];
-      std::sort(q.begin(), q.end());
-      out[q] = {r.mesh.labels[t], r.tet_parent[t]};
+  for (const RefineScheme scheme : {RefineScheme::kPaper, RefineScheme::kLongestEdge}) {
+    SCOPED_TRACE(std::string(RefineSchemeName(scheme)));
+    client::RefineRequestOptions options = Options(0.004, 3);
+    options.refine.scheme = scheme;
+    options.refine.track_parents = true;
+    const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+    ASSERT_EQ(whole.result.mesh.labels.size(), whole.result.mesh.tets.size());
+    ASSERT_EQ(whole.result.tet_parent.size(), whole.result.mesh.tets.size());
+    // Per tet, by its sorted corner positions: (label, parent).
+    auto keyed = [](const RefineResult& r) {
+      std::map<std::array<Vec3, 4>, std::pair<int32_t, uint32_t>> out;
+      for (size_t t = 0; t < r.mesh.tets.size(); ++t) {
+        std::array<Vec3, 4> q;
+        for (int k = 0; k < 4; ++k) q[k] = r.mesh.points[r.mesh.tets[t][k]];
+        std::sort(q.begin(), q.end());
+        out[q] = {r.mesh.labels[t], r.tet_parent[t]};
+      }
+      return out;
+    };
+    const auto want = keyed(whole.result);
+    for (int k : {2, 3}) {
+      SCOPED_TRACE(::testing::Message() << "shards = " << k);
+      const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
+      ASSERT_EQ(sharded.reply.result.mesh.labels.size(), sharded.reply.result.mesh.tets.size());
+      ASSERT_EQ(sharded.reply.result.tet_parent.size(), sharded.reply.result.mesh.tets.size());
+      EXPECT_EQ(keyed(sharded.reply.result), want);
     }
-    return out;
-  };
-  const auto want = keyed(whole.result);
-  for (int k : {2, 3}) {
-    SCOPED_TRACE(::testing::Message() << "shards = " << k);
-    const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
-    ASSERT_EQ(sharded.reply.result.mesh.labels.size(), sharded.reply.result.mesh.tets.size());
-    ASSERT_EQ(sharded.reply.result.tet_parent.size(), sharded.reply.result.mesh.tets.size());
-    EXPECT_EQ(keyed(sharded.reply.result), want);
   }
 }
 
