@@ -175,12 +175,14 @@ int LongestEdge(const std::array<Vec3, 4>& p) {
 }
 
 int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                            const EdgeTable& edges, int rounds, FillLater<uint8_t>& split) {
+                            const EdgeTable& edges, int rounds, FillLater<uint8_t>& split,
+                            CancelFlag& cancel) {
   const int64_t nt = static_cast<int64_t>(tets.size());
   int64_t added = 0;
   for (int round = 0; round < rounds; ++round) {
     FillLater<uint8_t> next(split.begin(), split.end());
     ForEachBlock(nt, [&](int64_t, int64_t begin, int64_t end) {
+      if (cancel.Check()) return;
       for (int64_t t = begin; t < end; ++t) {
         const auto& te = edges.tet_edges[t];
         bool any = false;
@@ -192,6 +194,7 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
         if (split[te[longest]] == 0) MarkSplit(next, te[longest]);
       }
     });
+    if (cancel.IsSet()) return added;
     const int64_t round_added = CountChanged(split, next);
     split.swap(next);
     added += round_added;
@@ -201,11 +204,13 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
 }
 
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                         const EdgeTable& edges, double ratio, FillLater<uint8_t>& split) {
+                         const EdgeTable& edges, double ratio, FillLater<uint8_t>& split,
+                         CancelFlag& cancel) {
   const int64_t nt = static_cast<int64_t>(tets.size());
   const auto& table = SubdivisionTable();
   FillLater<uint8_t> next(split.begin(), split.end());
   ForEachBlock(nt, [&](int64_t, int64_t begin, int64_t end) {
+    if (cancel.Check()) return;
     for (int64_t t = begin; t < end; ++t) {
       const auto& te = edges.tet_edges[t];
       uint32_t pattern = 0;
@@ -231,6 +236,7 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
       }
     }
   });
+  if (cancel.IsSet()) return 0;
   const int64_t added = CountChanged(split, next);
   split.swap(next);
   return added;

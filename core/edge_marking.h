@@ -64,15 +64,19 @@ int LongestEdge(const std::array<Vec3, 4>& p);
 // Longest-edge closure, `rounds` times: every tet with a split edge also splits its longest
 // edge. Each round reads the marks of the round before (never marks made in the same round), so
 // the result does not depend on the order tets are visited in. Needs edges.tet_edges. Returns
-// the number of edges the closure added.
+// the number of edges the closure added. Polls `cancel` per block: once it is set the marks are
+// incomplete and the caller must stop.
 int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                            const EdgeTable& edges, int rounds, FillLater<uint8_t>& split);
+                            const EdgeTable& edges, int rounds, FillLater<uint8_t>& split,
+                            CancelFlag& cancel);
 
 // One round of the quality guard: every tet whose split (by the paper's table) would make a
 // child of mean-ratio quality below `ratio` times its own splits all six edges instead (regular
 // 1:8 refinement keeps at least 0.77 of the parent's quality, measured). Returns edges added.
+// Polls `cancel` as CloseToLongestEdges does.
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                         const EdgeTable& edges, double ratio, FillLater<uint8_t>& split);
+                         const EdgeTable& edges, double ratio, FillLater<uint8_t>& split,
+                         CancelFlag& cancel);
 
 // Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165
 // points for n = 8) and keeps its discrepancy in state.tet_lattice_error (final until the tet is

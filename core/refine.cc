@@ -262,15 +262,21 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     stats.failing_tets = failing_tets;
     if (rules.closure_rounds > 0) {
       stats.closure_edges = refine_internal::CloseToLongestEdges(
-          *state.points, *state.tets, edges, rules.closure_rounds, errors.split);
+          *state.points, *state.tets, edges, rules.closure_rounds, errors.split, cancel);
     }
     for (int r = 0; r < rules.guard_rounds; ++r) {
-      stats.guard_edges += refine_internal::PromoteBadSplits(*state.points, *state.tets, edges,
-                                                             rules.guard_ratio, errors.split);
+      stats.guard_edges += refine_internal::PromoteBadSplits(
+          *state.points, *state.tets, edges, rules.guard_ratio, errors.split, cancel);
       if (rules.closure_rounds > 0) {
         stats.closure_edges += refine_internal::CloseToLongestEdges(
-            *state.points, *state.tets, edges, rules.closure_rounds, errors.split);
+            *state.points, *state.tets, edges, rules.closure_rounds, errors.split, cancel);
       }
+    }
+    // The closure and the guard poll cancellation (each pass reads every tet): their marks are
+    // incomplete once it is set.
+    if (cancel.IsSet()) {
+      result.stop_reason = StopReason::kCancelled;
+      break;
     }
     stats.split_edges = CountSplit(errors.split);
     const StepOutcome outcome =
