@@ -295,7 +295,13 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     stats.quality = SummarizeQuality(state.tet_quality);
     stats.seconds = SecondsSince(iteration_start);
     result.iterations.push_back(stats);
-    if (options.on_iteration) options.on_iteration(stats, state.mesh);
+    if (options.on_iteration) {
+      // The labels live beside the mesh while refining; lent to it for the callback so that an
+      // iteration's mesh carries them like the result does.
+      state.mesh.labels.swap(state.tet_label);
+      options.on_iteration(stats, state.mesh);
+      state.mesh.labels.swap(state.tet_label);
+    }
   }
   result.final_quality = SummarizeQuality(state.tet_quality);
   // Without a subdivision the result is the (validated, maybe reoriented) input.

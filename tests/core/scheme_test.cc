@@ -56,8 +56,15 @@ TEST_P(EveryScheme, LabelsAndParentsFollowEveryChildAndRegionVolumesStay) {
     o.epsilon = c.epsilon;
     o.max_iterations = 5;
     o.track_parents = true;
+    // Every iteration's mesh carries its labels too (what --every-iteration writes).
+    int iterations_seen = 0;
+    o.on_iteration = [&](const IterationStats&, const Mesh& m) {
+      ++iterations_seen;
+      EXPECT_EQ(m.labels.size(), m.tets.size());
+    };
     auto r = Refine(c.volume, c.mesh, o);
     ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_GT(iterations_seen, 0);
     ASSERT_GT(r->mesh.tets.size(), c.mesh.tets.size());
     ASSERT_EQ(r->mesh.labels.size(), r->mesh.tets.size());
     ASSERT_EQ(r->tet_parent.size(), r->mesh.tets.size());
