@@ -42,10 +42,21 @@ void CheckMeshParser(const MeshFormatUnderTest& format, const uint8_t* data, siz
     TETREFINE_FUZZ_CHECK(SameBits(file->tet_quality, again->tet_quality),
                          "tet_quality changed in a round trip");
   }
-  // Medit always reads a tet reference; a file without iterations is written with zeros.
-  if (!file->tet_iteration.empty()) {
+  if (format.keeps_iteration) {
     TETREFINE_FUZZ_CHECK(SameBits(file->tet_iteration, again->tet_iteration),
                          "tet_iteration changed in a round trip");
+  }
+  // Medit always reads a tet reference; a file without labels is written with zeros.
+  if (!file->mesh.labels.empty()) {
+    TETREFINE_FUZZ_CHECK(SameBits(file->mesh.labels, again->mesh.labels),
+                         "mesh.labels changed in a round trip");
+    if (format.keeps_label_name) {
+      TETREFINE_FUZZ_CHECK(file->label_name == again->label_name,
+                           "label_name changed in a round trip");
+    }
+  }
+  if (format.keeps_frame) {
+    TETREFINE_FUZZ_CHECK(file->frame == again->frame, "frame changed in a round trip");
   }
 }
 

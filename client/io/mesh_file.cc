@@ -8,6 +8,22 @@
 
 namespace tetrefine::io {
 
+absl::string_view FrameTag(MeshFrame frame) {
+  switch (frame) {
+    case MeshFrame::kRas:
+      return "RAS";
+    case MeshFrame::kLps:
+      return "LPS";
+    case MeshFrame::kUntagged:
+      break;
+  }
+  return "";
+}
+
+std::string LabelArrayName(const MeshFile& file) {
+  return file.label_name.empty() ? std::string("label") : file.label_name;
+}
+
 absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path) {
   const Mesh& mesh = file.mesh;
   const size_t v = mesh.points.size();
@@ -26,6 +42,11 @@ absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path) {
   if (!file.tet_quality.empty() && file.tet_quality.size() != t) {
     return FileError(path, absl::StrCat("cell data \"quality\" has ", file.tet_quality.size(),
                                         " entries for ", t, " tetrahedra"));
+  }
+  if (!file.mesh.labels.empty() && file.mesh.labels.size() != t) {
+    return FileError(
+        path, absl::StrCat("cell data \"", LabelArrayName(file), "\" has ", file.mesh.labels.size(),
+                           " entries for ", t, " tetrahedra"));
   }
   for (size_t i = 0; i < v; ++i) {
     for (int a = 0; a < 3; ++a) {

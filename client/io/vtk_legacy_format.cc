@@ -269,8 +269,7 @@ absl::StatusOr<MeshFile> ParseVtkLegacy(absl::string_view text, absl::string_vie
     file.mesh.points[i] = {p.points[3 * i], p.points[3 * i + 1], p.points[3 * i + 2]};
   }
   file.mesh.values = std::move(p.values);
-  int64_t ignored = 0;
-  if (absl::Status s = CellsToTets(p.cells, p.cell_data, v, path, file, ignored); !s.ok()) {
+  if (absl::Status s = CellsToTets(p.cells, p.cell_data, v, path, file); !s.ok()) {
     return s;
   }
   if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
