@@ -33,8 +33,9 @@ absl::string_view FrameTag(MeshFrame frame);
 //                  as "region" or "CellEntityIds"), or empty. Core refinement passes them on
 //                  to every child tet.
 //   label_name:    what the input called mesh.labels: "gmsh:physical", "medit:ref", or the VTK
-//                  cell array's name. Writers of VTK formats use it as the array name ("label"
-//                  when empty); Gmsh and Medit store labels in their own slots whatever the name.
+//                  cell array's name; one of the names LabelNameRank recognises, or empty.
+//                  Writers of VTK formats use it as the array name ("label" when empty); Gmsh
+//                  and Medit store labels in their own slots whatever the name.
 //   frame:         the frame tag of the file read, and the one to write.
 struct MeshFile {
   tetrefine::Mesh mesh;
@@ -50,7 +51,8 @@ struct MeshFile {
 std::string LabelArrayName(const MeshFile& file);
 
 // OK when every array has its documented length (or is empty where allowed), every index is
-// below V (and V fits uint32), and every coordinate, value and quality is finite. The message
+// below V (and V fits uint32), every coordinate, value and quality is finite, and label_name is
+// empty or a recognised label name. The message
 // starts with `path` and names the first offending entry.
 absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path);
 

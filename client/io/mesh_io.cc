@@ -11,21 +11,25 @@
 namespace tetrefine::io {
 namespace {
 
-enum class MeshFormat { kVtu, kVtkLegacy, kGmsh, kMedit, kUnknown };
+enum class MeshFormat { kVtu, kVtkLegacy, kGmsh, kMedit, kMeshb, kUnknown };
 
 MeshFormat FormatOf(const std::string& path) {
   if (absl::EndsWithIgnoreCase(path, ".vtu")) return MeshFormat::kVtu;
   if (absl::EndsWithIgnoreCase(path, ".vtk")) return MeshFormat::kVtkLegacy;
   if (absl::EndsWithIgnoreCase(path, ".msh")) return MeshFormat::kGmsh;
   if (absl::EndsWithIgnoreCase(path, ".mesh")) return MeshFormat::kMedit;
+  if (absl::EndsWithIgnoreCase(path, ".meshb")) return MeshFormat::kMeshb;
   return MeshFormat::kUnknown;
 }
 
 absl::Status UnknownExtension(const std::string& path) {
-  return FileError(path, "unknown extension for a mesh: expected .vtu, .vtk, .msh or .mesh");
+  return FileError(path,
+                   "unknown extension for a mesh: expected .vtu, .vtk, .msh, .mesh or .meshb");
 }
 
 }  // namespace
+
+bool IsMeshPath(const std::string& path) { return FormatOf(path) != MeshFormat::kUnknown; }
 
 absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   const MeshFormat format = FormatOf(path);
@@ -46,6 +50,9 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
     case MeshFormat::kMedit:
       file = ParseMedit(*text, path);
       break;
+    case MeshFormat::kMeshb:
+      file = ParseMeshb(*text, path);
+      break;
     case MeshFormat::kUnknown:
       break;
   }
@@ -56,23 +63,27 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   return file;
 }
 
-absl::Status WriteMesh(const std::string& path, const MeshFile& file) {
+absl::Status WriteMesh(const std::string& path, const MeshFile& file,
+                       const MeshWriteOptions& options) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
   if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
   std::string bytes;
   switch (format) {
     case MeshFormat::kVtu:
-      bytes = FormatVtu(file);
+      bytes = FormatVtu(file, options.vtu);
       break;
     case MeshFormat::kVtkLegacy:
-      bytes = FormatVtkLegacy(file);
+      bytes = FormatVtkLegacy(file, {.binary = options.binary});
       break;
     case MeshFormat::kGmsh:
-      bytes = FormatGmsh41(file);
+      bytes = FormatGmsh41(file, {.binary = options.binary});
       break;
     case MeshFormat::kMedit:
       bytes = FormatMedit(file);
+      break;
+    case MeshFormat::kMeshb:
+      bytes = FormatMeshb(file, {.version = options.meshb_version});
       break;
     case MeshFormat::kUnknown:
       break;

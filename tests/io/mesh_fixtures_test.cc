@@ -1,6 +1,8 @@
 // Files written by real tools (tests/data/meshes, made by make_fixtures.py there with VTK 9.1,
 // meshio and Gmsh 4.8): every variant reads as the same tetrahedra, labels, values and RAS
 // points, and non-tet cells are skipped.
+#include <cmath>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -64,6 +66,21 @@ std::vector<FixtureCase> AllFixtures() {
     all.push_back({name, "region"});
   }
   all.push_back({"slicer_lps.vtu", "region", MeshFrame::kLps});
+  for (const char* name : {"vtk9_legacy42_ascii.vtk", "vtk9_legacy42_binary.vtk",
+                           "vtk9_legacy51_ascii.vtk", "vtk9_legacy51_binary.vtk"}) {
+    all.push_back({name, "region"});
+  }
+  all.push_back({"slicer_lps.vtk", "region", MeshFrame::kLps});
+  for (const char* name : {"meshio.vtu", "meshio_ascii.vtk", "meshio_binary.vtk"}) {
+    all.push_back({name, "region"});
+  }
+  for (const char* name : {"meshio_22_ascii.msh", "meshio_22_binary.msh", "meshio_41_ascii.msh",
+                           "meshio_41_binary.msh"}) {
+    all.push_back({name, "gmsh:physical"});
+  }
+  for (const char* name : {"meshio.mesh", "meshio.meshb"}) {
+    all.push_back({name, "medit:ref", MeshFrame::kUntagged, /*values=*/false});
+  }
   return all;
 }
 
@@ -73,6 +90,38 @@ INSTANTIATE_TEST_SUITE_P(IoFixtures, IoFixtureTest, ::testing::ValuesIn(AllFixtu
                            for (char& c : name) c = std::isalnum(c) ? c : '_';
                            return name;
                          });
+
+// Gmsh 4.8 meshed two unit cubes as physical volumes 5 and 7 (two_cubes.geo); every variant it
+// writes reads as the same tets with the same labels, and each region keeps its unit volume.
+TEST(IoFixtureTest, GmshPhysicalVolumesInEveryVariant) {
+  absl::StatusOr<MeshFile> reference = ReadMesh(FixturePath("gmsh_41_binary.msh"));
+  ASSERT_TRUE(reference.ok()) << reference.status();
+  EXPECT_EQ(reference->label_name, "gmsh:physical");
+  std::map<int32_t, double> volume;
+  for (size_t t = 0; t < reference->mesh.tets.size(); ++t) {
+    const Tet& tet = reference->mesh.tets[t];
+    const auto& p = reference->mesh.points;
+    volume[reference->mesh.labels[t]] +=
+        std::abs(SignedVolume6(p[tet[0]], p[tet[1]], p[tet[2]], p[tet[3]])) / 6;
+  }
+  ASSERT_EQ(volume.size(), 2u);
+  EXPECT_NEAR(volume[5], 1.0, 1e-12);
+  EXPECT_NEAR(volume[7], 1.0, 1e-12);
+  for (const char* name : {"gmsh_41_ascii.msh", "gmsh_22_ascii.msh", "gmsh_22_binary.msh"}) {
+    SCOPED_TRACE(name);
+    absl::StatusOr<MeshFile> file = ReadMesh(FixturePath(name));
+    ASSERT_TRUE(file.ok()) << file.status();
+    EXPECT_EQ(file->mesh.tets, reference->mesh.tets);
+    EXPECT_EQ(file->mesh.labels, reference->mesh.labels);
+    // ASCII files print 16 significant digits: equal to 1e-15 relative, not to the bit.
+    ASSERT_EQ(file->mesh.points.size(), reference->mesh.points.size());
+    for (size_t i = 0; i < file->mesh.points.size(); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(file->mesh.points[i][a], reference->mesh.points[i][a], 1e-15);
+      }
+    }
+  }
+}
 
 }  // namespace
 }  // namespace tetrefine::io

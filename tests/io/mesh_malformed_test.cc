@@ -29,6 +29,7 @@ MeshFile SmallMesh() {
   RandomMeshOptions options;
   options.vertices = 6;
   options.tets = 4;
+  options.labels = true;
   return RandomMesh(11, options);
 }
 
@@ -41,7 +42,10 @@ std::string Written(const std::string& extension, const MeshFile& mesh) {
   if (extension == ".asc.vtu") return FormatVtu(mesh, {.layout = VtuWriteOptions::Layout::kAscii});
   if (extension == ".vtu") return FormatVtu(mesh);
   if (extension == ".vtk") return FormatVtkLegacy(mesh);
+  if (extension == ".bin.vtk") return FormatVtkLegacy(mesh, {.binary = true});
   if (extension == ".msh") return FormatGmsh41(mesh);
+  if (extension == ".bin.msh") return FormatGmsh41(mesh, {.binary = true});
+  if (extension == ".meshb") return FormatMeshb(mesh);
   return FormatMedit(mesh);
 }
 
@@ -173,7 +177,7 @@ INSTANTIATE_TEST_SUITE_P(
         // Declared counts larger than the file: refused before allocating.
         Edit{".mesh", "Vertices\n5\n", "Vertices\n5000000000\n", "out of range"},
         Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n2000000000\n", "bytes remain"},
-        Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n3\n", "tetrahedron vertex index"},
+        Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n3\n", "bytes remain"},
         Edit{".mesh", "1 2 3 4 ", "1 2 3 9 ", "out of range"},
         Edit{".mesh", "0.125 0.25 0.5", "0.125 nan 0.5", "not finite"},
         Edit{".vtk", "POINTS 5 double", "POINTS 4000000 double", "bytes remain"},
@@ -193,6 +197,20 @@ INSTANTIATE_TEST_SUITE_P(
         Edit{".vtu", "vtkZLibDataCompressor", "vtkZstdDataCompressor", "is not supported"},
         Edit{".vtu", "encoding=\"raw\"", "encoding=\"hex\"", "neither raw nor base64"},
         Edit{".vtu", "</VTKFile>", "</VTKFil", "does not end with"},
+        Edit{".bin.vtk", "BINARY", "BINARX", "ASCII or BINARY"},
+        Edit{".bin.vtk", "POINTS 5 double", "POINTS 6 double", "unexpected keyword"},
+        Edit{".bin.vtk", "CELL_TYPES 2", "CELL_TYPES 3", "unexpected keyword"},
+        Edit{".vtk", "CELL_TYPES 2\n10\n", "CELL_TYPES 2\n24\n",
+             "1 quadratic tetrahedron (tetra10) beside 1 tetrahedron"},
+        Edit{".vtk", "DATASET UNSTRUCTURED_GRID\n", "DATASET UNSTRUCTURED_GRID\nMETADATA\nX\n",
+             "are all required"},
+        Edit{".bin.msh", "4.1 1 8", "4.1 1 4", "data size 4"},
+        Edit{".bin.msh", "$EndElements", "$EndElementz", "expected $EndElements"},
+        Edit{".bin.msh", "$EndNodes", "", "expected $EndNodes"},
+        Edit{".msh", "3 1 4 2\n", "3 1 99 2\n", "unknown element type 99"},
+        Edit{".msh", "0 0 0 1\n1 ", "0 0 0 1\n1e3 ", "an entity tag"},
+        Edit{".mesh", "Tetrahedra\n2\n", "Hexahedra\n1\n1 2 3 4 1 2 3 4 0\nTetrahedra\n2\n",
+             "1 hexahedron beside 2 tetrahedra"},
         Edit{".b64.vtu", "format=\"binary\">\n          ", "format=\"binary\">\n          !",
              "invalid base64"},
         Edit{".b64.vtu", "header_type=\"UInt64\"", "header_type=\"UInt32\"", "header says"},
@@ -210,7 +228,8 @@ INSTANTIATE_TEST_SUITE_P(
     });
 
 INSTANTIATE_TEST_SUITE_P(IoFormats, IoMeshMalformedTest,
-                         ::testing::Values(".vtu", ".b64.vtu", ".asc.vtu", ".vtk", ".msh", ".mesh"),
+                         ::testing::Values(".vtu", ".b64.vtu", ".asc.vtu", ".vtk", ".bin.vtk",
+                                           ".msh", ".bin.msh", ".mesh", ".meshb"),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string name = info.param.substr(1);
                            for (char& c : name) c = c == '.' ? '_' : c;
