@@ -13,6 +13,7 @@
 #include "client/io/byte_order.h"
 #include "client/io/cell_census.h"
 #include "client/io/gmsh_format.h"
+#include "client/io/huge_pages.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
 
@@ -339,7 +340,9 @@ absl::Status GmshParser::StartNodes(int64_t count) {
   if (count > (int64_t{1} << 32) - 1) return in_.Error("too many nodes");
   // A node is at least "t x y z" with separators (8 bytes), or 4 + 24 bytes in binary.
   if (absl::Status s = in_.CheckCount(count, binary_ ? 28 : 8, "nodes"); !s.ok()) return s;
+  ReserveHuge(points_, count);
   points_.resize(count);
+  ReserveHuge(node_tags_, count);
   node_tags_.resize(count);
   have_nodes_ = true;
   return absl::OkStatus();
@@ -586,7 +589,9 @@ absl::Status GmshParser::Elements41() {
     }
   }
   if (absl::Status s = StartElements(*count); !s.ok()) return s;
-  tets_.reserve(std::min<int64_t>(*count, 1 << 26));
+  ReserveHuge(tets_, std::min<int64_t>(*count, 1 << 26));
+  ReserveHuge(tet_tags_, std::min<int64_t>(*count, 1 << 26));
+  ReserveHuge(labels_, std::min<int64_t>(*count, 1 << 26));
   int64_t seen = 0;
   int64_t nodes[125];
   for (int64_t b = 0; b < *blocks; ++b) {
@@ -825,6 +830,7 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
   MeshFile file;
   file.mesh.points = std::move(points_);
   file.mesh.values = std::move(values_);
+  ReserveHuge(file.mesh.tets, t);
   file.mesh.tets.resize(t);
   for (size_t i = 0; i < t; ++i) file.mesh.tets[i] = tets_[at(i)];
   if (!iteration_.empty()) {

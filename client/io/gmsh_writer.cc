@@ -1,12 +1,13 @@
 // Writing Gmsh .msh 4.1, ASCII or binary. See gmsh_format.h for the layout.
 #include <algorithm>
 #include <cstring>
-#include <map>
 #include <string>
 #include <vector>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "client/io/gmsh_format.h"
+#include "client/io/huge_pages.h"
 #include "client/io/number_text.h"
 
 namespace tetrefine::io {
@@ -18,10 +19,31 @@ constexpr int kGmshTet = 4;
 // tells readers which order that was.
 template <typename T>
 void AppendNative(std::string& out, const T* values, size_t n) {
-  const size_t start = out.size();
-  out.resize(start + n * sizeof(T));
-  if (n > 0) std::memcpy(out.data() + start, values, n * sizeof(T));
+  if (n > 0) out.append(reinterpret_cast<const char*>(values), n * sizeof(T));
 }
+
+// Fixed-size records appended through a small buffer: no temporary the size of the section,
+// no zero-filling of `out` before it is written.
+class RecordWriter {
+ public:
+  explicit RecordWriter(std::string& out) : out_(out) {}
+  ~RecordWriter() { Flush(); }
+  template <typename T>
+  void Put(T value) {
+    if (used_ + sizeof(T) > sizeof(buffer_)) Flush();
+    std::memcpy(buffer_ + used_, &value, sizeof(T));
+    used_ += sizeof(T);
+  }
+  void Flush() {
+    out_.append(buffer_, used_);
+    used_ = 0;
+  }
+
+ private:
+  std::string& out_;
+  char buffer_[1 << 16];
+  size_t used_ = 0;
+};
 template <typename T>
 void AppendNative(std::string& out, T value) {
   AppendNative(out, &value, 1);
@@ -44,15 +66,25 @@ std::vector<Group> GroupByLabel(const MeshFile& file) {
     groups[0].tets.resize(t);
     for (size_t i = 0; i < t; ++i) groups[0].tets[i] = static_cast<uint32_t>(i);
   } else {
-    std::map<int32_t, size_t> index;  // label -> group, in label order
+    absl::flat_hash_map<int32_t, size_t> index;  // label -> group
     for (int32_t label : file.mesh.labels) index.emplace(label, 0);
-    for (auto& [label, g] : index) {
-      g = groups.size();
+    std::vector<int32_t> labels;
+    for (const auto& [label, g] : index) labels.push_back(label);
+    std::sort(labels.begin(), labels.end());  // groups (entities) in label order
+    for (int32_t label : labels) {
+      index[label] = groups.size();
       groups.emplace_back();
       groups.back().label = label;
     }
+    size_t g = 0;
+    int32_t last = labels.front();
     for (size_t i = 0; i < t; ++i) {
-      groups[index[file.mesh.labels[i]]].tets.push_back(static_cast<uint32_t>(i));
+      const int32_t label = file.mesh.labels[i];
+      if (label != last) {  // labels come in runs; look up only where they change
+        g = index[label];
+        last = label;
+      }
+      groups[g].tets.push_back(static_cast<uint32_t>(i));
     }
   }
   for (Group& g : groups) {
@@ -83,14 +115,13 @@ void AppendData(std::string& out, const char* section, const char* name, const T
                 bool binary) {
   AppendDataHeader(out, section, name, n);
   if (binary) {
-    std::string block(n * 12, '\0');
-    for (size_t i = 0; i < n; ++i) {
-      const int32_t tag = static_cast<int32_t>(i + 1);
-      const double value = static_cast<double>(values[i]);
-      std::memcpy(block.data() + 12 * i, &tag, 4);
-      std::memcpy(block.data() + 12 * i + 4, &value, 8);
+    {
+      RecordWriter w(out);
+      for (size_t i = 0; i < n; ++i) {
+        w.Put(static_cast<int32_t>(i + 1));
+        w.Put(static_cast<double>(values[i]));
+      }
     }
-    out += block;
     out += '\n';
   } else {
     for (size_t i = 0; i < n; ++i) {
@@ -118,6 +149,9 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
   const std::vector<Group> groups = GroupByLabel(file);
 
   std::string out = absl::StrCat("$MeshFormat\n4.1 ", binary ? 1 : 0, " 8\n");
+  // Binary sizes are known; text takes about as much again per number.
+  ReserveHuge(out, 1024 + 80 * groups.size() + v * (8 + 24 + 12) + t * (40 + 24) +
+                       (binary ? 0 : v * 40 + t * 20));
   if (binary) {
     AppendNative<int32_t>(out, 1);
     out += '\n';
@@ -167,9 +201,10 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
       AppendNative<int32_t>(out, 1);
       AppendNative<int32_t>(out, 0);
       AppendNative<uint64_t>(out, v);
-      std::vector<uint64_t> tags(v);
-      for (size_t i = 0; i < v; ++i) tags[i] = i + 1;
-      AppendNative(out, tags.data(), v);
+      {
+        RecordWriter w(out);
+        for (size_t i = 0; i < v; ++i) w.Put(uint64_t{i + 1});
+      }
       static_assert(sizeof(Vec3) == 3 * sizeof(double));
       AppendNative(out, mesh.points.empty() ? nullptr : mesh.points[0].data(), 3 * v);
     }
@@ -208,13 +243,11 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
       AppendNative<int32_t>(out, static_cast<int32_t>(g + 1));
       AppendNative<int32_t>(out, kGmshTet);
       AppendNative<uint64_t>(out, tets.size());
-      std::vector<uint64_t> rows(5 * tets.size());
-      for (size_t k = 0; k < tets.size(); ++k) {
-        const Tet& tet = mesh.tets[tets[k]];
-        rows[5 * k] = uint64_t{tets[k]} + 1;
-        for (int c = 0; c < 4; ++c) rows[5 * k + 1 + c] = uint64_t{tet[c]} + 1;
+      RecordWriter w(out);
+      for (uint32_t i : tets) {
+        w.Put(uint64_t{i} + 1);
+        for (uint32_t c : mesh.tets[i]) w.Put(uint64_t{c} + 1);
       }
-      AppendNative(out, rows.data(), rows.size());
     } else {
       absl::StrAppend(&out, "3 ", g + 1, " ", kGmshTet, " ", tets.size(), "\n");
       for (uint32_t i : tets) {

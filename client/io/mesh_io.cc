@@ -34,24 +34,25 @@ bool IsMeshPath(const std::string& path) { return FormatOf(path) != MeshFormat::
 absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
-  absl::StatusOr<std::string> text = ReadFileBytes(path);
-  if (!text.ok()) return text.status();
+  absl::StatusOr<FileView> view = FileView::Open(path);
+  if (!view.ok()) return view.status();
+  const absl::string_view text = view->bytes();
   absl::StatusOr<MeshFile> file;
   switch (format) {
     case MeshFormat::kVtu:
-      file = ParseVtu(*text, path);
+      file = ParseVtu(text, path);
       break;
     case MeshFormat::kVtkLegacy:
-      file = ParseVtkLegacy(*text, path);
+      file = ParseVtkLegacy(text, path);
       break;
     case MeshFormat::kGmsh:
-      file = ParseGmsh(*text, path);
+      file = ParseGmsh(text, path);
       break;
     case MeshFormat::kMedit:
-      file = ParseMedit(*text, path);
+      file = ParseMedit(text, path);
       break;
     case MeshFormat::kMeshb:
-      file = ParseMeshb(*text, path);
+      file = ParseMeshb(text, path);
       break;
     case MeshFormat::kUnknown:
       break;
@@ -63,8 +64,8 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   return file;
 }
 
-absl::Status WriteMesh(const std::string& path, const MeshFile& file,
-                       const MeshWriteOptions& options) {
+absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
+                                       const MeshWriteOptions& options) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
   if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
@@ -88,7 +89,14 @@ absl::Status WriteMesh(const std::string& path, const MeshFile& file,
     case MeshFormat::kUnknown:
       break;
   }
-  return WriteFileAtomically(path, bytes);
+  return bytes;
+}
+
+absl::Status WriteMesh(const std::string& path, const MeshFile& file,
+                       const MeshWriteOptions& options) {
+  absl::StatusOr<std::string> bytes = FormatMesh(path, file, options);
+  if (!bytes.ok()) return bytes.status();
+  return WriteFileAtomically(path, *bytes);
 }
 
 }  // namespace tetrefine::io

@@ -39,6 +39,11 @@ struct MeshWriteOptions {
 absl::Status WriteMesh(const std::string& path, const MeshFile& file,
                        const MeshWriteOptions& options = {});
 
+// The bytes WriteMesh would write for `path` (the format from its extension), without writing
+// them: for callers that send or time the encoding on its own.
+absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
+                                       const MeshWriteOptions& options = {});
+
 // True when `path` has one of the mesh extensions above.
 bool IsMeshPath(const std::string& path);
 

@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "client/io/byte_order.h"
 #include "client/io/cell_census.h"
+#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
 #include "client/io/medit_format.h"
 
@@ -195,6 +196,7 @@ class MeshbReader {
     const size_t entry = 3 * sizes_.real + sizes_.integer;
     absl::StatusOr<absl::string_view> data = Entries(*count, entry, "vertices");
     if (!data.ok()) return data.status();
+    ReserveHuge(mesh.points, *count);
     mesh.points.resize(*count);
     for (int64_t i = 0; i < *count; ++i) {
       for (int a = 0; a < 3; ++a) {
@@ -300,7 +302,7 @@ std::string FormatMeshb(const MeshFile& file, const MeshbWriteOptions& options) 
   }
   MeshbWriter w(version);
   const Sizes& s = w.sizes();
-  w.out().reserve(64 + v * (3 * s.real + s.integer) + t * 5 * s.integer);
+  ReserveHuge(w.out(), 64 + v * (3 * s.real + s.integer) + t * 5 * s.integer);
   w.Word(1);
   w.Word(version);
   w.Keyword(kDimension, 4);

@@ -6,6 +6,7 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "client/io/cell_census.h"
+#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
 
 namespace tetrefine::io {
@@ -64,7 +65,7 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
 
   Mesh& mesh = file.mesh;
   mesh.tets.clear();
-  mesh.tets.reserve(tets);
+  ReserveHuge(mesh.tets, tets);
   file.tet_iteration.clear();
   file.tet_quality.clear();
   file.mesh.labels.clear();

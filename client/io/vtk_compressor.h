@@ -7,6 +7,8 @@
 #include "absl/status/status.h"
 #include "absl/strings/string_view.h"
 
+struct libdeflate_compressor;  // libdeflate.h
+
 namespace tetrefine::io {
 
 // The block compressors of VTK XML files (the VTKFile "compressor" attribute). VTK compresses
@@ -31,8 +33,24 @@ size_t MaxExpansion(VtkCompressor compressor);
 absl::Status DecompressBlock(VtkCompressor compressor, absl::string_view compressed, char* out,
                              size_t decoded_size);
 
-// Appends the compressed form of `raw` to `out`. `level` is the compressor's own scale (zlib and
-// lzma 1-9; LZ4 ignores it).
-void CompressBlock(VtkCompressor compressor, int level, absl::string_view raw, std::string& out);
+// Compresses blocks one after another, reusing its coder state: one per thread.
+// `level` is the compressor's own scale (zlib 1-12 as libdeflate counts, lzma 0-9; LZ4 ignores
+// it). zlib streams are made by libdeflate: the same format VTK reads, about 2.3x faster than
+// zlib's own deflate at level 1 on refined meshes for 6% more bytes (bench/mesh_io_bench).
+class BlockCompressor {
+ public:
+  BlockCompressor(VtkCompressor compressor, int level);
+  ~BlockCompressor();
+  BlockCompressor(const BlockCompressor&) = delete;
+  BlockCompressor& operator=(const BlockCompressor&) = delete;
+
+  // Appends the compressed form of `raw` to `out`.
+  void Compress(absl::string_view raw, std::string& out);
+
+ private:
+  VtkCompressor compressor_;
+  int level_;
+  ::libdeflate_compressor* deflate_ = nullptr;
+};
 
 }  // namespace tetrefine::io

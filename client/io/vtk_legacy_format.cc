@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/strip.h"
 #include "client/io/byte_order.h"
+#include "client/io/huge_pages.h"
 #include "client/io/label_names.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
@@ -125,11 +126,14 @@ absl::Status LegacyParser::ReadDoubles(int64_t count, absl::string_view type,
   if (binary_) {
     absl::StatusOr<absl::string_view> bytes = BinaryBlock(count, VtkScalarSize(*scalar), what);
     if (!bytes.ok()) return bytes.status();
+    ReserveHuge(out, count);
+    ReserveHuge(out, count);
     out.resize(count);
     ScalarsToDoubles(*bytes, *scalar, ByteOrder::kBig, count, out.data());
     return absl::OkStatus();
   }
   if (absl::Status s = in_.CheckCount(count, 2, what); !s.ok()) return s;
+  ReserveHuge(out, count);
   out.resize(count);
   for (double& x : out) {
     absl::StatusOr<double> value = in_.Double(what);
@@ -147,6 +151,8 @@ absl::Status LegacyParser::ReadInts(int64_t count, absl::string_view type, absl:
   if (binary_) {
     absl::StatusOr<absl::string_view> bytes = BinaryBlock(count, VtkScalarSize(*scalar), what);
     if (!bytes.ok()) return bytes.status();
+    ReserveHuge(out, count);
+    ReserveHuge(out, count);
     out.resize(count);
     const size_t bad = ScalarsToInt64s(*bytes, *scalar, ByteOrder::kBig, count, out.data());
     if (bad != static_cast<size_t>(count)) {
@@ -155,6 +161,7 @@ absl::Status LegacyParser::ReadInts(int64_t count, absl::string_view type, absl:
     return absl::OkStatus();
   }
   if (absl::Status s = in_.CheckCount(count, 2, what); !s.ok()) return s;
+  ReserveHuge(out, count);
   out.resize(count);
   for (int64_t& x : out) {
     absl::StatusOr<double> value = in_.Double(what);
@@ -489,6 +496,7 @@ absl::StatusOr<MeshFile> LegacyParser::Parse() {
   MeshFile file;
   file.frame = frame_;
   const size_t v = points_.size() / 3;
+  ReserveHuge(file.mesh.points, v);
   file.mesh.points.resize(v);
   for (size_t i = 0; i < v; ++i) {
     file.mesh.points[i] = {points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]};

@@ -9,6 +9,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/io/byte_stream.h"
+#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
 #include "client/io/number_text.h"
 #include "client/io/vtk_scalar.h"
@@ -57,6 +58,7 @@ absl::Status ParseTokens(absl::string_view text, uint64_t count, std::vector<T>&
     return error(absl::StrCat("needs ", count, " values but holds only ", text.size(),
                               " characters (truncated?)"));
   }
+  ReserveHuge(out, count);
   out.resize(count);
   size_t pos = 0;
   uint64_t n = 0;
@@ -183,7 +185,9 @@ absl::StatusOr<std::string> VtuArrayReader::Decode(pugi::xml_node array, ByteStr
   }
   absl::StatusOr<absl::string_view> data = read(start[blocks], "compressed data");
   if (!data.ok()) return data.status();
-  std::string out(total, '\0');
+  std::string out;
+  ReserveHuge(out, total);
+  out.resize(total);
   // Blocks decode independently; the first failing block (by index) is reported.
   std::vector<absl::Status> failures(blocks);
   tbb::parallel_for(uint64_t{0}, blocks, [&](uint64_t b) {
@@ -218,6 +222,7 @@ absl::StatusOr<std::vector<double>> VtuArrayReader::Doubles(pugi::xml_node array
   }
   absl::StatusOr<std::string> bytes = Bytes(array, count * VtkScalarSize(*type));
   if (!bytes.ok()) return bytes.status();
+  ReserveHuge(out, count);
   out.resize(count);
   ScalarsToDoubles(*bytes, *type, enc_.order, count, out.data());
   return out;
@@ -248,6 +253,7 @@ absl::StatusOr<std::vector<int64_t>> VtuArrayReader::Int64s(pugi::xml_node array
   }
   absl::StatusOr<std::string> bytes = Bytes(array, count * VtkScalarSize(*type));
   if (!bytes.ok()) return bytes.status();
+  ReserveHuge(out, count);
   out.resize(count);
   const size_t bad = ScalarsToInt64s(*bytes, *type, enc_.order, count, out.data());
   if (bad != count) return Error(array, absl::StrCat("value ", bad, " is not an integer index"));

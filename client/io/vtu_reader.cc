@@ -8,6 +8,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/strip.h"
+#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
 #include "client/io/label_names.h"
 #include "client/io/mesh_frame.h"
@@ -192,6 +193,7 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
   }
   absl::StatusOr<std::vector<double>> xyz = arrays.Doubles(points_array, 3 * v);
   if (!xyz.ok()) return xyz.status();
+  ReserveHuge(file.mesh.points, v);
   file.mesh.points.resize(v);
   for (int64_t i = 0; i < v; ++i) {
     file.mesh.points[i] = {(*xyz)[3 * i], (*xyz)[3 * i + 1], (*xyz)[3 * i + 2]};

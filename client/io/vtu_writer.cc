@@ -1,6 +1,8 @@
 // Writing VTK XML unstructured grids (.vtu). See vtu_format.h for the layout.
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -9,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "client/io/base64.h"
 #include "client/io/byte_order.h"
+#include "client/io/huge_pages.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
 #include "client/io/vtk_cells.h"
@@ -18,32 +21,58 @@
 namespace tetrefine::io {
 namespace {
 
-// zlib level 1 when the caller does not choose. Measured on a refined 1.6 M-tet mesh (value,
-// iteration, quality and label arrays; bench/file_formats.sh): level 1 gives 21.5 bytes per tet
-// at about 5x the speed of level 6 (20.2 bytes per tet), whose extra 6% saving is not worth it.
+// Level 1 when the caller does not choose: on a refined 1.6 M-tet mesh (value, iteration,
+// quality and labels; bench/mesh_io_bench) libdeflate's level 1 writes 16.2 bytes per tet and
+// level 6 16.1 at 1.8x the time; zlib's own deflate gave 15.2 (level 1) and 14.9 (level 6) at
+// 2.3x and 7x the time of libdeflate level 1. Speed wins: the file is well under the 25 bytes
+// per tet aimed at either way.
 constexpr int kDefaultZlibLevel = 1;
 constexpr int kDefaultLzmaLevel = 1;
 
-// One array to write: where it goes, its XML attributes and its little-endian bytes.
+// One array to write: where it goes, its XML attributes, its little-endian bytes (a view of the
+// mesh's own memory when the host is little-endian, or of `owned`) and, once compressed, its
+// blocks.
 struct OutArray {
   std::string element;     // "DataArray" or "Array" (field data)
   std::string attributes;  // type, Name, NumberOfComponents / NumberOfTuples
   VtkScalar type = VtkScalar::kUInt8;
   bool is_string = false;  // a String array: raw holds NUL-terminated strings
-  std::string raw;
-  std::string encoded;  // header + data, compressed when asked
+  std::string owned;
+  absl::string_view raw;
+  std::vector<std::string> blocks;  // compressed blocks (compressed files only)
+
+  // Header plus data as stored in the file.
+  uint64_t EncodedSize(bool compressed) const {
+    if (!compressed) return 8 + raw.size();
+    uint64_t size = 8 * (3 + blocks.size());
+    for (const std::string& b : blocks) size += b.size();
+    return size;
+  }
 };
 
 template <typename T>
-std::string LittleBytes(const T* values, size_t n) {
-  std::string raw(n * sizeof(T), '\0');
+void SetRaw(OutArray& a, const T* values, size_t n) {
   if (kNativeOrder == ByteOrder::kLittle) {
-    if (n > 0) std::memcpy(raw.data(), values, n * sizeof(T));
-  } else {
-    raw.clear();
-    for (size_t i = 0; i < n; ++i) AppendLittle(raw, values[i]);
+    a.raw = n == 0 ? absl::string_view()
+                   : absl::string_view(reinterpret_cast<const char*>(values), n * sizeof(T));
+    return;
   }
-  return raw;
+  a.owned.clear();
+  for (size_t i = 0; i < n; ++i) AppendLittle(a.owned, values[i]);
+  a.raw = a.owned;
+}
+
+template <typename T>
+void SetOwned(OutArray& a, const std::vector<T>& values) {
+  a.owned.clear();
+  if (kNativeOrder == ByteOrder::kLittle) {
+    ReserveHuge(a.owned, values.size() * sizeof(T));
+    a.owned.resize(values.size() * sizeof(T));
+    if (!values.empty()) std::memcpy(a.owned.data(), values.data(), a.owned.size());
+  } else {
+    for (const T& v : values) AppendLittle(a.owned, v);
+  }
+  a.raw = a.owned;
 }
 
 std::string EscapeXml(absl::string_view text) {
@@ -69,84 +98,76 @@ std::string EscapeXml(absl::string_view text) {
   return out;
 }
 
-template <typename T>
-OutArray Numeric(absl::string_view name, VtkScalar type, int components, const T* values,
-                 size_t n) {
+OutArray Numeric(absl::string_view name, VtkScalar type, int components) {
   OutArray a;
   a.element = "DataArray";
   a.type = type;
   a.attributes =
       absl::StrCat("type=\"", VtkScalarXmlName(type), "\" Name=\"", EscapeXml(name), "\"");
   if (components != 1) absl::StrAppend(&a.attributes, " NumberOfComponents=\"", components, "\"");
-  a.raw = LittleBytes(values, n);
   return a;
 }
 
 void AppendHeaderWord(std::string& out, uint64_t word) { AppendLittle<uint64_t>(out, word); }
 
-// Encodes every array's bytes (header + data) as the options say, compressing all blocks of all
-// arrays in parallel.
-void EncodeAll(std::vector<OutArray>& arrays, const VtuWriteOptions& options) {
-  const VtkCompressor compressor = options.compressor;
-  if (compressor == VtkCompressor::kNone) {
-    for (OutArray& a : arrays) {
-      a.encoded.reserve(8 + a.raw.size());
-      AppendHeaderWord(a.encoded, a.raw.size());
-      a.encoded += a.raw;
-    }
-    return;
-  }
+size_t BlockSize(const VtuWriteOptions& options) { return std::max<size_t>(options.block_size, 1); }
+
+// Compresses every block of every array in parallel, one coder per task range.
+void CompressAll(std::vector<OutArray>& arrays, const VtuWriteOptions& options) {
   int level = options.level;
-  if (level < 0) level = compressor == VtkCompressor::kLzma ? kDefaultLzmaLevel : kDefaultZlibLevel;
-  const size_t block = std::max<size_t>(options.block_size, 1);
+  if (level < 0) {
+    level = options.compressor == VtkCompressor::kLzma ? kDefaultLzmaLevel : kDefaultZlibLevel;
+  }
+  const size_t block = BlockSize(options);
   struct Job {
-    size_t array;
-    size_t begin;
-    size_t size;
+    OutArray* array;
+    size_t index;
   };
   std::vector<Job> jobs;
-  for (size_t a = 0; a < arrays.size(); ++a) {
-    for (size_t begin = 0; begin < arrays[a].raw.size(); begin += block) {
-      jobs.push_back({a, begin, std::min(block, arrays[a].raw.size() - begin)});
-    }
-  }
-  std::vector<std::string> compressed(jobs.size());
-  tbb::parallel_for(size_t{0}, jobs.size(), [&](size_t j) {
-    const Job& job = jobs[j];
-    CompressBlock(compressor, level,
-                  absl::string_view(arrays[job.array].raw).substr(job.begin, job.size),
-                  compressed[j]);
-  });
-  size_t j = 0;
   for (OutArray& a : arrays) {
-    const size_t blocks = (a.raw.size() + block - 1) / block;
-    AppendHeaderWord(a.encoded, blocks);
-    AppendHeaderWord(a.encoded, block);
-    AppendHeaderWord(a.encoded, a.raw.size() % block);
-    size_t total = 0;
-    for (size_t b = 0; b < blocks; ++b) {
-      AppendHeaderWord(a.encoded, compressed[j + b].size());
-      total += compressed[j + b].size();
-    }
-    a.encoded.reserve(a.encoded.size() + total);
-    for (size_t b = 0; b < blocks; ++b) a.encoded += compressed[j + b];
-    j += blocks;
+    a.blocks.resize((a.raw.size() + block - 1) / block);
+    for (size_t b = 0; b < a.blocks.size(); ++b) jobs.push_back({&a, b});
   }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, jobs.size(), 4),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      BlockCompressor coder(options.compressor, level);
+                      for (size_t j = range.begin(); j != range.end(); ++j) {
+                        const Job& job = jobs[j];
+                        coder.Compress(job.array->raw.substr(job.index * block, block),
+                                       job.array->blocks[job.index]);
+                      }
+                    });
+}
+
+// Appends an array's header and data as stored in the file.
+void AppendEncoded(std::string& out, const OutArray& a, bool compressed, size_t block) {
+  if (!compressed) {
+    AppendHeaderWord(out, a.raw.size());
+    out.append(a.raw.data(), a.raw.size());
+    return;
+  }
+  AppendHeaderWord(out, a.blocks.size());
+  AppendHeaderWord(out, block);
+  AppendHeaderWord(out, a.raw.size() % block);
+  for (const std::string& b : a.blocks) AppendHeaderWord(out, b.size());
+  for (const std::string& b : a.blocks) out += b;
 }
 
 // VTK encodes a compressed array's header and its blocks as two base64 runs.
-std::string InlineBase64(const OutArray& a, const VtuWriteOptions& options) {
-  if (options.compressor == VtkCompressor::kNone) return Base64Encode(a.encoded);
-  const size_t blocks = LoadAs<uint64_t>(a.encoded, 0, ByteOrder::kLittle);
-  const size_t header = 8 * (3 + blocks);
-  return absl::StrCat(Base64Encode(absl::string_view(a.encoded).substr(0, header)),
-                      Base64Encode(absl::string_view(a.encoded).substr(header)));
+std::string InlineBase64(const OutArray& a, bool compressed, size_t block) {
+  std::string encoded;
+  AppendEncoded(encoded, a, compressed, block);
+  if (!compressed) return Base64Encode(encoded);
+  const size_t header = 8 * (3 + a.blocks.size());
+  return absl::StrCat(Base64Encode(absl::string_view(encoded).substr(0, header)),
+                      Base64Encode(absl::string_view(encoded).substr(header)));
 }
 
 void AppendAsciiValues(std::string& out, const OutArray& a) {
   if (a.is_string) {
-    for (char c : a.raw)
+    for (char c : a.raw) {
       absl::StrAppend(&out, static_cast<int>(static_cast<unsigned char>(c)), " ");
+    }
     return;
   }
   const size_t width = VtkScalarSize(a.type);
@@ -169,119 +190,130 @@ void AppendAsciiValues(std::string& out, const OutArray& a) {
   }
 }
 
-// Writes one array element; appended arrays take their offset into the appended section.
-void AppendArrayXml(std::string& out, const OutArray& a, const VtuWriteOptions& options,
-                    absl::string_view indent, size_t& appended_offset) {
-  absl::StrAppend(&out, indent, "<", a.element, " ", a.attributes);
-  switch (options.layout) {
-    case VtuWriteOptions::Layout::kAppendedRaw:
-      absl::StrAppend(&out, " format=\"appended\" offset=\"", appended_offset, "\"/>\n");
-      appended_offset += a.encoded.size();
-      return;
-    case VtuWriteOptions::Layout::kInlineBase64:
-      absl::StrAppend(&out, " format=\"binary\">\n", indent, "  ", InlineBase64(a, options), "\n");
-      break;
-    case VtuWriteOptions::Layout::kAscii:
-      absl::StrAppend(&out, " format=\"ascii\">\n");
-      AppendAsciiValues(out, a);
-      out += "\n";
-      break;
-  }
-  absl::StrAppend(&out, indent, "</", a.element, ">\n");
-}
-
 }  // namespace
 
 std::string FormatVtu(const MeshFile& file, const VtuWriteOptions& options) {
   const Mesh& mesh = file.mesh;
   const size_t v = mesh.points.size();
   const size_t t = mesh.tets.size();
-  const bool ascii = options.layout == VtuWriteOptions::Layout::kAscii;
+  using Layout = VtuWriteOptions::Layout;
+  const bool compressed =
+      options.layout != Layout::kAscii && options.compressor != VtkCompressor::kNone;
+  const size_t block = BlockSize(options);
 
   std::vector<OutArray> arrays;
-  // Order of the sections below: field data, point data, cell data, points, cells.
+  arrays.reserve(10);  // views of `owned` strings must not move
+  // In the order of the sections below: field data, point data, cell data, points, cells.
   size_t field = 0, point_data = 0, cell_data = 0;
   if (file.frame != MeshFrame::kUntagged) {
-    OutArray a;
+    OutArray& a = arrays.emplace_back();
     a.element = "Array";
     a.attributes = "type=\"String\" Name=\"SPACE\" NumberOfTuples=\"1\"";
     a.is_string = true;
-    a.raw = absl::StrCat(FrameTag(file.frame), std::string(1, '\0'));
-    arrays.push_back(std::move(a));
+    a.owned = absl::StrCat(FrameTag(file.frame), std::string(1, '\0'));
+    a.raw = a.owned;
     ++field;
   }
   if (!mesh.values.empty()) {
-    arrays.push_back(Numeric("value", VtkScalar::kFloat64, 1, mesh.values.data(), v));
+    SetRaw(arrays.emplace_back(Numeric("value", VtkScalar::kFloat64, 1)), mesh.values.data(), v);
     ++point_data;
   }
   if (!file.tet_iteration.empty()) {
-    arrays.push_back(Numeric("iteration", VtkScalar::kInt32, 1, file.tet_iteration.data(), t));
+    SetRaw(arrays.emplace_back(Numeric("iteration", VtkScalar::kInt32, 1)),
+           file.tet_iteration.data(), t);
     ++cell_data;
   }
   if (!file.tet_quality.empty()) {
-    arrays.push_back(Numeric("quality", VtkScalar::kFloat32, 1, file.tet_quality.data(), t));
+    SetRaw(arrays.emplace_back(Numeric("quality", VtkScalar::kFloat32, 1)), file.tet_quality.data(),
+           t);
     ++cell_data;
   }
   if (!file.mesh.labels.empty()) {
-    arrays.push_back(
-        Numeric(LabelArrayName(file), VtkScalar::kInt32, 1, file.mesh.labels.data(), t));
+    SetRaw(arrays.emplace_back(Numeric(LabelArrayName(file), VtkScalar::kInt32, 1)),
+           file.mesh.labels.data(), t);
     ++cell_data;
   }
   {
-    std::vector<double> xyz(3 * v);
-    const double sx = FrameSign(file.frame, 0);
-    const double sy = FrameSign(file.frame, 1);
-    for (size_t i = 0; i < v; ++i) {
-      xyz[3 * i] = sx * mesh.points[i][0];
-      xyz[3 * i + 1] = sy * mesh.points[i][1];
-      xyz[3 * i + 2] = mesh.points[i][2];
+    OutArray& a = arrays.emplace_back(Numeric("Points", VtkScalar::kFloat64, 3));
+    static_assert(sizeof(Vec3) == 3 * sizeof(double));
+    if (file.frame == MeshFrame::kLps) {
+      std::vector<double> xyz(3 * v);
+      for (size_t i = 0; i < v; ++i) {
+        for (int k = 0; k < 3; ++k) xyz[3 * i + k] = FrameSign(file.frame, k) * mesh.points[i][k];
+      }
+      SetOwned(a, xyz);
+    } else {
+      SetRaw(a, v == 0 ? nullptr : mesh.points[0].data(), 3 * v);
     }
-    arrays.push_back(Numeric("Points", VtkScalar::kFloat64, 3, xyz.data(), 3 * v));
   }
   // 32-bit indices halve the largest array; VTK, ParaView and meshio read any integer type.
-  const bool small_indices = v <= static_cast<size_t>(std::numeric_limits<int32_t>::max());
-  const bool small_offsets = 4 * t <= static_cast<size_t>(std::numeric_limits<int32_t>::max());
-  if (small_indices) {
+  if (v <= static_cast<size_t>(std::numeric_limits<int32_t>::max())) {
     static_assert(sizeof(Tet) == 4 * sizeof(uint32_t));
-    const uint32_t* flat = t == 0 ? nullptr : mesh.tets[0].data();
-    arrays.push_back(Numeric("connectivity", VtkScalar::kInt32, 1,
-                             reinterpret_cast<const int32_t*>(flat), 4 * t));
+    SetRaw(arrays.emplace_back(Numeric("connectivity", VtkScalar::kInt32, 1)),
+           t == 0 ? nullptr : reinterpret_cast<const int32_t*>(mesh.tets[0].data()), 4 * t);
   } else {
     std::vector<int64_t> flat(4 * t);
     for (size_t i = 0; i < t; ++i) {
       for (int k = 0; k < 4; ++k) flat[4 * i + k] = mesh.tets[i][k];
     }
-    arrays.push_back(Numeric("connectivity", VtkScalar::kInt64, 1, flat.data(), 4 * t));
+    SetOwned(arrays.emplace_back(Numeric("connectivity", VtkScalar::kInt64, 1)), flat);
   }
-  if (small_offsets) {
-    std::vector<int32_t> offsets(t);
-    for (size_t i = 0; i < t; ++i) offsets[i] = static_cast<int32_t>(4 * (i + 1));
-    arrays.push_back(Numeric("offsets", VtkScalar::kInt32, 1, offsets.data(), t));
+  if (4 * t <= static_cast<size_t>(std::numeric_limits<int32_t>::max())) {
+    OutArray& a = arrays.emplace_back(Numeric("offsets", VtkScalar::kInt32, 1));
+    ReserveHuge(a.owned, 4 * t);
+    a.owned.resize(4 * t);
+    for (size_t i = 0; i < t; ++i) {
+      const uint32_t end = static_cast<uint32_t>(4 * (i + 1));
+      const char bytes[4] = {static_cast<char>(end), static_cast<char>(end >> 8),
+                             static_cast<char>(end >> 16), static_cast<char>(end >> 24)};
+      std::memcpy(a.owned.data() + 4 * i, bytes, 4);
+    }
+    a.raw = a.owned;
   } else {
     std::vector<int64_t> offsets(t);
     for (size_t i = 0; i < t; ++i) offsets[i] = static_cast<int64_t>(4 * (i + 1));
-    arrays.push_back(Numeric("offsets", VtkScalar::kInt64, 1, offsets.data(), t));
+    SetOwned(arrays.emplace_back(Numeric("offsets", VtkScalar::kInt64, 1)), offsets);
   }
   {
-    const std::vector<uint8_t> types(t, kVtkTetra);
-    arrays.push_back(Numeric("types", VtkScalar::kUInt8, 1, types.data(), t));
+    OutArray& a = arrays.emplace_back(Numeric("types", VtkScalar::kUInt8, 1));
+    a.owned.assign(t, static_cast<char>(kVtkTetra));
+    a.raw = a.owned;
   }
-  if (!ascii) EncodeAll(arrays, options);
+  if (compressed) CompressAll(arrays, options);
 
   std::string out =
       "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
       "byte_order=\"LittleEndian\" header_type=\"UInt64\"";
-  if (!ascii && options.compressor != VtkCompressor::kNone) {
+  if (compressed) {
     absl::StrAppend(&out, " compressor=\"", VtkCompressorName(options.compressor), "\"");
   }
   out += ">\n  <UnstructuredGrid>\n";
-  size_t offset = 0;
+  uint64_t offset = 0;  // of the next array in the appended section
   size_t next = 0;
   const auto section = [&](absl::string_view open, absl::string_view close, size_t count,
                            absl::string_view indent) {
     if (count == 0) return;
     absl::StrAppend(&out, open);
-    for (size_t i = 0; i < count; ++i) AppendArrayXml(out, arrays[next++], options, indent, offset);
+    for (size_t i = 0; i < count; ++i) {
+      const OutArray& a = arrays[next++];
+      absl::StrAppend(&out, indent, "<", a.element, " ", a.attributes);
+      switch (options.layout) {
+        case Layout::kAppendedRaw:
+          absl::StrAppend(&out, " format=\"appended\" offset=\"", offset, "\"/>\n");
+          offset += a.EncodedSize(compressed);
+          continue;
+        case Layout::kInlineBase64:
+          absl::StrAppend(&out, " format=\"binary\">\n", indent, "  ",
+                          InlineBase64(a, compressed, block), "\n");
+          break;
+        case Layout::kAscii:
+          out += " format=\"ascii\">\n";
+          AppendAsciiValues(out, a);
+          out += "\n";
+          break;
+      }
+      absl::StrAppend(&out, indent, "</", a.element, ">\n");
+    }
     absl::StrAppend(&out, close);
   };
   section("    <FieldData>\n", "    </FieldData>\n", field, "      ");
@@ -291,10 +323,10 @@ std::string FormatVtu(const MeshFile& file, const VtuWriteOptions& options) {
   section("      <Points>\n", "      </Points>\n", 1, "        ");
   section("      <Cells>\n", "      </Cells>\n", 3, "        ");
   out += "    </Piece>\n  </UnstructuredGrid>\n";
-  if (options.layout == VtuWriteOptions::Layout::kAppendedRaw) {
-    out.reserve(out.size() + offset + 64);
+  if (options.layout == Layout::kAppendedRaw) {
+    ReserveHuge(out, out.size() + offset + 64);
     out += "  <AppendedData encoding=\"raw\">\n   _";
-    for (const OutArray& a : arrays) out += a.encoded;
+    for (const OutArray& a : arrays) AppendEncoded(out, a, compressed, block);
     out += "\n  </AppendedData>\n";
   }
   out += "</VTKFile>\n";
