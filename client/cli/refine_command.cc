@@ -208,8 +208,17 @@ std::string IterationPath(const std::string& output, int iteration) {
   return absl::StrFormat("%s.iter%02d%s", PathStem(output), iteration, PathExtension(output));
 }
 
-io::MeshFile WithQuality(const Mesh& mesh) {
+// What the input file said about its labels and frame, carried to every file refine writes: the
+// labels come back under the input's name, the points in the input's frame.
+struct InputTags {
+  std::string label_name;
+  io::MeshFrame frame = io::MeshFrame::kUntagged;
+};
+
+io::MeshFile WithQuality(const Mesh& mesh, const InputTags& tags) {
   io::MeshFile file{.mesh = mesh, .tet_iteration = {}, .tet_quality = {}};
+  file.label_name = tags.label_name;
+  file.frame = tags.frame;
   file.tet_quality.reserve(mesh.tets.size());
   for (const Tet& t : mesh.tets) {
     file.tet_quality.push_back(static_cast<float>(
@@ -224,6 +233,8 @@ int RunRefinement(const RefineSettings& s) {
   PrintVolumeWarnings(*volume);
   absl::StatusOr<io::MeshFile> mesh_file = LoadMesh(s.mesh_path, "--mesh");
   if (!mesh_file.ok()) return Fail(mesh_file.status(), kExitUsage);
+  const InputTags tags{.label_name = mesh_file->label_name, .frame = mesh_file->frame};
+  // Region labels (mesh.labels) go in with the mesh; every child tet inherits its parent's.
   Mesh mesh = std::move(mesh_file->mesh);
   // The service samples the volume at the vertices; values stored in the file are not inputs.
   mesh.values.clear();
@@ -274,7 +285,8 @@ int RunRefinement(const RefineSettings& s) {
   if (s.every_iteration) {
     callbacks.on_mesh = [&](int iteration, const Mesh& m) {
       if (!iteration_write.ok()) return;
-      iteration_write = io::WriteMesh(IterationPath(s.output_path, iteration), WithQuality(m));
+      iteration_write =
+          io::WriteMesh(IterationPath(s.output_path, iteration), WithQuality(m, tags));
     };
   }
   InterruptGuard interrupt_guard;
@@ -313,6 +325,12 @@ int RunRefinement(const RefineSettings& s) {
   io::MeshFile out{.mesh = std::move(result.mesh),
                    .tet_iteration = std::move(result.tet_iteration),
                    .tet_quality = std::move(result.tet_quality)};
+  out.label_name = tags.label_name;
+  out.frame = tags.frame;
+  if (!mesh.labels.empty() && out.mesh.labels.empty()) {
+    PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
+                              " is written without them"));
+  }
   absl::Status written = io::WriteMesh(s.output_path, out);
   if (!written.ok()) return Fail(written, kExitUsage);
   if (!s.stats_json_path.empty()) {
