@@ -366,7 +366,7 @@ const CommandSpec& RefineSpec() {
         .flags =
             {
                 {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
-                {"mesh", "FILE", "input tet mesh: .vtu .vtk .msh .mesh", true},
+                {"mesh", "FILE", "input tet mesh: .vtu .vtk .msh .mesh .meshb", true},
                 {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},
                 {"max-iterations", "N",
                  absl::StrCat("stop after N iterations (default ", RefineOptions{}.max_iterations,
@@ -376,7 +376,7 @@ const CommandSpec& RefineSpec() {
                               "service's limit, ",
                               wire::ServiceLimits{}.max_output_tets, ")")},
                 {"output", "FILE",
-                 "refined mesh, .vtu .vtk .msh .mesh (default <mesh name>.refined.vtu "
+                 "refined mesh, .vtu .vtk .msh .mesh .meshb (default <mesh name>.refined.vtu "
                  "in the working directory)"},
                 {"every-iteration", "",
                  "also write each iteration's mesh as <output stem>.iterNN.<ext>"},
