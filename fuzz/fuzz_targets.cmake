@@ -2,7 +2,8 @@
 # tests/hardening (the same entry points run over the corpora with any compiler, as tests).
 # Target <name>: source fuzz/<name>_fuzzer.cc, corpus fuzz/corpus/<name>/.
 set(TETREFINE_FUZZ_DIR ${CMAKE_CURRENT_LIST_DIR})
-set(TETREFINE_FUZZ_TARGETS request response refine vtu vtk_legacy gmsh medit nifti nrrd metaimage)
+set(TETREFINE_FUZZ_TARGETS request response refine vtu vtk_legacy vtk_legacy_binary gmsh gmsh_binary
+  medit meshb nifti nrrd metaimage)
 
 set(_tetrefine_fuzz_sources_request request_fuzzer.cc)
 set(_tetrefine_fuzz_libs_request tetrefine_wire)
@@ -10,7 +11,7 @@ set(_tetrefine_fuzz_sources_response response_fuzzer.cc)
 set(_tetrefine_fuzz_libs_response tetrefine_wire)
 set(_tetrefine_fuzz_sources_refine refine_fuzzer.cc)
 set(_tetrefine_fuzz_libs_refine tetrefine_core)
-foreach(_format vtu vtk_legacy gmsh medit)
+foreach(_format vtu vtk_legacy vtk_legacy_binary gmsh gmsh_binary medit meshb)
   set(_tetrefine_fuzz_sources_${_format} ${_format}_fuzzer.cc mesh_parser_check.cc)
   set(_tetrefine_fuzz_libs_${_format} tetrefine_io)
 endforeach()

@@ -1,5 +1,5 @@
-// libFuzzer target: the Gmsh (.msh 2.2 and 4.1) reader on arbitrary text, then a write-read round
-// trip through the 4.1 writer.
+// libFuzzer target: the Gmsh (.msh 2.2 and 4.1, ASCII and binary) reader on arbitrary bytes, then
+// a write-read round trip through the ASCII 4.1 writer.
 
 #include "client/io/gmsh_format.h"
 #include "fuzz/mesh_parser_check.h"
@@ -8,8 +8,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   tetrefine::fuzz::CheckMeshParser(
       {.parse = [](absl::string_view text,
                    absl::string_view path) { return tetrefine::io::ParseGmsh(text, path); },
-       .format = &tetrefine::io::FormatGmsh41,
-       .path = "fuzz.msh"},
+       .format =
+           [](const tetrefine::io::MeshFile& file) { return tetrefine::io::FormatGmsh41(file); },
+       .path = "fuzz.msh",
+       .keeps_label_name = false,
+       .keeps_frame = false,
+       .positive_labels_only = true},
       data, size);
   return 0;
 }

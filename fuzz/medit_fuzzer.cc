@@ -1,5 +1,5 @@
 // libFuzzer target: the Medit (.mesh) reader on arbitrary text, then a write-read round trip of
-// what Medit stores (points, tets, tet references).
+// what Medit stores (points, tets, tet references as labels).
 
 #include "client/io/medit_format.h"
 #include "fuzz/mesh_parser_check.h"
@@ -9,7 +9,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                                     .format = &tetrefine::io::FormatMedit,
                                     .path = "fuzz.mesh",
                                     .keeps_values = false,
-                                    .keeps_quality = false},
+                                    .keeps_quality = false,
+                                    .keeps_iteration = false,
+                                    .keeps_label_name = false,
+                                    .keeps_frame = false},
                                    data, size);
   return 0;
 }

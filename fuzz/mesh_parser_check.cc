@@ -1,5 +1,6 @@
 #include "fuzz/mesh_parser_check.h"
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -42,10 +43,32 @@ void CheckMeshParser(const MeshFormatUnderTest& format, const uint8_t* data, siz
     TETREFINE_FUZZ_CHECK(SameBits(file->tet_quality, again->tet_quality),
                          "tet_quality changed in a round trip");
   }
-  // Medit always reads a tet reference; a file without iterations is written with zeros.
-  if (!file->tet_iteration.empty()) {
+  if (format.keeps_iteration) {
     TETREFINE_FUZZ_CHECK(SameBits(file->tet_iteration, again->tet_iteration),
                          "tet_iteration changed in a round trip");
+  }
+  // No labels and all-zero labels are the same to Medit (every tet has a reference, 0 when
+  // none) and Gmsh (0 = no physical group); Gmsh keeps positive labels only.
+  if (!file->mesh.labels.empty()) {
+    std::vector<int32_t> expected = file->mesh.labels;
+    if (!format.keeps_label_name) {  // Gmsh and Medit store labels in their own slot
+      for (int32_t& label : expected) {
+        if (format.positive_labels_only && label < 0) label = 0;
+      }
+    }
+    const bool all_zero =
+        std::all_of(expected.begin(), expected.end(), [](int32_t x) { return x == 0; });
+    if (!(all_zero && again->mesh.labels.empty())) {
+      TETREFINE_FUZZ_CHECK(SameBits(expected, again->mesh.labels),
+                           "mesh.labels changed in a round trip");
+    }
+    if (format.keeps_label_name) {
+      TETREFINE_FUZZ_CHECK(file->label_name == again->label_name,
+                           "label_name changed in a round trip");
+    }
+  }
+  if (format.keeps_frame) {
+    TETREFINE_FUZZ_CHECK(file->frame == again->frame, "frame changed in a round trip");
   }
 }
 

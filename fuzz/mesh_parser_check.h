@@ -14,9 +14,14 @@ struct MeshFormatUnderTest {
   absl::StatusOr<io::MeshFile> (*parse)(absl::string_view text, absl::string_view path);
   std::string (*format)(const io::MeshFile& file);
   const char* path;  // the name error messages carry, e.g. "fuzz.vtu"
-  // What the format stores (Medit keeps neither values nor quality).
+  // What the format stores (Medit keeps neither values, quality nor iteration; Gmsh and Medit
+  // store labels in their own slot, whatever the input called them, and no frame tag).
   bool keeps_values = true;
   bool keeps_quality = true;
+  bool keeps_iteration = true;
+  bool keeps_label_name = true;
+  bool keeps_frame = true;
+  bool positive_labels_only = false;  // Gmsh: labels <= 0 read back as 0
 };
 
 // Parses `data` as the format. Any input may fail, but none may crash; an input that parses and

@@ -4,9 +4,11 @@
 #include "fuzz/mesh_parser_check.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  tetrefine::fuzz::CheckMeshParser({.parse = &tetrefine::io::ParseVtkLegacy,
-                                    .format = &tetrefine::io::FormatVtkLegacy,
-                                    .path = "fuzz.vtk"},
-                                   data, size);
+  tetrefine::fuzz::CheckMeshParser(
+      {.parse = &tetrefine::io::ParseVtkLegacy,
+       .format =
+           [](const tetrefine::io::MeshFile& file) { return tetrefine::io::FormatVtkLegacy(file); },
+       .path = "fuzz.vtk"},
+      data, size);
   return 0;
 }

@@ -5,7 +5,9 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   tetrefine::fuzz::CheckMeshParser(
-      {.parse = &tetrefine::io::ParseVtu, .format = &tetrefine::io::FormatVtu, .path = "fuzz.vtu"},
+      {.parse = &tetrefine::io::ParseVtu,
+       .format = [](const tetrefine::io::MeshFile& file) { return tetrefine::io::FormatVtu(file); },
+       .path = "fuzz.vtu"},
       data, size);
   return 0;
 }

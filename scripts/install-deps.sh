@@ -8,7 +8,7 @@ if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
 packages=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libabsl-dev libspdlog-dev libtbb-dev zlib1g-dev
+  libabsl-dev libspdlog-dev libtbb-dev zlib1g-dev libpugixml-dev liblzma-dev liblz4-dev libdeflate-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   prometheus-cpp-dev libssl-dev openssl clang-format
   python3 python3-grpcio python3-numpy python3-meshio python3-yaml
@@ -18,6 +18,11 @@ packages=(
   # tetrefine slice draws its figures with Cairo and writes them as PNG through it.
   libcairo2-dev
 )
+# Independent readers and writers the tests compare against (VTK 9 and Gmsh, beside meshio
+# above); the container's build stage sets TETREFINE_WITH_TEST_TOOLS=0 as it builds no tests.
+if [ "${TETREFINE_WITH_TEST_TOOLS:-1}" = "1" ]; then
+  packages+=(python3-vtk9 gmsh)
+fi
 # Fuzzing and sanitizer runs (clang's libFuzzer) only when asked: TETREFINE_WITH_FUZZ=1.
 if [ "${TETREFINE_WITH_FUZZ:-0}" = "1" ]; then
   packages+=(clang-14 libclang-rt-14-dev llvm-14)

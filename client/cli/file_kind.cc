@@ -7,6 +7,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "client/io/mesh_io.h"
 
 namespace tetrefine::cli {
 namespace {
@@ -36,9 +37,7 @@ bool IsVolumePath(const std::string& path) {
                      {".nii", ".nii.gz", ".hdr", ".hdr.gz", ".nrrd", ".nhdr", ".mha", ".mhd"});
 }
 
-bool IsMeshPath(const std::string& path) {
-  return EndsWithAny(path, {".vtu", ".vtk", ".msh", ".mesh"});
-}
+bool IsMeshPath(const std::string& path) { return io::IsMeshPath(path); }
 
 std::string PathStem(const std::string& path) {
   const size_t dot = ExtensionStart(path);
@@ -59,8 +58,9 @@ std::string FileStem(const std::string& path) {
 absl::Status CheckOutputPath(const std::string& path, const std::string& flag, bool mesh) {
   if (path.empty()) return absl::InvalidArgumentError(absl::StrCat(flag, ": empty path"));
   if (mesh && !IsMeshPath(path)) {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": unknown extension for a mesh (", flag,
-                                                   "): expected .vtu, .vtk, .msh or .mesh"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": unknown extension for a mesh (", flag,
+                     "): expected .vtu, .vtk, .msh, .mesh or .meshb"));
   }
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {

@@ -109,7 +109,7 @@ const CommandSpec& InfoSpec() {
       .description =
           "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd): dims, voxel type, spacing, origin\n"
           "and world box in RAS mm, value range, the file's own index-to-world affine, reading\n"
-          "warnings. A mesh (.vtu .vtk .msh .mesh): vertices, tets, bounding box, volume,\n"
+          "warnings. A mesh (.vtu .vtk .msh .mesh .meshb): vertices, tets, bounding box, volume,\n"
           "boundary area, mean-ratio quality, inverted tets, which arrays it carries.",
       .flags = {},
       .positional = "FILE"};
@@ -125,7 +125,7 @@ int RunInfo(const std::vector<std::string>& args) {
   if (IsMeshPath(path)) return MeshInfo(path);
   return Fail(absl::StrCat(path,
                            ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
-                           ".nhdr, .mha, .mhd) or a mesh (.vtu, .vtk, .msh, .mesh)"),
+                           ".nhdr, .mha, .mhd) or a mesh (.vtu, .vtk, .msh, .mesh, .meshb)"),
               kExitUsage);
 }
 

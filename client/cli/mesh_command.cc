@@ -31,7 +31,7 @@ const CommandSpec& MeshSpec() {
       .flags =
           {
               {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
-              {"output", "FILE", "mesh to write: .vtu .vtk .msh .mesh", true},
+              {"output", "FILE", "mesh to write: .vtu .vtk .msh .mesh .meshb", true},
               {"block", "B", "voxels per cell edge (default 1)"},
               {"mask-threshold", "T", "mesh only cells whose 8 corner samples are all >= T"},
           },

@@ -222,8 +222,17 @@ std::string IterationPath(const std::string& output, int iteration) {
   return absl::StrFormat("%s.iter%02d%s", PathStem(output), iteration, PathExtension(output));
 }
 
-io::MeshFile WithQuality(const Mesh& mesh) {
+// What the input file said about its labels and frame, carried to every file refine writes: the
+// labels come back under the input's name, the points in the input's frame.
+struct InputTags {
+  std::string label_name;
+  io::MeshFrame frame = io::MeshFrame::kUntagged;
+};
+
+io::MeshFile WithQuality(const Mesh& mesh, const InputTags& tags) {
   io::MeshFile file{.mesh = mesh, .tet_iteration = {}, .tet_quality = {}};
+  file.label_name = tags.label_name;
+  file.frame = tags.frame;
   file.tet_quality.reserve(mesh.tets.size());
   for (const Tet& t : mesh.tets) {
     file.tet_quality.push_back(static_cast<float>(
@@ -238,6 +247,8 @@ int RunRefinement(const RefineSettings& s) {
   PrintVolumeWarnings(*volume);
   absl::StatusOr<io::MeshFile> mesh_file = LoadMesh(s.mesh_path, "--mesh");
   if (!mesh_file.ok()) return Fail(mesh_file.status(), kExitUsage);
+  const InputTags tags{.label_name = mesh_file->label_name, .frame = mesh_file->frame};
+  // Region labels (mesh.labels) go in with the mesh; every child tet inherits its parent's.
   Mesh mesh = std::move(mesh_file->mesh);
   // The service samples the volume at the vertices; values stored in the file are not inputs.
   mesh.values.clear();
@@ -288,7 +299,8 @@ int RunRefinement(const RefineSettings& s) {
   if (s.every_iteration) {
     callbacks.on_mesh = [&](int iteration, const Mesh& m) {
       if (!iteration_write.ok()) return;
-      iteration_write = io::WriteMesh(IterationPath(s.output_path, iteration), WithQuality(m));
+      iteration_write =
+          io::WriteMesh(IterationPath(s.output_path, iteration), WithQuality(m, tags));
     };
   }
   InterruptGuard interrupt_guard;
@@ -327,6 +339,12 @@ int RunRefinement(const RefineSettings& s) {
   io::MeshFile out{.mesh = std::move(result.mesh),
                    .tet_iteration = std::move(result.tet_iteration),
                    .tet_quality = std::move(result.tet_quality)};
+  out.label_name = tags.label_name;
+  out.frame = tags.frame;
+  if (!mesh.labels.empty() && out.mesh.labels.empty()) {
+    PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
+                              " is written without them"));
+  }
   absl::Status written = io::WriteMesh(s.output_path, out);
   if (!written.ok()) return Fail(written, kExitUsage);
   if (!s.stats_json_path.empty()) {
@@ -362,7 +380,7 @@ const CommandSpec& RefineSpec() {
         .flags =
             {
                 {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
-                {"mesh", "FILE", "input tet mesh: .vtu .vtk .msh .mesh", true},
+                {"mesh", "FILE", "input tet mesh: .vtu .vtk .msh .mesh .meshb", true},
                 {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},
                 {"max-iterations", "N",
                  absl::StrCat("stop after N iterations (default ", RefineOptions{}.max_iterations,
@@ -385,7 +403,7 @@ const CommandSpec& RefineSpec() {
                               "tet; 0 skips the check (default ",
                               RefineOptions{}.lattice_n, ", the paper's 165 points)")},
                 {"output", "FILE",
-                 "refined mesh, .vtu .vtk .msh .mesh (default <mesh name>.refined.vtu "
+                 "refined mesh, .vtu .vtk .msh .mesh .meshb (default <mesh name>.refined.vtu "
                  "in the working directory)"},
                 {"every-iteration", "",
                  "also write each iteration's mesh as <output stem>.iterNN.<ext>"},

@@ -105,7 +105,8 @@ const CommandSpec& SliceSpec() {
       .flags =
           {
               {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
-              {"mesh", "FILE", "tet mesh: .vtu .vtk .msh .mesh (first row, e.g. before)", true},
+              {"mesh", "FILE", "tet mesh: .vtu .vtk .msh .mesh .meshb (first row, e.g. before)",
+               true},
               {"mesh-after", "FILE", "a second mesh for a second row (e.g. after refinement)"},
               {"axis", "x|y|z", "normal of the plane (default z)"},
               {"position", "P",

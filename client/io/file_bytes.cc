@@ -1,12 +1,17 @@
 #include "client/io/file_bytes.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "client/io/io_error.h"
@@ -38,15 +43,73 @@ absl::StatusOr<std::string> ReadFileBytes(const std::string& path) {
   if (std::filesystem::is_directory(path, ec)) return FileError(path, "is a directory");
   std::FILE* file = std::fopen(path.c_str(), "rb");
   if (file == nullptr) return ErrnoError(path, "cannot open", errno);
+  // One buffer of the file's size read in place: growing a string chunk by chunk copied a
+  // large mesh several times over. The loop still reads to the end, for files that grow or
+  // report no size (pipes).
   std::string bytes;
-  char buffer[1 << 16];
+  size_t size = 0;
+  if (std::fseek(file, 0, SEEK_END) == 0) {
+    const long end = std::ftell(file);
+    if (end > 0) size = static_cast<size_t>(end);
+    std::rewind(file);
+  }
+  bytes.resize(std::max<size_t>(size, 1 << 16));
+  size_t used = 0;
   size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), file)) > 0) bytes.append(buffer, n);
+  while ((n = std::fread(bytes.data() + used, 1, bytes.size() - used, file)) > 0) {
+    used += n;
+    if (used == bytes.size()) bytes.resize(2 * bytes.size());
+  }
+  bytes.resize(used);
   const bool failed = std::ferror(file) != 0;
   const int err = errno;
   std::fclose(file);
   if (failed) return ErrnoError(path, "read failed", err);
   return bytes;
+}
+
+absl::StatusOr<FileView> FileView::Open(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return FileError(path, "is a directory");
+  FileView view;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return ErrnoError(path, "cannot open", errno);
+  struct stat st;
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+    // MAP_POPULATE: fault the pages in at once rather than one by one while parsing.
+    void* map = ::mmap(nullptr, static_cast<size_t>(st.st_size), PROT_READ,
+                       MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    if (map != MAP_FAILED) {
+      view.map_ = map;
+      view.map_size_ = static_cast<size_t>(st.st_size);
+      view.bytes_ = absl::string_view(static_cast<const char*>(map), view.map_size_);
+    }
+  }
+  ::close(fd);
+  if (view.map_ == nullptr) {
+    absl::StatusOr<std::string> bytes = ReadFileBytes(path);
+    if (!bytes.ok()) return bytes.status();
+    view.copy_ = *std::move(bytes);
+    view.bytes_ = view.copy_;
+  }
+  return view;
+}
+
+FileView::FileView(FileView&& other) noexcept { *this = std::move(other); }
+
+FileView& FileView::operator=(FileView&& other) noexcept {
+  if (this == &other) return *this;
+  if (map_ != nullptr) ::munmap(map_, map_size_);
+  map_ = std::exchange(other.map_, nullptr);
+  map_size_ = std::exchange(other.map_size_, 0);
+  copy_ = std::move(other.copy_);
+  bytes_ = map_ != nullptr ? std::exchange(other.bytes_, absl::string_view()) : copy_;
+  other.bytes_ = absl::string_view();
+  return *this;
+}
+
+FileView::~FileView() {
+  if (map_ != nullptr) ::munmap(map_, map_size_);
 }
 
 absl::StatusOr<std::string> ReadFileMaybeGzip(const std::string& path) {

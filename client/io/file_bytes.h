@@ -10,6 +10,28 @@ namespace tetrefine::io {
 // The whole file as bytes (std::string used as a byte buffer).
 absl::StatusOr<std::string> ReadFileBytes(const std::string& path);
 
+// A whole file as read-only bytes, memory-mapped (no copy, no zero-filled buffer: a large mesh
+// is parsed straight from the page cache), or read into memory where mapping fails (pipes,
+// empty files). Movable, not copyable; the bytes live as long as the object.
+class FileView {
+ public:
+  static absl::StatusOr<FileView> Open(const std::string& path);
+  FileView(FileView&& other) noexcept;
+  FileView& operator=(FileView&& other) noexcept;
+  FileView(const FileView&) = delete;
+  FileView& operator=(const FileView&) = delete;
+  ~FileView();
+
+  absl::string_view bytes() const { return bytes_; }
+
+ private:
+  FileView() = default;
+  void* map_ = nullptr;
+  size_t map_size_ = 0;
+  std::string copy_;
+  absl::string_view bytes_;
+};
+
 // The whole file, gunzipped when it starts with the gzip magic (1f 8b); otherwise as stored.
 // Decided by content rather than name so a mislabelled ".nii" that is really gzip still reads.
 absl::StatusOr<std::string> ReadFileMaybeGzip(const std::string& path);

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "absl/status/statusor.h"
@@ -8,17 +9,34 @@
 
 namespace tetrefine::io {
 
-// Gmsh .msh, ASCII. Reads format 2.2 and 4.1: keeps tetrahedra (element type 4) and ignores,
-// but counts, every other element type (triangles, points, ...). $NodeData "value" (1 component)
-// gives the vertex values; $ElementData "iteration" and "quality" the per-tet arrays; other data
-// blocks and unknown sections are skipped. Node tags may be sparse. Binary .msh is refused.
-// Writes format 4.1: one volume entity holding all nodes and tets, tags 1..V and 1..T, then
-// $NodeData "value" and $ElementData "iteration"/"quality" when the MeshFile has them.
+// Gmsh .msh, formats 2.2 and 4.1, ASCII or binary (`gmsh -bin`; either byte order, detected from
+// the file's endianness word).
+//
+// Reading keeps linear tetrahedra (element type 4). Points, lines and surface elements are
+// skipped (boundary markers); other volume elements (hexahedra, prisms, pyramids, second-order
+// tetrahedra, ...) are an error naming what the file holds. Region labels are the physical
+// groups: in 2.2 the first element tag, in 4.1 the first physical tag of the element's entity
+// ($Entities); a tet without a physical group gets label 0, and a file without any physical
+// group gives no labels. label_name is then "gmsh:physical" (meshio's name for them).
+// $NodeData "value" (1 component) gives the vertex values, $ElementData "iteration" and
+// "quality" the per-tet arrays; other sections are skipped. Node and element tags may be sparse
+// and unordered; vertices are returned in node-tag order and tets in element-tag order (what
+// meshio and Gmsh's API return), whatever order the blocks had.
 struct GmshReadInfo {
-  int64_t ignored_elements = 0;  // non-tetrahedral elements skipped
+  int64_t ignored_elements = 0;  // point, line and surface elements skipped
 };
 absl::StatusOr<MeshFile> ParseGmsh(absl::string_view text, absl::string_view path,
                                    GmshReadInfo* info = nullptr);
-std::string FormatGmsh41(const MeshFile& file);
+
+struct GmshWriteOptions {
+  bool binary = false;  // "4.1 1 8" binary (native little-endian) instead of ASCII
+};
+
+// Writes format 4.1: one volume entity per distinct label (physical group = the label when it is
+// positive; labels <= 0 get an entity without a physical group and read back as 0), or a single
+// volume entity without labels; all nodes in the first volume entity, tags 1..V; tets grouped by
+// label, element tag = tet index + 1, so the tet order survives a round trip; then $NodeData
+// "value" and $ElementData "iteration"/"quality" when the MeshFile has them.
+std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options = {});
 
 }  // namespace tetrefine::io

@@ -5,38 +5,71 @@
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "client/io/cell_census.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
 
 namespace tetrefine::io {
 namespace {
 
-// Numbers per entry of the sections read only to be skipped (lower-case keyword).
+// A Medit element section that is not a tetrahedron: numbers per entry, and what it is.
+struct OtherSection {
+  const char* keyword;  // lower-case
+  int width;            // numbers per entry (vertex indices and the reference)
+  CellKind kind;
+};
+
+const OtherSection* FindOtherSection(const std::string& keyword) {
+  const auto skip = [](const char* singular, const char* plural) {
+    return CellKind{singular, plural, CellFate::kSkip};
+  };
+  const auto volume = [](const char* singular, const char* plural) {
+    return CellKind{singular, plural, CellFate::kUnsupported};
+  };
+  static const OtherSection kSections[] = {
+      {"edges", 3, skip("edge", "edges")},
+      {"triangles", 4, skip("triangle", "triangles")},
+      {"quadrilaterals", 5, skip("quadrilateral", "quadrilaterals")},
+      {"edgesp2", 4, skip("edge", "edges")},
+      {"trianglesp2", 7, skip("triangle", "triangles")},
+      {"quadrilateralsq2", 10, skip("quadrilateral", "quadrilaterals")},
+      {"hexahedra", 9, volume("hexahedron", "hexahedra")},
+      {"hexaedra", 9, volume("hexahedron", "hexahedra")},  // Dobrzynski's spelling
+      {"prisms", 7, volume("prism", "prisms")},
+      {"pyramids", 6, volume("pyramid", "pyramids")},
+      {"tetrahedrap2", 11, volume("second-order tetrahedron", "second-order tetrahedra")},
+      {"hexahedraq2", 28, volume("second-order hexahedron", "second-order hexahedra")},
+  };
+  for (const OtherSection& s : kSections) {
+    if (keyword == s.keyword) return &s;
+  }
+  return nullptr;
+}
+
+// Numbers per entry of the non-element sections read only to be skipped (lower-case keyword).
 int SkippedSectionWidth(const std::string& keyword) {
   static const std::pair<const char*, int> kWidths[] = {
-      {"edges", 3},
-      {"triangles", 4},
-      {"quadrilaterals", 5},
-      {"hexahedra", 9},
-      {"prisms", 7},
-      {"pyramids", 6},
-      {"corners", 1},
-      {"ridges", 1},
-      {"requiredvertices", 1},
-      {"requirededges", 1},
-      {"requiredtriangles", 1},
-      {"requiredquadrilaterals", 1},
-      {"normals", 3},
-      {"tangents", 3},
-      {"normalatvertices", 2},
-      {"tangentatedges", 3},
-      {"tangentatvertices", 2},
-      {"normalattrianglevertices", 3},
+      {"corners", 1},           {"ridges", 1},
+      {"requiredvertices", 1},  {"requirededges", 1},
+      {"requiredtriangles", 1}, {"requiredquadrilaterals", 1},
+      {"normals", 3},           {"tangents", 3},
+      {"normalatvertices", 2},  {"tangentatedges", 3},
+      {"tangentatvertices", 2}, {"normalattrianglevertices", 3},
   };
   for (const auto& [name, width] : kWidths) {
     if (keyword == name) return width;
   }
   return 0;
+}
+
+absl::Status SkipNumbers(TextScanner& in, int64_t count, int width, absl::string_view what) {
+  if (absl::Status s = in.CheckCount(count, 2 * width, what); !s.ok()) return s;
+  for (int64_t i = 0; i < count * width; ++i) {
+    if (absl::Status s = in.Double(absl::StrCat("a number of ", what)).status(); !s.ok()) {
+      return s;
+    }
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace
@@ -47,6 +80,7 @@ absl::StatusOr<MeshFile> ParseMedit(absl::string_view text, absl::string_view pa
   Mesh& mesh = file.mesh;
   bool have_vertices = false;
   bool have_tets = false;
+  CellCensus census;
   while (!in.AtEnd()) {
     absl::StatusOr<absl::string_view> token = in.Token("a section keyword");
     if (!token.ok()) return token.status();
@@ -77,15 +111,16 @@ absl::StatusOr<MeshFile> ParseMedit(absl::string_view text, absl::string_view pa
       }
       have_vertices = true;
     } else if (keyword == "tetrahedra") {
-      if (have_tets) return in.Error("second Tetrahedra section");
+      // Several Tetrahedra sections append (meshio writes one per cell block).
       absl::StatusOr<int64_t> count = in.Int("the tetrahedron count");
       if (!count.ok()) return count.status();
       if (absl::Status s = in.CheckCount(*count, 10, "tetrahedra"); !s.ok()) return s;
       if (!have_vertices) return in.Error("Tetrahedra before Vertices");
       const int64_t v = static_cast<int64_t>(mesh.points.size());
-      mesh.tets.resize(*count);
-      file.tet_iteration.resize(*count);
-      for (int64_t t = 0; t < *count; ++t) {
+      const size_t first = mesh.tets.size();
+      mesh.tets.resize(first + *count);
+      file.mesh.labels.resize(first + *count);
+      for (size_t t = first; t < mesh.tets.size(); ++t) {
         for (uint32_t& index : mesh.tets[t]) {
           // Medit indices are 1-based.
           absl::StatusOr<int64_t> i = in.IntIn("a tetrahedron vertex index", 1, v);
@@ -96,25 +131,28 @@ absl::StatusOr<MeshFile> ParseMedit(absl::string_view text, absl::string_view pa
             in.IntIn("a tetrahedron reference", std::numeric_limits<int32_t>::min(),
                      std::numeric_limits<int32_t>::max());
         if (!ref.ok()) return ref.status();
-        file.tet_iteration[t] = static_cast<int32_t>(*ref);
+        file.mesh.labels[t] = static_cast<int32_t>(*ref);
       }
       have_tets = true;
+    } else if (const OtherSection* other = FindOtherSection(keyword)) {
+      absl::StatusOr<int64_t> count = in.Int(absl::StrCat("the ", *token, " count"));
+      if (!count.ok()) return count.status();
+      if (absl::Status s = SkipNumbers(in, *count, other->width, *token); !s.ok()) return s;
+      census.Add(other->kind, *count);
     } else if (const int width = SkippedSectionWidth(keyword); width > 0) {
       absl::StatusOr<int64_t> count = in.Int(absl::StrCat("the ", *token, " count"));
       if (!count.ok()) return count.status();
-      if (absl::Status s = in.CheckCount(*count, 2 * width, *token); !s.ok()) return s;
-      for (int64_t i = 0; i < *count * width; ++i) {
-        if (absl::Status s = in.Double(absl::StrCat("a number of ", *token)).status(); !s.ok()) {
-          return s;
-        }
-      }
+      if (absl::Status s = SkipNumbers(in, *count, width, *token); !s.ok()) return s;
     } else {
-      return in.Error(absl::StrCat("unknown Medit section \"", token->substr(0, 40), "\""));
+      return in.Error(absl::StrCat("unknown Medit section ", QuoteToken(*token)));
     }
   }
   if (!have_vertices) return in.Error("no Vertices section (not a Medit mesh?)");
+  census.AddTets(static_cast<int64_t>(mesh.tets.size()));
+  if (absl::Status s = census.Check(path); !s.ok()) return s;
   // A volume mesh without its tets is more likely cut short than meant.
   if (!have_tets) return in.Error("no Tetrahedra section (truncated, or a surface mesh?)");
+  file.label_name = "medit:ref";
   return file;
 }
 
@@ -133,7 +171,7 @@ std::string FormatMedit(const MeshFile& file) {
   for (size_t t = 0; t < mesh.tets.size(); ++t) {
     const Tet& tet = mesh.tets[t];
     absl::StrAppend(&out, tet[0] + 1, " ", tet[1] + 1, " ", tet[2] + 1, " ", tet[3] + 1, " ",
-                    file.tet_iteration.empty() ? 0 : file.tet_iteration[t], "\n");
+                    file.mesh.labels.empty() ? 0 : file.mesh.labels[t], "\n");
   }
   out += "End\n";
   return out;

@@ -5,8 +5,25 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/io/io_error.h"
+#include "client/io/label_names.h"
 
 namespace tetrefine::io {
+
+absl::string_view FrameTag(MeshFrame frame) {
+  switch (frame) {
+    case MeshFrame::kRas:
+      return "RAS";
+    case MeshFrame::kLps:
+      return "LPS";
+    case MeshFrame::kUntagged:
+      break;
+  }
+  return "";
+}
+
+std::string LabelArrayName(const MeshFile& file) {
+  return file.label_name.empty() ? std::string("label") : file.label_name;
+}
 
 absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path) {
   const Mesh& mesh = file.mesh;
@@ -26,6 +43,18 @@ absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path) {
   if (!file.tet_quality.empty() && file.tet_quality.size() != t) {
     return FileError(path, absl::StrCat("cell data \"quality\" has ", file.tet_quality.size(),
                                         " entries for ", t, " tetrahedra"));
+  }
+  // A label name must be one readers recognise (label_names.h), or labels written under it
+  // would come back as an anonymous cell array.
+  if (!file.mesh.labels.empty() && !file.label_name.empty() && LabelNameRank(file.label_name) < 0) {
+    return FileError(path, absl::StrCat("label name \"", file.label_name,
+                                        "\" is not one of the names readers recognise as labels "
+                                        "(gmsh:physical, medit:ref, CellEntityIds, region, ...)"));
+  }
+  if (!file.mesh.labels.empty() && file.mesh.labels.size() != t) {
+    return FileError(
+        path, absl::StrCat("cell data \"", LabelArrayName(file), "\" has ", file.mesh.labels.size(),
+                           " entries for ", t, " tetrahedra"));
   }
   for (size_t i = 0; i < v; ++i) {
     for (int a = 0; a < 3; ++a) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -9,20 +10,49 @@
 
 namespace tetrefine::io {
 
+// The world frame a mesh file says its coordinates are in. 3D Slicer tags the files it writes
+// ("SPACE=LPS" in a legacy VTK header, a "SPACE" string array in VTU field data); other tools
+// write no tag. tetrefine works in RAS (see VolumeFile), so readers negate x and y of an LPS file
+// and writers negate them back, writing the same tag: a file goes out in the frame it came in.
+enum class MeshFrame {
+  kUntagged,  // no tag: coordinates are taken as RAS, and written without a tag
+  kRas,       // tagged SPACE=RAS
+  kLps,       // tagged SPACE=LPS: stored x and y are the negated RAS x and y
+};
+
+// "RAS", "LPS" or "" (untagged).
+absl::string_view FrameTag(MeshFrame frame);
+
 // A tetrahedral mesh as stored in a file: the core Mesh plus optional per-tet arrays.
-//   mesh.points:   V x 3 world coordinates (mm for imaging data).
+//   mesh.points:   V x 3 world coordinates, RAS (mm for imaging data) whatever `frame` says.
 //   mesh.tets:     T x 4 zero-based vertex indices.
 //   mesh.values:   V scalars, or empty when the file has no "value" point data.
 //   tet_iteration: T integers (the refinement iteration that created each tet), or empty.
 //   tet_quality:   T quality measures, or empty.
+//   mesh.labels:   T region labels (Gmsh physical group, Medit reference, a VTK cell array such
+//                  as "region" or "CellEntityIds"), or empty. Core refinement passes them on
+//                  to every child tet.
+//   label_name:    what the input called mesh.labels: "gmsh:physical", "medit:ref", or the VTK
+//                  cell array's name; one of the names LabelNameRank recognises, or empty.
+//                  Writers of VTK formats use it as the array name ("label" when empty); Gmsh
+//                  and Medit store labels in their own slots whatever the name.
+//   frame:         the frame tag of the file read, and the one to write.
 struct MeshFile {
   tetrefine::Mesh mesh;
   std::vector<int32_t> tet_iteration;
   std::vector<float> tet_quality;
+  // Default member initializers: designated initializers that predate these members (e.g.
+  // {.mesh = m, .tet_iteration = {}, .tet_quality = {}}) stay warning-free.
+  std::string label_name{};
+  MeshFrame frame = MeshFrame::kUntagged;
 };
 
+// Name of the label array VTK writers use: label_name, or "label" when that is empty.
+std::string LabelArrayName(const MeshFile& file);
+
 // OK when every array has its documented length (or is empty where allowed), every index is
-// below V (and V fits uint32), and every coordinate, value and quality is finite. The message
+// below V (and V fits uint32), every coordinate, value and quality is finite, and label_name is
+// empty or a recognised label name. The message
 // starts with `path` and names the first offending entry.
 absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path);
 

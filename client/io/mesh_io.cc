@@ -11,40 +11,48 @@
 namespace tetrefine::io {
 namespace {
 
-enum class MeshFormat { kVtu, kVtkLegacy, kGmsh, kMedit, kUnknown };
+enum class MeshFormat { kVtu, kVtkLegacy, kGmsh, kMedit, kMeshb, kUnknown };
 
 MeshFormat FormatOf(const std::string& path) {
   if (absl::EndsWithIgnoreCase(path, ".vtu")) return MeshFormat::kVtu;
   if (absl::EndsWithIgnoreCase(path, ".vtk")) return MeshFormat::kVtkLegacy;
   if (absl::EndsWithIgnoreCase(path, ".msh")) return MeshFormat::kGmsh;
   if (absl::EndsWithIgnoreCase(path, ".mesh")) return MeshFormat::kMedit;
+  if (absl::EndsWithIgnoreCase(path, ".meshb")) return MeshFormat::kMeshb;
   return MeshFormat::kUnknown;
 }
 
 absl::Status UnknownExtension(const std::string& path) {
-  return FileError(path, "unknown extension for a mesh: expected .vtu, .vtk, .msh or .mesh");
+  return FileError(path,
+                   "unknown extension for a mesh: expected .vtu, .vtk, .msh, .mesh or .meshb");
 }
 
 }  // namespace
 
+bool IsMeshPath(const std::string& path) { return FormatOf(path) != MeshFormat::kUnknown; }
+
 absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
-  absl::StatusOr<std::string> text = ReadFileBytes(path);
-  if (!text.ok()) return text.status();
+  absl::StatusOr<FileView> view = FileView::Open(path);
+  if (!view.ok()) return view.status();
+  const absl::string_view text = view->bytes();
   absl::StatusOr<MeshFile> file;
   switch (format) {
     case MeshFormat::kVtu:
-      file = ParseVtu(*text, path);
+      file = ParseVtu(text, path);
       break;
     case MeshFormat::kVtkLegacy:
-      file = ParseVtkLegacy(*text, path);
+      file = ParseVtkLegacy(text, path);
       break;
     case MeshFormat::kGmsh:
-      file = ParseGmsh(*text, path);
+      file = ParseGmsh(text, path);
       break;
     case MeshFormat::kMedit:
-      file = ParseMedit(*text, path);
+      file = ParseMedit(text, path);
+      break;
+    case MeshFormat::kMeshb:
+      file = ParseMeshb(text, path);
       break;
     case MeshFormat::kUnknown:
       break;
@@ -56,28 +64,39 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   return file;
 }
 
-absl::Status WriteMesh(const std::string& path, const MeshFile& file) {
+absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
+                                       const MeshWriteOptions& options) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
   if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
   std::string bytes;
   switch (format) {
     case MeshFormat::kVtu:
-      bytes = FormatVtu(file);
+      bytes = FormatVtu(file, options.vtu);
       break;
     case MeshFormat::kVtkLegacy:
-      bytes = FormatVtkLegacy(file);
+      bytes = FormatVtkLegacy(file, {.binary = options.binary});
       break;
     case MeshFormat::kGmsh:
-      bytes = FormatGmsh41(file);
+      bytes = FormatGmsh41(file, {.binary = options.binary});
       break;
     case MeshFormat::kMedit:
       bytes = FormatMedit(file);
       break;
+    case MeshFormat::kMeshb:
+      bytes = FormatMeshb(file, {.version = options.meshb_version});
+      break;
     case MeshFormat::kUnknown:
       break;
   }
-  return WriteFileAtomically(path, bytes);
+  return bytes;
+}
+
+absl::Status WriteMesh(const std::string& path, const MeshFile& file,
+                       const MeshWriteOptions& options) {
+  absl::StatusOr<std::string> bytes = FormatMesh(path, file, options);
+  if (!bytes.ok()) return bytes.status();
+  return WriteFileAtomically(path, *bytes);
 }
 
 }  // namespace tetrefine::io

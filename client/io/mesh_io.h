@@ -5,21 +5,46 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "client/io/mesh_file.h"
+#include "client/io/vtu_format.h"
 
 namespace tetrefine::io {
 
 // Reads a tetrahedral mesh, choosing the format from the extension (case-insensitive):
-//   .vtu   VTK XML unstructured grid     .vtk   legacy VTK, ASCII
-//   .msh   Gmsh 2.2 or 4.1, ASCII        .mesh  Medit, ASCII
-// Non-tetrahedral cells are ignored. The result passed ValidateMeshFile. Errors name the file,
-// and the line for text formats; an unknown extension is an error naming the file.
+//   .vtu    VTK XML unstructured grid (every encoding and compressor VTK writes)
+//   .vtk    legacy VTK, ASCII or BINARY, versions 2 to 5.1
+//   .msh    Gmsh 2.2 or 4.1, ASCII or binary
+//   .mesh   Medit ASCII          .meshb  Medit binary (libMeshb versions 1 to 4)
+// Linear tetrahedra are kept; points, lines and surface cells are skipped; any other volume cell
+// is an error naming what the file holds. Region labels, their name and the file's frame tag
+// come along (MeshFile); points are RAS. The result passed ValidateMeshFile. Errors name the
+// file, and the line for text formats; an unknown extension is an error naming the file.
 absl::StatusOr<MeshFile> ReadMesh(const std::string& path);
+
+// How WriteMesh encodes each format.
+struct MeshWriteOptions {
+  VtuWriteOptions vtu{};  // .vtu: ParaView's layout (appended raw, zlib) unless changed
+  // .vtk and .msh: binary instead of ASCII. ASCII stays the default for these two: it is what
+  // every older reader takes and what people open in an editor; binary is for large meshes.
+  bool binary = false;
+  int meshb_version = 0;  // .meshb: libMeshb version 1-4, 0 = 3 (see MeshbWriteOptions)
+};
 
 // Writes `file` in the format of `path`'s extension (as above; .msh is written as 4.1) after
 // checking it with ValidateMeshFile. The bytes go to a temporary file in the same directory
 // which is then renamed over `path`, so a failed write never leaves half a file.
-// What each format keeps: .vtu/.vtk/.msh keep values, iteration and quality; .mesh keeps only
-// iteration (as the Medit tet reference).
-absl::Status WriteMesh(const std::string& path, const MeshFile& file);
+// What each format keeps: .vtu/.vtk keep values, iteration, quality, labels (under label_name)
+// and the frame tag; .msh keeps values, iteration, quality and positive labels (as physical
+// groups); .mesh/.meshb keep only the labels (as references). Formats without a frame tag get
+// RAS coordinates.
+absl::Status WriteMesh(const std::string& path, const MeshFile& file,
+                       const MeshWriteOptions& options = {});
+
+// The bytes WriteMesh would write for `path` (the format from its extension), without writing
+// them: for callers that send or time the encoding on its own.
+absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
+                                       const MeshWriteOptions& options = {});
+
+// True when `path` has one of the mesh extensions above.
+bool IsMeshPath(const std::string& path);
 
 }  // namespace tetrefine::io

@@ -1,5 +1,6 @@
 #include "client/io/text_scanner.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -15,16 +16,15 @@ bool IsSpace(char c) {
   return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
 }
 
-// A bad token quoted in a message, shortened so binary garbage cannot flood it.
-std::string Quote(absl::string_view token) {
+}  // namespace
+
+std::string QuoteToken(absl::string_view token) {
   std::string out = "\"";
   for (char c : token.substr(0, 40)) out.push_back(c >= 32 && c < 127 ? c : '?');
   if (token.size() > 40) out += "...";
   out += "\"";
   return out;
 }
-
-}  // namespace
 
 void TextScanner::SkipSpace() {
   while (pos_ < text_.size()) {
@@ -65,7 +65,7 @@ absl::StatusOr<double> TextScanner::Double(absl::string_view what) {
   if (!token.ok()) return token.status();
   double value;
   if (!ParseDouble(*token, value)) {
-    return Error(absl::StrCat("expected ", what, " (a number), got ", Quote(*token)));
+    return Error(absl::StrCat("expected ", what, " (a number), got ", QuoteToken(*token)));
   }
   return value;
 }
@@ -83,7 +83,7 @@ absl::StatusOr<int64_t> TextScanner::Int(absl::string_view what) {
   if (!token.ok()) return token.status();
   int64_t value;
   if (!ParseInt64(*token, value)) {
-    return Error(absl::StrCat("expected ", what, " (an integer), got ", Quote(*token)));
+    return Error(absl::StrCat("expected ", what, " (an integer), got ", QuoteToken(*token)));
   }
   return value;
 }
@@ -120,8 +120,19 @@ absl::string_view TextScanner::RestOfLine() {
   return rest;
 }
 
+absl::StatusOr<absl::string_view> TextScanner::Bytes(size_t n, absl::string_view what) {
+  if (n > remaining()) {
+    return Error(
+        absl::StrCat("truncated: ", what, " needs ", n, " bytes, only ", remaining(), " remain"));
+  }
+  const absl::string_view out = text_.substr(pos_, n);
+  line_ += std::count(out.begin(), out.end(), '\n');
+  pos_ += n;
+  return out;
+}
+
 absl::Status TextScanner::CheckCount(int64_t count, int64_t min_bytes, absl::string_view what) {
-  SkipSpace();
+  // No whitespace skipping here: in binary files the next bytes are data, not separators.
   if (count < 0) return Error(absl::StrCat("negative count of ", what, ": ", count));
   const int64_t left = static_cast<int64_t>(remaining());
   if (count > 0 && count > left / min_bytes) {

@@ -1,12 +1,17 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 
 namespace tetrefine::io {
+
+// `token` quoted for a message: at most 40 characters, bytes outside printable ASCII as '?', so
+// binary garbage cannot flood or corrupt an error line.
+std::string QuoteToken(absl::string_view token);
 
 // Splits an ASCII mesh file into whitespace-separated tokens, tracking line numbers so every
 // error can say "<path>:<line>: <problem>".
@@ -18,6 +23,8 @@ class TextScanner {
 
   // True when only whitespace (and comments) remain.
   bool AtEnd();
+  // True when nothing at all remains (AtEnd skips blank lines; this does not).
+  bool AtEndOfInput() const { return pos_ >= text_.size(); }
 
   // The next token; an "unexpected end of file" error naming `what` when there is none.
   absl::StatusOr<absl::string_view> Token(absl::string_view what);
@@ -34,6 +41,11 @@ class TextScanner {
   // The rest of the current line (after the last token), without the terminator, and moves to
   // the next line. Used for free-text lines such as titles.
   absl::string_view RestOfLine();
+
+  // The next `n` raw bytes, from the current position (no whitespace skipped): the binary block
+  // that follows a header line in binary legacy VTK and Gmsh files. Line numbers keep counting
+  // the newline bytes inside, so later errors still give the line an editor shows.
+  absl::StatusOr<absl::string_view> Bytes(size_t n, absl::string_view what);
 
   // Fails unless at least `count` entries of at least `min_bytes` each can still follow. Called
   // before reserving memory for a declared count, so a corrupt count cannot allocate more than

@@ -3,13 +3,23 @@
 #include <cmath>
 #include <limits>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
+#include "client/io/cell_census.h"
+#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
 
 namespace tetrefine::io {
+namespace {
+
+bool IsInt32(int64_t x) {
+  return x >= std::numeric_limits<int32_t>::min() && x <= std::numeric_limits<int32_t>::max();
+}
+
+}  // namespace
 
 absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t num_points,
-                         absl::string_view path, MeshFile& file, int64_t& ignored_cells) {
+                         absl::string_view path, MeshFile& file) {
   const size_t n = cells.types.size();
   if (cells.offsets.size() != n + 1 || cells.offsets[0] != 0 ||
       cells.offsets[n] != static_cast<int64_t>(cells.connectivity.size())) {
@@ -17,17 +27,21 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
         path, absl::StrCat("cell offsets (", cells.offsets.size(), ") do not match ", n,
                            " cells and ", cells.connectivity.size(), " connectivity entries"));
   }
-  for (const auto* array : {&data.iteration, &data.quality}) {
-    if (!array->empty() && array->size() != n) {
-      return FileError(path,
-                       absl::StrCat("cell data has ", array->size(), " entries for ", n, " cells"));
-    }
+  if (!data.iteration.empty() && data.iteration.size() != n) {
+    return FileError(path, absl::StrCat("cell data \"iteration\" has ", data.iteration.size(),
+                                        " entries for ", n, " cells"));
   }
-  ignored_cells = 0;
-  Mesh& mesh = file.mesh;
-  mesh.tets.clear();
-  file.tet_iteration.clear();
-  file.tet_quality.clear();
+  if (!data.quality.empty() && data.quality.size() != n) {
+    return FileError(path, absl::StrCat("cell data \"quality\" has ", data.quality.size(),
+                                        " entries for ", n, " cells"));
+  }
+  if (!data.label.empty() && data.label.size() != n) {
+    return FileError(path, absl::StrCat("cell data \"", data.label_name, "\" has ",
+                                        data.label.size(), " entries for ", n, " cells"));
+  }
+  // Non-tet cells are counted by type here and named once at the end.
+  absl::flat_hash_map<int64_t, int64_t> other_types;
+  int64_t tets = 0;
   for (size_t c = 0; c < n; ++c) {
     const int64_t begin = cells.offsets[c];
     const int64_t end = cells.offsets[c + 1];
@@ -35,13 +49,30 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
       return FileError(path, absl::StrCat("cell ", c, " has decreasing offsets"));
     }
     if (cells.types[c] != kVtkTetra) {
-      ++ignored_cells;
+      ++other_types[cells.types[c]];
       continue;
     }
     if (end - begin != 4) {
       return FileError(path,
                        absl::StrCat("cell ", c, " is a tetrahedron with ", end - begin, " points"));
     }
+    ++tets;
+  }
+  CellCensus census;
+  census.AddTets(tets);
+  for (const auto& [type, count] : other_types) census.Add(VtkCellKind(type), count);
+  if (absl::Status s = census.Check(path); !s.ok()) return s;
+
+  Mesh& mesh = file.mesh;
+  mesh.tets.clear();
+  ReserveHuge(mesh.tets, tets);
+  file.tet_iteration.clear();
+  file.tet_quality.clear();
+  file.mesh.labels.clear();
+  file.label_name.clear();
+  for (size_t c = 0; c < n; ++c) {
+    if (cells.types[c] != kVtkTetra) continue;
+    const int64_t begin = cells.offsets[c];
     Tet tet;
     for (int k = 0; k < 4; ++k) {
       const int64_t index = cells.connectivity[begin + k];
@@ -64,13 +95,19 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
     if (!data.quality.empty()) {
       const double q = data.quality[c];
       if (!std::isfinite(q) || std::abs(q) > std::numeric_limits<float>::max()) {
-        return FileError(path, absl::StrCat("cell ", c, ": quality ", q,
-                                            " is not a finite "
-                                            "float"));
+        return FileError(path, absl::StrCat("cell ", c, ": quality ", q, " is not a finite float"));
       }
       file.tet_quality.push_back(static_cast<float>(q));
     }
+    if (!data.label.empty()) {
+      if (!IsInt32(data.label[c])) {
+        return FileError(path, absl::StrCat("cell ", c, ": ", data.label_name, " ", data.label[c],
+                                            " is not a 32-bit integer"));
+      }
+      file.mesh.labels.push_back(static_cast<int32_t>(data.label[c]));
+    }
   }
+  if (!data.label.empty()) file.label_name = data.label_name;
   return absl::OkStatus();
 }
 

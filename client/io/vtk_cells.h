@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -20,17 +21,21 @@ struct VtkCells {
   std::vector<int64_t> types;  // one VTK cell type per cell
 };
 
-// Per-cell arrays as read ("iteration", "quality"), one entry per cell of any type.
+// Per-cell arrays as read, one entry per cell of any type (or empty when absent).
 struct VtkCellData {
   std::vector<double> iteration;
   std::vector<double> quality;
+  std::vector<int64_t> label;
+  std::string label_name;  // the array `label` came from
+  int label_rank = -1;     // its LabelNameRank, to keep the most preferred of several
 };
 
-// Fills file.mesh.tets from the tetrahedra (type 10) of `cells`, ignoring every other cell type,
-// and the per-tet arrays from the entries of `data` for those cells. Checks the layout, that each
-// tet has 4 indices below `num_points`, that iterations are int32 and qualities float-finite.
-// `ignored_cells` receives how many cells were not tets.
+// Fills file.mesh.tets from the tetrahedra (type 10) of `cells`, and the per-tet arrays (and
+// label_name) from the entries of `data` for those cells. Points, lines and surface cells are
+// skipped; other volume cells are an error naming what the file holds (CellCensus). Checks the
+// layout, that each tet has 4 indices below `num_points`, that iterations and labels are int32
+// and qualities float-finite.
 absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t num_points,
-                         absl::string_view path, MeshFile& file, int64_t& ignored_cells);
+                         absl::string_view path, MeshFile& file);
 
 }  // namespace tetrefine::io

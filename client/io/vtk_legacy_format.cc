@@ -1,5 +1,11 @@
 #include "client/io/vtk_legacy_format.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <optional>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -7,315 +13,610 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/strip.h"
+#include "client/io/byte_order.h"
+#include "client/io/huge_pages.h"
+#include "client/io/label_names.h"
+#include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
 #include "client/io/vtk_cells.h"
+#include "client/io/vtk_scalar.h"
 
 namespace tetrefine::io {
 namespace {
 
 constexpr int64_t kMaxCount = int64_t{1} << 40;
 
-// Reads `count` numbers into `out` (after checking the file can hold them).
-absl::Status ReadNumbers(TextScanner& in, int64_t count, absl::string_view what,
-                         std::vector<double>& out) {
-  if (absl::Status s = in.CheckCount(count, 2, what); !s.ok()) return s;
-  out.resize(count);
-  for (double& x : out) {
-    absl::StatusOr<double> value = in.Double(what);
-    if (!value.ok()) return value.status();
-    x = *value;
-  }
-  return absl::OkStatus();
+int HexDigit(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  return -1;
 }
 
-absl::Status ReadInts(TextScanner& in, int64_t count, absl::string_view what,
-                      std::vector<int64_t>& out) {
-  if (absl::Status s = in.CheckCount(count, 2, what); !s.ok()) return s;
-  out.resize(count);
-  for (int64_t& x : out) {
-    absl::StatusOr<int64_t> value = in.Int(what);
-    if (!value.ok()) return value.status();
-    x = *value;
+// VTK writes array names and ASCII strings with %XX escapes for spaces, '%' and other bytes
+// that would break tokens.
+std::string Unescape(absl::string_view text) {
+  std::string out;
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '%' && i + 2 < text.size() && HexDigit(text[i + 1]) >= 0 &&
+        HexDigit(text[i + 2]) >= 0) {
+      out.push_back(static_cast<char>(HexDigit(text[i + 1]) * 16 + HexDigit(text[i + 2])));
+      i += 2;
+    } else {
+      out.push_back(text[i]);
+    }
   }
-  return absl::OkStatus();
+  return out;
 }
 
-absl::Status SkipNumbers(TextScanner& in, int64_t count, absl::string_view what) {
-  if (absl::Status s = in.CheckCount(count, 2, what); !s.ok()) return s;
-  for (int64_t i = 0; i < count; ++i) {
-    if (absl::Status s = in.Double(what).status(); !s.ok()) return s;
+std::string Escape(absl::string_view text) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  std::string out;
+  for (char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u <= ' ' || u > '~' || c == '%' || c == '"') {
+      out += '%';
+      out += kHex[u >> 4];
+      out += kHex[u & 15];
+    } else {
+      out += c;
+    }
   }
-  return absl::OkStatus();
+  return out.empty() ? std::string("label") : out;
 }
 
-// State of a parse: the arrays found so far.
-struct Parsed {
-  int major_version = 0;
-  bool have_points = false;
-  bool have_cells = false;
-  bool have_types = false;
-  std::vector<double> points;
-  VtkCells cells;
-  std::vector<double> values;
-  VtkCellData cell_data;
+class LegacyParser {
+ public:
+  LegacyParser(absl::string_view text, absl::string_view path) : in_(text, path), path_(path) {}
+
+  absl::StatusOr<MeshFile> Parse();
+
+ private:
+  // Reads `count` values stored as `type` (a legacy type token) into `out`, ASCII or binary.
+  // In a binary file the values start on the line after the header, so the rest of the header
+  // line is consumed first.
+  absl::Status ReadDoubles(int64_t count, absl::string_view type, absl::string_view what,
+                           std::vector<double>& out);
+  absl::Status ReadInts(int64_t count, absl::string_view type, absl::string_view what,
+                        std::vector<int64_t>& out);
+  // Reads `count` strings (ASCII: one per line, %-escaped; binary: length-prefixed).
+  absl::Status ReadStrings(int64_t count, std::vector<std::string>* out);
+  // Skips `count` values of `type`, which may also be "bit" or "string".
+  absl::Status SkipValues(int64_t count, absl::string_view type, absl::string_view what);
+  absl::StatusOr<absl::string_view> BinaryBlock(int64_t count, size_t width,
+                                                absl::string_view what);
+  absl::Status SkipMetadata();
+
+  absl::Status ReadCells();
+  absl::Status ReadField(int64_t tuples_expected, bool point_section, bool dataset_level);
+  absl::Status ReadAttribute(const std::string& keyword, int64_t n, bool point_section);
+  // Where a named array goes: values, iteration, quality (doubles) or labels (ints).
+  std::vector<double>* DoubleDestination(bool point_section, absl::string_view name);
+  bool IsLabel(bool point_section, absl::string_view name) const;
+  absl::Status ReadArray(absl::string_view name, int64_t components, int64_t n,
+                         absl::string_view type, bool point_section);
+
+  TextScanner in_;
+  absl::string_view path_;
+  int major_version_ = 0;
+  bool binary_ = false;
+  bool have_points_ = false;
+  bool have_cells_ = false;
+  bool have_types_ = false;
+  std::vector<double> points_;
+  VtkCells cells_;
+  std::vector<double> values_;
+  VtkCellData cell_data_;
+  MeshFrame frame_ = MeshFrame::kUntagged;
 };
 
-// Where a named array of the current attribute section goes, or nullptr to skip it.
-std::vector<double>* Destination(Parsed& p, bool point_section, absl::string_view name) {
-  if (point_section) return name == "value" ? &p.values : nullptr;
-  if (name == "iteration") return &p.cell_data.iteration;
-  if (name == "quality") return &p.cell_data.quality;
+absl::StatusOr<absl::string_view> LegacyParser::BinaryBlock(int64_t count, size_t width,
+                                                            absl::string_view what) {
+  if (count < 0 || count > kMaxCount) return in_.Error(absl::StrCat("bad count of ", what));
+  in_.RestOfLine();
+  return in_.Bytes(static_cast<size_t>(count) * width, what);
+}
+
+absl::Status LegacyParser::ReadDoubles(int64_t count, absl::string_view type,
+                                       absl::string_view what, std::vector<double>& out) {
+  const std::optional<VtkScalar> scalar = VtkScalarFromLegacy(type);
+  if (!scalar)
+    return in_.Error(absl::StrCat("unsupported data type ", QuoteToken(type), " for ", what));
+  if (binary_) {
+    absl::StatusOr<absl::string_view> bytes = BinaryBlock(count, VtkScalarSize(*scalar), what);
+    if (!bytes.ok()) return bytes.status();
+    ReserveHuge(out, count);
+    ReserveHuge(out, count);
+    out.resize(count);
+    ScalarsToDoubles(*bytes, *scalar, ByteOrder::kBig, count, out.data());
+    return absl::OkStatus();
+  }
+  if (absl::Status s = in_.CheckCount(count, 2, what); !s.ok()) return s;
+  ReserveHuge(out, count);
+  out.resize(count);
+  for (double& x : out) {
+    absl::StatusOr<double> value = in_.Double(what);
+    if (!value.ok()) return value.status();
+    x = *value;
+  }
+  return absl::OkStatus();
+}
+
+absl::Status LegacyParser::ReadInts(int64_t count, absl::string_view type, absl::string_view what,
+                                    std::vector<int64_t>& out) {
+  const std::optional<VtkScalar> scalar = VtkScalarFromLegacy(type);
+  if (!scalar)
+    return in_.Error(absl::StrCat("unsupported data type ", QuoteToken(type), " for ", what));
+  if (binary_) {
+    absl::StatusOr<absl::string_view> bytes = BinaryBlock(count, VtkScalarSize(*scalar), what);
+    if (!bytes.ok()) return bytes.status();
+    ReserveHuge(out, count);
+    ReserveHuge(out, count);
+    out.resize(count);
+    const size_t bad = ScalarsToInt64s(*bytes, *scalar, ByteOrder::kBig, count, out.data());
+    if (bad != static_cast<size_t>(count)) {
+      return in_.Error(absl::StrCat(what, ": value ", bad, " is not an integer"));
+    }
+    return absl::OkStatus();
+  }
+  if (absl::Status s = in_.CheckCount(count, 2, what); !s.ok()) return s;
+  ReserveHuge(out, count);
+  out.resize(count);
+  for (int64_t& x : out) {
+    absl::StatusOr<double> value = in_.Double(what);
+    if (!value.ok()) return value.status();
+    if (!(std::abs(*value) < 0x1p62) || *value != std::floor(*value)) {
+      return in_.Error(absl::StrCat(what, ": ", *value, " is not an integer"));
+    }
+    x = static_cast<int64_t>(*value);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status LegacyParser::ReadStrings(int64_t count, std::vector<std::string>* out) {
+  if (count < 0 || count > kMaxCount) return in_.Error("bad string count");
+  if (!binary_) {
+    in_.RestOfLine();
+    if (absl::Status s = in_.CheckCount(count, 1, "strings"); !s.ok()) return s;
+    for (int64_t i = 0; i < count; ++i) {
+      if (in_.AtEndOfInput()) return in_.Error("truncated in a string array");
+      const std::string value = Unescape(in_.RestOfLine());
+      if (out != nullptr) out->push_back(value);
+    }
+    return absl::OkStatus();
+  }
+  in_.RestOfLine();
+  for (int64_t i = 0; i < count; ++i) {
+    absl::StatusOr<absl::string_view> head = in_.Bytes(1, "a string length");
+    if (!head.ok()) return head.status();
+    const auto first = static_cast<unsigned char>((*head)[0]);
+    // The top two bits say how many bytes hold the length: 11 one, 10 two, 01 four, 00 eight.
+    const int width = (first >> 6) == 3 ? 1 : (first >> 6) == 2 ? 2 : (first >> 6) == 1 ? 4 : 8;
+    uint64_t length = first & 0x3f;
+    if (width > 1) {
+      absl::StatusOr<absl::string_view> rest = in_.Bytes(width - 1, "a string length");
+      if (!rest.ok()) return rest.status();
+      for (char c : *rest) length = (length << 8) | static_cast<unsigned char>(c);
+    }
+    absl::StatusOr<absl::string_view> value = in_.Bytes(length, "a string");
+    if (!value.ok()) return value.status();
+    if (out != nullptr) out->emplace_back(*value);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status LegacyParser::SkipValues(int64_t count, absl::string_view type,
+                                      absl::string_view what) {
+  if (absl::EqualsIgnoreCase(type, "string")) return ReadStrings(count, nullptr);
+  if (absl::EqualsIgnoreCase(type, "bit")) {
+    if (binary_) {
+      absl::StatusOr<absl::string_view> bytes = BinaryBlock((count + 7) / 8, 1, what);
+      return bytes.status();
+    }
+  } else if (binary_) {
+    const std::optional<VtkScalar> scalar = VtkScalarFromLegacy(type);
+    if (!scalar)
+      return in_.Error(absl::StrCat("unsupported data type ", QuoteToken(type), " for ", what));
+    return BinaryBlock(count, VtkScalarSize(*scalar), what).status();
+  }
+  if (absl::Status s = in_.CheckCount(count, 2, what); !s.ok()) return s;
+  for (int64_t i = 0; i < count; ++i) {
+    if (absl::Status s = in_.Double(what).status(); !s.ok()) return s;
+  }
+  return absl::OkStatus();
+}
+
+// METADATA (VTK 5.1+, also in 4.2 files VTK 9 writes): text lines up to an empty line.
+absl::Status LegacyParser::SkipMetadata() {
+  in_.RestOfLine();  // the rest of the METADATA line itself
+  while (!in_.AtEndOfInput() && !absl::StripAsciiWhitespace(in_.RestOfLine()).empty()) {
+  }
+  return absl::OkStatus();
+}
+
+absl::Status LegacyParser::ReadCells() {
+  absl::StatusOr<int64_t> first = in_.IntIn("the CELLS count", 0, kMaxCount);
+  if (!first.ok()) return first.status();
+  absl::StatusOr<int64_t> second = in_.IntIn("the CELLS size", 0, kMaxCount);
+  if (!second.ok()) return second.status();
+  if (major_version_ >= 5) {
+    // "CELLS <offsets> <connectivity>" then "OFFSETS <type>" and "CONNECTIVITY <type>".
+    if (!in_.ConsumeIf("OFFSETS")) return in_.Error("expected OFFSETS after CELLS (version 5)");
+    absl::StatusOr<absl::string_view> type = in_.Token("the OFFSETS type");
+    if (!type.ok()) return type.status();
+    if (absl::Status s = ReadInts(*first, *type, "cell offsets", cells_.offsets); !s.ok()) {
+      return s;
+    }
+    if (!in_.ConsumeIf("CONNECTIVITY")) return in_.Error("expected CONNECTIVITY after OFFSETS");
+    type = in_.Token("the CONNECTIVITY type");
+    if (!type.ok()) return type.status();
+    return ReadInts(*second, *type, "cell connectivity", cells_.connectivity);
+  }
+  // "CELLS <n> <size>" then n runs "k i_1 ... i_k" (int32 in binary files).
+  std::vector<int64_t> flat;
+  if (absl::Status s = ReadInts(*second, "int", "cell entries", flat); !s.ok()) return s;
+  if (*first > *second) return in_.Error("CELLS count exceeds its size");
+  cells_.offsets.assign(1, 0);
+  cells_.offsets.reserve(*first + 1);
+  cells_.connectivity.reserve(*second - *first);
+  size_t at = 0;
+  for (int64_t c = 0; c < *first; ++c) {
+    if (at >= flat.size()) return in_.Error(absl::StrCat("CELLS ends inside cell ", c));
+    const int64_t k = flat[at++];
+    if (k < 0 || static_cast<uint64_t>(k) > flat.size() - at) {
+      return in_.Error(absl::StrCat("cell ", c, " claims ", k, " points, beyond CELLS size"));
+    }
+    cells_.connectivity.insert(cells_.connectivity.end(), flat.begin() + at, flat.begin() + at + k);
+    at += k;
+    cells_.offsets.push_back(static_cast<int64_t>(cells_.connectivity.size()));
+  }
+  if (at != flat.size()) {
+    return in_.Error(
+        absl::StrCat("CELLS size ", *second, " does not match the ", at, " numbers its cells use"));
+  }
+  return absl::OkStatus();
+}
+
+std::vector<double>* LegacyParser::DoubleDestination(bool point_section, absl::string_view name) {
+  if (point_section) return name == "value" ? &values_ : nullptr;
+  if (name == "iteration") return &cell_data_.iteration;
+  if (name == "quality") return &cell_data_.quality;
   return nullptr;
 }
 
-absl::Status ReadCells(TextScanner& in, Parsed& p) {
-  absl::StatusOr<int64_t> first = in.IntIn("the CELLS count", 0, kMaxCount);
-  if (!first.ok()) return first.status();
-  absl::StatusOr<int64_t> second = in.IntIn("the CELLS size", 0, kMaxCount);
-  if (!second.ok()) return second.status();
-  if (p.major_version >= 5) {
-    // "CELLS <offsets> <connectivity>" then "OFFSETS <type>" and "CONNECTIVITY <type>".
-    if (!in.ConsumeIf("OFFSETS")) return in.Error("expected OFFSETS after CELLS (version 5)");
-    if (absl::Status s = in.Token("the OFFSETS type").status(); !s.ok()) return s;
-    if (absl::Status s = ReadInts(in, *first, "cell offsets", p.cells.offsets); !s.ok()) return s;
-    if (!in.ConsumeIf("CONNECTIVITY")) return in.Error("expected CONNECTIVITY after OFFSETS");
-    if (absl::Status s = in.Token("the CONNECTIVITY type").status(); !s.ok()) return s;
-    return ReadInts(in, *second, "cell connectivity", p.cells.connectivity);
-  }
-  // "CELLS <n> <size>" then n lines "k i_1 ... i_k".
-  if (absl::Status s = in.CheckCount(*second, 2, "cell entries"); !s.ok()) return s;
-  if (*first > *second) return in.Error("CELLS count exceeds its size");
-  p.cells.offsets.assign(1, 0);
-  p.cells.offsets.reserve(*first + 1);
-  p.cells.connectivity.reserve(*second - *first);
-  for (int64_t c = 0; c < *first; ++c) {
-    absl::StatusOr<int64_t> k = in.IntIn("a cell's point count", 0, *second);
-    if (!k.ok()) return k.status();
-    for (int64_t i = 0; i < *k; ++i) {
-      absl::StatusOr<int64_t> index = in.Int("a cell point index");
-      if (!index.ok()) return index.status();
-      p.cells.connectivity.push_back(*index);
+bool LegacyParser::IsLabel(bool point_section, absl::string_view name) const {
+  if (point_section) return false;
+  const int rank = LabelNameRank(name);
+  return rank >= 0 && (cell_data_.label_rank < 0 || rank < cell_data_.label_rank);
+}
+
+absl::Status LegacyParser::ReadArray(absl::string_view raw_name, int64_t components, int64_t n,
+                                     absl::string_view type, bool point_section) {
+  const std::string name = Unescape(raw_name);
+  if (components == 1) {
+    if (std::vector<double>* out = DoubleDestination(point_section, name)) {
+      return ReadDoubles(n, type, name, *out);
     }
-    p.cells.offsets.push_back(static_cast<int64_t>(p.cells.connectivity.size()));
+    if (IsLabel(point_section, name)) {
+      if (absl::Status s = ReadInts(n, type, name, cell_data_.label); !s.ok()) return s;
+      cell_data_.label_name = name;
+      cell_data_.label_rank = LabelNameRank(name);
+      return absl::OkStatus();
+    }
   }
-  if (static_cast<int64_t>(p.cells.connectivity.size()) + *first != *second) {
-    return in.Error(absl::StrCat("CELLS size ", *second, " does not match the ",
-                                 p.cells.connectivity.size() + *first, " numbers read"));
+  return SkipValues(n * components, type, name);
+}
+
+absl::Status LegacyParser::ReadField(int64_t tuples_expected, bool point_section,
+                                     bool dataset_level) {
+  if (absl::Status s = in_.Token("the FIELD name").status(); !s.ok()) return s;
+  absl::StatusOr<int64_t> arrays = in_.IntIn("the FIELD array count", 0, 1 << 20);
+  if (!arrays.ok()) return arrays.status();
+  for (int64_t a = 0; a < *arrays; ++a) {
+    absl::StatusOr<absl::string_view> name = in_.Token("a FIELD array name");
+    if (!name.ok()) return name.status();
+    const std::string array_name(*name);
+    absl::StatusOr<int64_t> components = in_.IntIn("a FIELD component count", 1, 1 << 20);
+    if (!components.ok()) return components.status();
+    absl::StatusOr<int64_t> tuples = in_.IntIn("a FIELD tuple count", 0, kMaxCount);
+    if (!tuples.ok()) return tuples.status();
+    absl::StatusOr<absl::string_view> type = in_.Token("a FIELD array type");
+    if (!type.ok()) return type.status();
+    const std::string type_name(*type);
+    if (dataset_level) {
+      if (array_name == "SPACE" && absl::EqualsIgnoreCase(type_name, "string")) {
+        std::vector<std::string> strings;
+        if (absl::Status s = ReadStrings(*components * *tuples, &strings); !s.ok()) return s;
+        if (!strings.empty() && frame_ == MeshFrame::kUntagged) {
+          frame_ = absl::StrContains(strings[0], "LPS")   ? MeshFrame::kLps
+                   : absl::StrContains(strings[0], "RAS") ? MeshFrame::kRas
+                                                          : MeshFrame::kUntagged;
+        }
+      } else if (absl::Status s = SkipValues(*components * *tuples, type_name, array_name);
+                 !s.ok()) {
+        return s;
+      }
+    } else {
+      const bool wanted =
+          *components == 1 && (DoubleDestination(point_section, Unescape(array_name)) != nullptr ||
+                               IsLabel(point_section, Unescape(array_name)));
+      if (wanted && *tuples != tuples_expected) {
+        return in_.Error(absl::StrCat("array \"", array_name, "\" has ", *tuples,
+                                      " tuples, expected ", tuples_expected));
+      }
+      if (absl::Status s = ReadArray(array_name, *components, *tuples, type_name, point_section);
+          !s.ok()) {
+        return s;
+      }
+    }
+    if (in_.ConsumeIf("METADATA")) {
+      if (absl::Status s = SkipMetadata(); !s.ok()) return s;
+    }
   }
   return absl::OkStatus();
 }
 
 // One attribute (SCALARS, FIELD, VECTORS, ...) of a POINT_DATA/CELL_DATA section of `n` tuples.
-absl::Status ReadAttribute(TextScanner& in, Parsed& p, const std::string& keyword, int64_t n,
-                           bool point_section) {
+absl::Status LegacyParser::ReadAttribute(const std::string& keyword, int64_t n,
+                                         bool point_section) {
   if (keyword == "scalars") {
-    absl::StatusOr<absl::string_view> name = in.Token("the SCALARS name");
+    absl::StatusOr<absl::string_view> name = in_.Token("the SCALARS name");
     if (!name.ok()) return name.status();
-    if (absl::Status s = in.Token("the SCALARS type").status(); !s.ok()) return s;
+    const std::string array_name(*name);
+    absl::StatusOr<absl::string_view> type = in_.Token("the SCALARS type");
+    if (!type.ok()) return type.status();
+    const std::string type_name(*type);
     // The component count is optional; the next token is then LOOKUP_TABLE or a number.
     int64_t components = 1;
-    const absl::string_view rest = absl::StripAsciiWhitespace(in.RestOfLine());
+    const absl::string_view rest = absl::StripAsciiWhitespace(in_.RestOfLine());
     if (!rest.empty() && !ParseInt64(rest, components)) {
-      return in.Error(absl::StrCat("bad SCALARS component count \"", rest.substr(0, 20), "\""));
+      return in_.Error(absl::StrCat("bad SCALARS component count \"", rest.substr(0, 20), "\""));
     }
-    if (components < 1 || components > 4) return in.Error("SCALARS needs 1 to 4 components");
-    if (in.ConsumeIf("LOOKUP_TABLE")) {
-      if (absl::Status s = in.Token("the lookup table name").status(); !s.ok()) return s;
+    if (components < 1 || components > 4) return in_.Error("SCALARS needs 1 to 4 components");
+    if (in_.ConsumeIf("LOOKUP_TABLE")) {
+      if (absl::Status s = in_.Token("the lookup table name").status(); !s.ok()) return s;
     }
-    std::vector<double>* out = Destination(p, point_section, *name);
-    if (out == nullptr || components != 1) return SkipNumbers(in, n * components, *name);
-    return ReadNumbers(in, n, *name, *out);
+    return ReadArray(array_name, components, n, type_name, point_section);
   }
-  if (keyword == "field") {
-    if (absl::Status s = in.Token("the FIELD name").status(); !s.ok()) return s;
-    absl::StatusOr<int64_t> arrays = in.IntIn("the FIELD array count", 0, 1 << 20);
-    if (!arrays.ok()) return arrays.status();
-    for (int64_t a = 0; a < *arrays; ++a) {
-      absl::StatusOr<absl::string_view> name = in.Token("a FIELD array name");
-      if (!name.ok()) return name.status();
-      absl::StatusOr<int64_t> components = in.IntIn("a FIELD component count", 1, 1 << 20);
-      if (!components.ok()) return components.status();
-      absl::StatusOr<int64_t> tuples = in.IntIn("a FIELD tuple count", 0, kMaxCount);
-      if (!tuples.ok()) return tuples.status();
-      if (absl::Status s = in.Token("a FIELD array type").status(); !s.ok()) return s;
-      std::vector<double>* out = Destination(p, point_section, *name);
-      if (out != nullptr && *components == 1) {
-        if (*tuples != n) {
-          return in.Error(
-              absl::StrCat("array \"", *name, "\" has ", *tuples, " tuples, expected ", n));
-        }
-        if (absl::Status s = ReadNumbers(in, n, *name, *out); !s.ok()) return s;
-      } else if (absl::Status s = SkipNumbers(in, *components * *tuples, *name); !s.ok()) {
-        return s;
-      }
-      if (in.ConsumeIf("METADATA")) {
-        while (!in.AtEnd() && !absl::StripAsciiWhitespace(in.RestOfLine()).empty()) {
-        }
-      }
-    }
-    return absl::OkStatus();
-  }
+  if (keyword == "field") return ReadField(n, point_section, false);
   // Attributes kept only to be skipped: numbers per tuple.
   int64_t width = 0;
   if (keyword == "vectors" || keyword == "normals") width = 3;
   if (keyword == "tensors") width = 9;
   if (keyword == "tensors6") width = 6;
   if (width > 0) {
-    for (const char* what : {"the attribute name", "the attribute type"}) {
-      if (absl::Status s = in.Token(what).status(); !s.ok()) return s;
-    }
-    return SkipNumbers(in, n * width, keyword);
+    if (absl::Status s = in_.Token("the attribute name").status(); !s.ok()) return s;
+    absl::StatusOr<absl::string_view> type = in_.Token("the attribute type");
+    if (!type.ok()) return type.status();
+    return SkipValues(n * width, std::string(*type), keyword);
   }
-  if (keyword == "texture_coordinates" || keyword == "color_scalars") {
-    if (absl::Status s = in.Token("the attribute name").status(); !s.ok()) return s;
-    absl::StatusOr<int64_t> dim = in.IntIn("the attribute width", 1, 16);
+  if (keyword == "texture_coordinates") {
+    if (absl::Status s = in_.Token("the attribute name").status(); !s.ok()) return s;
+    absl::StatusOr<int64_t> dim = in_.IntIn("the attribute width", 1, 16);
     if (!dim.ok()) return dim.status();
-    if (keyword == "texture_coordinates") {
-      if (absl::Status s = in.Token("the attribute type").status(); !s.ok()) return s;
-    }
-    return SkipNumbers(in, n * *dim, keyword);
+    absl::StatusOr<absl::string_view> type = in_.Token("the attribute type");
+    if (!type.ok()) return type.status();
+    return SkipValues(n * *dim, std::string(*type), keyword);
+  }
+  if (keyword == "color_scalars") {
+    // Floats in ASCII files, unsigned chars in binary ones.
+    if (absl::Status s = in_.Token("the attribute name").status(); !s.ok()) return s;
+    absl::StatusOr<int64_t> dim = in_.IntIn("the attribute width", 1, 16);
+    if (!dim.ok()) return dim.status();
+    return SkipValues(n * *dim, binary_ ? "unsigned_char" : "float", keyword);
   }
   if (keyword == "lookup_table") {
-    if (absl::Status s = in.Token("the lookup table name").status(); !s.ok()) return s;
-    absl::StatusOr<int64_t> size = in.IntIn("the lookup table size", 0, kMaxCount);
+    if (absl::Status s = in_.Token("the lookup table name").status(); !s.ok()) return s;
+    absl::StatusOr<int64_t> size = in_.IntIn("the lookup table size", 0, kMaxCount);
     if (!size.ok()) return size.status();
-    return SkipNumbers(in, 4 * *size, "lookup table");
+    return SkipValues(4 * *size, binary_ ? "unsigned_char" : "float", "lookup table");
   }
-  if (keyword == "metadata") {
-    while (!in.AtEnd() && !absl::StripAsciiWhitespace(in.RestOfLine()).empty()) {
+  if (keyword == "metadata") return SkipMetadata();
+  return in_.Error(absl::StrCat("unknown keyword ", QuoteToken(keyword)));
+}
+
+absl::StatusOr<MeshFile> LegacyParser::Parse() {
+  absl::string_view header = in_.RestOfLine();
+  if (!absl::ConsumePrefix(&header, "# vtk DataFile Version ")) {
+    return in_.Error("not a legacy VTK file: first line is not \"# vtk DataFile Version x.y\"");
+  }
+  if (header.empty() || !absl::ascii_isdigit(header[0])) {
+    return in_.Error("bad legacy VTK version");
+  }
+  major_version_ = header[0] - '0';
+  frame_ = FrameFromHeader(in_.RestOfLine());  // the title
+  const std::string format = absl::AsciiStrToUpper(absl::StripAsciiWhitespace(in_.RestOfLine()));
+  if (format == "BINARY") {
+    binary_ = true;
+  } else if (format != "ASCII") {
+    return in_.Error("third line must be ASCII or BINARY");
+  }
+
+  int64_t section_size = -1;  // tuples in the current POINT_DATA / CELL_DATA section
+  bool point_section = false;
+  while (!in_.AtEnd()) {
+    absl::StatusOr<absl::string_view> token = in_.Token("a keyword");
+    if (!token.ok()) return token.status();
+    const std::string keyword = absl::AsciiStrToLower(*token);
+    if (keyword == "dataset") {
+      absl::StatusOr<absl::string_view> kind = in_.Token("the dataset type");
+      if (!kind.ok()) return kind.status();
+      if (!absl::EqualsIgnoreCase(*kind, "UNSTRUCTURED_GRID")) {
+        return in_.Error(absl::StrCat("DATASET ", QuoteToken(*kind),
+                                      ": only UNSTRUCTURED_GRID holds a tetrahedral mesh"));
+      }
+    } else if (keyword == "points") {
+      absl::StatusOr<int64_t> n = in_.IntIn("the POINTS count", 0, (int64_t{1} << 32) - 1);
+      if (!n.ok()) return n.status();
+      absl::StatusOr<absl::string_view> type = in_.Token("the POINTS type");
+      if (!type.ok()) return type.status();
+      if (absl::Status s = ReadDoubles(3 * *n, std::string(*type), "point coordinates", points_);
+          !s.ok()) {
+        return s;
+      }
+      have_points_ = true;
+    } else if (keyword == "metadata") {
+      if (absl::Status s = SkipMetadata(); !s.ok()) return s;
+    } else if (keyword == "field" && section_size < 0) {
+      if (absl::Status s = ReadField(-1, false, true); !s.ok()) return s;
+    } else if (keyword == "cells") {
+      if (absl::Status s = ReadCells(); !s.ok()) return s;
+      have_cells_ = true;
+    } else if (keyword == "cell_types") {
+      absl::StatusOr<int64_t> n = in_.IntIn("the CELL_TYPES count", 0, kMaxCount);
+      if (!n.ok()) return n.status();
+      if (absl::Status s = ReadInts(*n, "int", "cell types", cells_.types); !s.ok()) return s;
+      have_types_ = true;
+    } else if (keyword == "point_data" || keyword == "cell_data") {
+      absl::StatusOr<int64_t> n = in_.IntIn(absl::StrCat("the ", *token, " count"), 0, kMaxCount);
+      if (!n.ok()) return n.status();
+      section_size = *n;
+      point_section = keyword == "point_data";
+      const size_t expected = point_section ? points_.size() / 3 : cells_.types.size();
+      if (static_cast<size_t>(*n) != expected) {
+        return in_.Error(absl::StrCat(*token, " ", *n, " does not match the ", expected,
+                                      point_section ? " points" : " cells"));
+      }
+    } else if (section_size >= 0) {
+      if (absl::Status s = ReadAttribute(keyword, section_size, point_section); !s.ok()) {
+        return s;
+      }
+    } else {
+      return in_.Error(absl::StrCat("unexpected keyword ", QuoteToken(*token)));
     }
-    return absl::OkStatus();
   }
-  return in.Error(absl::StrCat("unknown keyword \"", keyword.substr(0, 40), "\""));
+  if (!have_points_ || !have_cells_ || !have_types_) {
+    return in_.Error("truncated: POINTS, CELLS and CELL_TYPES are all required");
+  }
+  if (major_version_ < 5 && cells_.offsets.size() != cells_.types.size() + 1) {
+    return in_.Error(absl::StrCat("CELL_TYPES has ", cells_.types.size(), " entries for ",
+                                  cells_.offsets.size() - 1, " cells"));
+  }
+  MeshFile file;
+  file.frame = frame_;
+  const size_t v = points_.size() / 3;
+  ReserveHuge(file.mesh.points, v);
+  file.mesh.points.resize(v);
+  for (size_t i = 0; i < v; ++i) {
+    file.mesh.points[i] = {points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]};
+  }
+  file.mesh.values = std::move(values_);
+  if (absl::Status s = CellsToTets(cells_, cell_data_, v, path_, file); !s.ok()) return s;
+  FrameToRas(file);
+  if (absl::Status s = ValidateMeshFile(file, path_); !s.ok()) return s;
+  return file;
+}
+
+// Appends `values` in the file's format: ASCII text (one value per line) or big-endian bytes.
+template <typename T>
+void AppendValues(std::string& out, const T* values, size_t n, bool binary) {
+  if (binary) {
+    const size_t start = out.size();
+    out.resize(start + n * sizeof(T));
+    char* at = out.data() + start;
+    for (size_t i = 0; i < n; ++i) {
+      std::memcpy(at + i * sizeof(T), &values[i], sizeof(T));
+      if (kNativeOrder != ByteOrder::kBig)
+        std::reverse(at + i * sizeof(T), at + (i + 1) * sizeof(T));
+    }
+    out += '\n';
+    return;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if constexpr (std::is_same_v<T, double>) {
+      AppendDouble(out, values[i]);
+    } else if constexpr (std::is_same_v<T, float>) {
+      AppendFloat(out, values[i]);
+    } else {
+      absl::StrAppend(&out, values[i]);
+    }
+    out += '\n';
+  }
 }
 
 }  // namespace
 
 absl::StatusOr<MeshFile> ParseVtkLegacy(absl::string_view text, absl::string_view path) {
-  TextScanner in(text, path);
-  Parsed p;
-  absl::string_view header = in.RestOfLine();
-  if (!absl::ConsumePrefix(&header, "# vtk DataFile Version ")) {
-    return in.Error("not a legacy VTK file: first line is not \"# vtk DataFile Version x.y\"");
-  }
-  if (header.empty() || !absl::ascii_isdigit(header[0])) {
-    return in.Error("bad legacy VTK version");
-  }
-  p.major_version = header[0] - '0';
-  in.RestOfLine();  // title
-  const std::string format = absl::AsciiStrToUpper(absl::StripAsciiWhitespace(in.RestOfLine()));
-  if (format == "BINARY") return in.Error("binary legacy VTK is not supported; write it as ASCII");
-  if (format != "ASCII") return in.Error("third line must be ASCII or BINARY");
-
-  int64_t section_size = -1;  // tuples in the current POINT_DATA / CELL_DATA section
-  bool point_section = false;
-  while (!in.AtEnd()) {
-    absl::StatusOr<absl::string_view> token = in.Token("a keyword");
-    if (!token.ok()) return token.status();
-    const std::string keyword = absl::AsciiStrToLower(*token);
-    if (keyword == "dataset") {
-      absl::StatusOr<absl::string_view> kind = in.Token("the dataset type");
-      if (!kind.ok()) return kind.status();
-      if (!absl::EqualsIgnoreCase(*kind, "UNSTRUCTURED_GRID")) {
-        return in.Error(absl::StrCat("DATASET ", kind->substr(0, 40),
-                                     ": only UNSTRUCTURED_GRID holds a tetrahedral mesh"));
-      }
-    } else if (keyword == "points") {
-      absl::StatusOr<int64_t> n = in.IntIn("the POINTS count", 0, (int64_t{1} << 32) - 1);
-      if (!n.ok()) return n.status();
-      if (absl::Status s = in.Token("the POINTS type").status(); !s.ok()) return s;
-      if (absl::Status s = ReadNumbers(in, 3 * *n, "point coordinates", p.points); !s.ok()) {
-        return s;
-      }
-      p.have_points = true;
-    } else if (keyword == "cells") {
-      if (absl::Status s = ReadCells(in, p); !s.ok()) return s;
-      p.have_cells = true;
-    } else if (keyword == "cell_types") {
-      absl::StatusOr<int64_t> n = in.IntIn("the CELL_TYPES count", 0, kMaxCount);
-      if (!n.ok()) return n.status();
-      if (absl::Status s = ReadInts(in, *n, "cell types", p.cells.types); !s.ok()) return s;
-      p.have_types = true;
-    } else if (keyword == "point_data" || keyword == "cell_data") {
-      absl::StatusOr<int64_t> n = in.IntIn(absl::StrCat("the ", *token, " count"), 0, kMaxCount);
-      if (!n.ok()) return n.status();
-      section_size = *n;
-      point_section = keyword == "point_data";
-      const size_t expected = point_section ? p.points.size() / 3 : p.cells.types.size();
-      if (static_cast<size_t>(*n) != expected) {
-        return in.Error(absl::StrCat(*token, " ", *n, " does not match the ", expected,
-                                     point_section ? " points" : " cells"));
-      }
-    } else if (section_size >= 0) {
-      if (absl::Status s = ReadAttribute(in, p, keyword, section_size, point_section); !s.ok()) {
-        return s;
-      }
-    } else {
-      return in.Error(absl::StrCat("unexpected keyword \"", token->substr(0, 40), "\""));
-    }
-  }
-  if (!p.have_points || !p.have_cells || !p.have_types) {
-    return in.Error("truncated: POINTS, CELLS and CELL_TYPES are all required");
-  }
-  if (p.major_version < 5 && p.cells.offsets.size() != p.cells.types.size() + 1) {
-    return in.Error(absl::StrCat("CELL_TYPES has ", p.cells.types.size(), " entries for ",
-                                 p.cells.offsets.size() - 1, " cells"));
-  }
-  MeshFile file;
-  const size_t v = p.points.size() / 3;
-  file.mesh.points.resize(v);
-  for (size_t i = 0; i < v; ++i) {
-    file.mesh.points[i] = {p.points[3 * i], p.points[3 * i + 1], p.points[3 * i + 2]};
-  }
-  file.mesh.values = std::move(p.values);
-  int64_t ignored = 0;
-  if (absl::Status s = CellsToTets(p.cells, p.cell_data, v, path, file, ignored); !s.ok()) {
-    return s;
-  }
-  if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
-  return file;
+  return LegacyParser(text, path).Parse();
 }
 
-std::string FormatVtkLegacy(const MeshFile& file) {
+std::string FormatVtkLegacy(const MeshFile& file, const VtkLegacyWriteOptions& options) {
   const Mesh& mesh = file.mesh;
   const size_t v = mesh.points.size();
   const size_t t = mesh.tets.size();
-  std::string out = "# vtk DataFile Version 3.0\ntetrefine mesh\nASCII\n";
-  absl::StrAppend(&out, "DATASET UNSTRUCTURED_GRID\nPOINTS ", v, " double\n");
-  for (const Vec3& p : mesh.points) {
-    AppendDouble(out, p[0]);
-    out += ' ';
-    AppendDouble(out, p[1]);
-    out += ' ';
-    AppendDouble(out, p[2]);
-    out += '\n';
-  }
-  absl::StrAppend(&out, "CELLS ", t, " ", 5 * t, "\n");
-  for (const Tet& tet : mesh.tets) {
-    absl::StrAppend(&out, "4 ", tet[0], " ", tet[1], " ", tet[2], " ", tet[3], "\n");
-  }
-  absl::StrAppend(&out, "CELL_TYPES ", t, "\n");
-  for (size_t i = 0; i < t; ++i) out += "10\n";
-  if (!mesh.values.empty()) {
-    absl::StrAppend(&out, "POINT_DATA ", v, "\nSCALARS value double 1\nLOOKUP_TABLE default\n");
-    for (double value : mesh.values) {
-      AppendDouble(out, value);
-      out += '\n';
+  const bool binary = options.binary;
+  const bool wide = v > static_cast<size_t>(std::numeric_limits<int32_t>::max());
+  std::string out =
+      absl::StrCat("# vtk DataFile Version ", wide ? "5.1" : "4.2", "\ntetrefine mesh");
+  if (file.frame != MeshFrame::kUntagged) absl::StrAppend(&out, " SPACE=", FrameTag(file.frame));
+  absl::StrAppend(&out, "\n", binary ? "BINARY" : "ASCII", "\nDATASET UNSTRUCTURED_GRID\n");
+  absl::StrAppend(&out, "POINTS ", v, " double\n");
+  {
+    std::vector<double> xyz(3 * v);
+    for (size_t i = 0; i < v; ++i) {
+      for (int a = 0; a < 3; ++a) xyz[3 * i + a] = FrameSign(file.frame, a) * mesh.points[i][a];
+    }
+    if (binary) {
+      AppendValues(out, xyz.data(), xyz.size(), true);
+    } else {
+      for (size_t i = 0; i < v; ++i) {
+        AppendDouble(out, xyz[3 * i]);
+        out += ' ';
+        AppendDouble(out, xyz[3 * i + 1]);
+        out += ' ';
+        AppendDouble(out, xyz[3 * i + 2]);
+        out += '\n';
+      }
     }
   }
-  if (!file.tet_iteration.empty() || !file.tet_quality.empty()) {
+  if (wide) {
+    absl::StrAppend(&out, "CELLS ", t + 1, " ", 4 * t, "\nOFFSETS vtktypeint64\n");
+    std::vector<int64_t> offsets(t + 1);
+    for (size_t i = 0; i <= t; ++i) offsets[i] = static_cast<int64_t>(4 * i);
+    AppendValues(out, offsets.data(), offsets.size(), binary);
+    out += "CONNECTIVITY vtktypeint64\n";
+    std::vector<int64_t> connectivity(4 * t);
+    for (size_t i = 0; i < t; ++i) {
+      for (int k = 0; k < 4; ++k) connectivity[4 * i + k] = mesh.tets[i][k];
+    }
+    AppendValues(out, connectivity.data(), connectivity.size(), binary);
+  } else {
+    absl::StrAppend(&out, "CELLS ", t, " ", 5 * t, "\n");
+    if (binary) {
+      std::vector<int32_t> cells(5 * t);
+      for (size_t i = 0; i < t; ++i) {
+        cells[5 * i] = 4;
+        for (int k = 0; k < 4; ++k) cells[5 * i + 1 + k] = static_cast<int32_t>(mesh.tets[i][k]);
+      }
+      AppendValues(out, cells.data(), cells.size(), true);
+    } else {
+      for (const Tet& tet : mesh.tets) {
+        absl::StrAppend(&out, "4 ", tet[0], " ", tet[1], " ", tet[2], " ", tet[3], "\n");
+      }
+    }
+  }
+  absl::StrAppend(&out, "CELL_TYPES ", t, "\n");
+  const std::vector<int32_t> types(t, kVtkTetra);
+  AppendValues(out, types.data(), t, binary);
+  if (!mesh.values.empty()) {
+    absl::StrAppend(&out, "POINT_DATA ", v, "\nSCALARS value double 1\nLOOKUP_TABLE default\n");
+    AppendValues(out, mesh.values.data(), v, binary);
+  }
+  if (!file.tet_iteration.empty() || !file.tet_quality.empty() || !file.mesh.labels.empty()) {
     absl::StrAppend(&out, "CELL_DATA ", t, "\n");
     if (!file.tet_iteration.empty()) {
       out += "SCALARS iteration int 1\nLOOKUP_TABLE default\n";
-      for (int32_t it : file.tet_iteration) absl::StrAppend(&out, it, "\n");
+      AppendValues(out, file.tet_iteration.data(), t, binary);
     }
     if (!file.tet_quality.empty()) {
       out += "SCALARS quality float 1\nLOOKUP_TABLE default\n";
-      for (float q : file.tet_quality) {
-        AppendFloat(out, q);
-        out += '\n';
-      }
+      AppendValues(out, file.tet_quality.data(), t, binary);
+    }
+    if (!file.mesh.labels.empty()) {
+      absl::StrAppend(&out, "SCALARS ", Escape(LabelArrayName(file)),
+                      " int 1\nLOOKUP_TABLE default\n");
+      AppendValues(out, file.mesh.labels.data(), t, binary);
     }
   }
   return out;

@@ -8,13 +8,28 @@
 
 namespace tetrefine::io {
 
-// Legacy VTK .vtk, ASCII, DATASET UNSTRUCTURED_GRID. Reads file versions 2.x-4.x (CELLS with a
-// count per cell) and 5.x (OFFSETS/CONNECTIVITY); keeps tetrahedra (cell type 10) and ignores
-// other cells. Point data "value" and cell data "iteration"/"quality" are read from SCALARS or
-// FIELD arrays; other attributes are skipped. Writes version 3.0 (readable by every VTK and
-// ParaView): POINTS double, CELLS/CELL_TYPES 10, POINT_DATA SCALARS value double, CELL_DATA
-// SCALARS iteration int and quality float, each present only when the MeshFile has it.
+// Legacy VTK .vtk, DATASET UNSTRUCTURED_GRID, ASCII or BINARY (big-endian).
+//
+// Reads file versions 2.x-4.x (CELLS with a count per cell) and 5.x (OFFSETS/CONNECTIVITY, any
+// integer type) as VTK 9, ParaView, meshio and 3D Slicer write them; METADATA blocks (after
+// POINTS or an array) are skipped. Keeps linear tetrahedra (type 10); points, lines and surface
+// cells are skipped; other volume cells are an error naming what the file holds. Point data
+// "value", cell data "iteration"/"quality" and the region labels (the array LabelNameRank
+// prefers) come from SCALARS or FIELD arrays; other attributes are skipped. The frame comes from
+// "SPACE=LPS"/"SPACE=RAS" in the title line (how Slicer tags the files it writes) or a dataset
+// FIELD string array "SPACE"; LPS points are converted to RAS.
 absl::StatusOr<MeshFile> ParseVtkLegacy(absl::string_view text, absl::string_view path);
-std::string FormatVtkLegacy(const MeshFile& file);
+
+struct VtkLegacyWriteOptions {
+  bool binary = false;  // BINARY (big-endian raw values) instead of ASCII
+};
+
+// Writes version 4.2 (what Slicer writes, readable by every VTK since 6, ParaView and meshio), or
+// 5.1 with 64-bit connectivity when vertex indices exceed 32-bit signed range: POINTS double,
+// CELLS/CELL_TYPES 10, POINT_DATA SCALARS value double, CELL_DATA SCALARS iteration int, quality
+// float and the labels int (named LabelArrayName, '%'-escaped as VTK escapes names), each only
+// when the MeshFile has it. A tagged frame goes into the title ("tetrefine mesh SPACE=LPS"),
+// with the points in that frame.
+std::string FormatVtkLegacy(const MeshFile& file, const VtkLegacyWriteOptions& options = {});
 
 }  // namespace tetrefine::io

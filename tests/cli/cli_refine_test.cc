@@ -1,5 +1,6 @@
 // `tetrefine refine` with the embedded service, end to end: the real binary on generated files.
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -71,6 +72,67 @@ TEST_F(CliRefine, EmbeddedMatchesCoreRefineAndPrintsThePapersTables) {
     EXPECT_TRUE(absl::StrContains(run.out, text)) << text << " missing from\n" << run.out;
   }
   EXPECT_TRUE(absl::StrContains(run.out, std::string(StopReasonName(want->stop_reason))));
+}
+
+// Region labels read from the input come back in the output, inherited by every child tet, under
+// the input's array name and in the input's frame (here 3D Slicer's LPS tag).
+TEST_F(CliRefine, LabelsAndFrameOfTheInputReachTheOutput) {
+  io::MeshFile labelled;
+  labelled.mesh = testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2});
+  for (size_t t = 0; t < labelled.mesh.tets.size(); ++t) {
+    labelled.mesh.labels.push_back(static_cast<int32_t>(1 + t % 3));
+  }
+  labelled.label_name = "CellEntityIds";
+  labelled.frame = io::MeshFrame::kLps;
+  const std::string in = dir_.File("labelled.vtu");
+  ASSERT_TRUE(io::WriteMesh(in, labelled).ok());
+
+  for (const char* extension : {".vtu", ".msh"}) {
+    SCOPED_TRACE(extension);
+    const std::string out = dir_.File(std::string("labelled.out") + extension);
+    // The LPS points are (-x, -y, z) of the RAS ones, so the RAS mesh sits where the volume is.
+    const ProcessResult run =
+        RunTetrefine({"refine", "--volume", volume_, "--mesh", in, "--epsilon", "0.05", "--output",
+                      out, "--threads", "1"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+
+    absl::StatusOr<io::VolumeFile> volume = io::ReadVolume(volume_);
+    ASSERT_TRUE(volume.ok()) << volume.status();
+    absl::StatusOr<io::MeshFile> input = io::ReadMesh(in);
+    ASSERT_TRUE(input.ok()) << input.status();
+    ASSERT_EQ(input->mesh.labels, labelled.mesh.labels);
+    RefineOptions options;
+    options.epsilon = 0.05;
+    absl::StatusOr<RefineResult> want = Refine(volume->volume, input->mesh, options);
+    ASSERT_TRUE(want.ok()) << want.status();
+    ASSERT_GT(want->mesh.tets.size(), labelled.mesh.tets.size());
+
+    absl::StatusOr<io::MeshFile> got = io::ReadMesh(out);
+    ASSERT_TRUE(got.ok()) << got.status();
+    EXPECT_EQ(got->mesh.tets.size(), want->mesh.tets.size());
+    ASSERT_EQ(want->mesh.labels.size(), want->mesh.tets.size());
+    // Labels cross the wire (MeshHeader.has_labels, tet_label_chunk) and come back.
+    ASSERT_FALSE(got->mesh.labels.empty()) << run.err;
+    EXPECT_FALSE(absl::StrContains(run.err, "returned no region labels")) << run.err;
+    if (std::string(extension) == ".vtu") {
+      EXPECT_EQ(got->mesh.labels, want->mesh.labels);
+      EXPECT_EQ(got->label_name, "CellEntityIds");
+    } else {
+      // Gmsh stores labels as physical groups and groups the tets by them.
+      EXPECT_EQ(got->label_name, "gmsh:physical");
+      std::vector<int32_t> got_labels = got->mesh.labels;
+      std::vector<int32_t> want_labels = want->mesh.labels;
+      std::sort(got_labels.begin(), got_labels.end());
+      std::sort(want_labels.begin(), want_labels.end());
+      EXPECT_EQ(got_labels, want_labels);
+    }
+    if (std::string(extension) == ".vtu") {
+      // The frame is the client's: the output is tagged LPS like the input, points back in RAS.
+      EXPECT_EQ(got->frame, io::MeshFrame::kLps);
+      EXPECT_EQ(got->mesh.tets, want->mesh.tets);
+      EXPECT_EQ(got->mesh.points, want->mesh.points);
+    }
+  }
 }
 
 TEST_F(CliRefine, StatsJsonParsesAndAgreesWithTheRun) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -83,6 +84,16 @@ MeshFile RandomMesh(uint64_t seed, const RandomMeshOptions& options) {
     if (options.iteration) file.tet_iteration.push_back(t % 3 == 0 ? t % 7 : iteration(rng));
     if (options.quality) file.tet_quality.push_back(static_cast<float>(awkward() / 3.0));
   }
+  if (options.labels) {
+    // Mostly a few small region numbers, as real meshes have, and some extremes.
+    std::uniform_int_distribution<int32_t> any(std::numeric_limits<int32_t>::min(),
+                                               std::numeric_limits<int32_t>::max());
+    for (int t = 0; t < options.tets; ++t) {
+      file.mesh.labels.push_back(t % 11 == 5 ? any(rng) : static_cast<int32_t>(rng() % 4));
+    }
+    file.label_name = options.label_name;
+  }
+  file.frame = options.frame;
   return file;
 }
 

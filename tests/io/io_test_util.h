@@ -36,6 +36,9 @@ struct RandomMeshOptions {
   bool values = true;
   bool iteration = true;
   bool quality = true;
+  bool labels = false;  // mesh.labels: small region numbers, some negative, zero or extreme
+  std::string label_name = "region";
+  MeshFrame frame = MeshFrame::kUntagged;
 };
 MeshFile RandomMesh(uint64_t seed, const RandomMeshOptions& options = {});
 

@@ -5,6 +5,7 @@
 #include <random>
 #include <string>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_replace.h"
 #include "client/io/gmsh_format.h"
 #include "client/io/medit_format.h"
@@ -28,13 +29,23 @@ MeshFile SmallMesh() {
   RandomMeshOptions options;
   options.vertices = 6;
   options.tets = 4;
+  options.labels = true;
   return RandomMesh(11, options);
 }
 
+// ".b64.vtu" stands for a .vtu with inline base64 arrays (read as .vtu, by extension).
 std::string Written(const std::string& extension, const MeshFile& mesh) {
+  if (extension == ".b64.vtu") {
+    return FormatVtu(mesh, {.layout = VtuWriteOptions::Layout::kInlineBase64,
+                            .compressor = VtkCompressor::kNone});
+  }
+  if (extension == ".asc.vtu") return FormatVtu(mesh, {.layout = VtuWriteOptions::Layout::kAscii});
   if (extension == ".vtu") return FormatVtu(mesh);
   if (extension == ".vtk") return FormatVtkLegacy(mesh);
+  if (extension == ".bin.vtk") return FormatVtkLegacy(mesh, {.binary = true});
   if (extension == ".msh") return FormatGmsh41(mesh);
+  if (extension == ".bin.msh") return FormatGmsh41(mesh, {.binary = true});
+  if (extension == ".meshb") return FormatMeshb(mesh);
   return FormatMedit(mesh);
 }
 
@@ -85,7 +96,7 @@ TEST_P(IoMeshMalformedTest, EveryTruncationFails) {
       EXPECT_THAT(std::string(file.status().message()), HasSubstr(path));
       continue;
     }
-    EXPECT_NE(GetParam(), ".vtu");  // XML must be closed
+    EXPECT_FALSE(absl::EndsWith(GetParam(), ".vtu"));  // XML must be closed
     EXPECT_TRUE(CutsAtSectionEnd(bytes, size));
     EXPECT_EQ(file->mesh.points, mesh.mesh.points);
   }
@@ -166,7 +177,7 @@ INSTANTIATE_TEST_SUITE_P(
         // Declared counts larger than the file: refused before allocating.
         Edit{".mesh", "Vertices\n5\n", "Vertices\n5000000000\n", "out of range"},
         Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n2000000000\n", "bytes remain"},
-        Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n3\n", "tetrahedron vertex index"},
+        Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n3\n", "bytes remain"},
         Edit{".mesh", "1 2 3 4 ", "1 2 3 9 ", "out of range"},
         Edit{".mesh", "0.125 0.25 0.5", "0.125 nan 0.5", "not finite"},
         Edit{".vtk", "POINTS 5 double", "POINTS 4000000 double", "bytes remain"},
@@ -181,15 +192,49 @@ INSTANTIATE_TEST_SUITE_P(
         Edit{".msh", "$EndNodes", "$EndNodez", "expected $EndNodes"},
         Edit{".vtu", "NumberOfPoints=\"5\"", "NumberOfPoints=\"6\"", "header says"},
         Edit{".vtu", "NumberOfCells=\"2\"", "NumberOfCells=\"99999999999\"", "header says"},
-        Edit{".vtu", "</Points>", "</Pointz>", "closes <Points>"},
-        Edit{".vtu", "format=\"binary\">\n          ", "format=\"binary\">\n          !",
-             "invalid base64"}),
+        Edit{".vtu", "</Points>", "</Pointz>", "not well-formed XML"},
+        Edit{".vtu", "offset=\"0\"", "offset=\"99999\"", "bad appended offset"},
+        Edit{".vtu", "vtkZLibDataCompressor", "vtkZstdDataCompressor", "is not supported"},
+        Edit{".vtu", "encoding=\"raw\"", "encoding=\"hex\"", "neither raw nor base64"},
+        Edit{".vtu", "</VTKFile>", "</VTKFil", "does not end with"},
+        Edit{".bin.vtk", "BINARY", "BINARX", "ASCII or BINARY"},
+        Edit{".bin.vtk", "POINTS 5 double", "POINTS 6 double", "unexpected keyword"},
+        Edit{".bin.vtk", "CELL_TYPES 2", "CELL_TYPES 3", "unexpected keyword"},
+        Edit{".vtk", "CELL_TYPES 2\n10\n", "CELL_TYPES 2\n24\n",
+             "1 quadratic tetrahedron (tetra10) beside 1 tetrahedron"},
+        Edit{".vtk", "DATASET UNSTRUCTURED_GRID\n", "DATASET UNSTRUCTURED_GRID\nMETADATA\nX\n",
+             "are all required"},
+        Edit{".bin.msh", "4.1 1 8", "4.1 1 4", "data size 4"},
+        Edit{".bin.msh", "$EndElements", "$EndElementz", "expected $EndElements"},
+        Edit{".bin.msh", "$EndNodes", "", "expected $EndNodes"},
+        Edit{".msh", "3 1 4 2\n", "3 1 99 2\n", "unknown element type 99"},
+        Edit{".msh", "0 0 0 1\n1 ", "0 0 0 1\n1e3 ", "an entity tag"},
+        Edit{".mesh", "Tetrahedra\n2\n", "Hexahedra\n1\n1 2 3 4 1 2 3 4 0\nTetrahedra\n2\n",
+             "1 hexahedron beside 2 tetrahedra"},
+        Edit{".b64.vtu", "format=\"binary\">\n          ", "format=\"binary\">\n          !",
+             "invalid base64"},
+        Edit{".b64.vtu", "header_type=\"UInt64\"", "header_type=\"UInt32\"", "header says"},
+        Edit{".b64.vtu", "type=\"Int32\" Name=\"connectivity\"",
+             "type=\"String\" Name=\"connectivity\"", "expected a numeric type"},
+        Edit{".asc.vtu", "<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n4",
+             "<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n5",
+             "tetrahedron with 5 points"},
+        Edit{".asc.vtu", "Name=\"types\" format=\"ascii\">\n10",
+             "Name=\"types\" format=\"ascii\">\n12", "1 hexahedron beside 1 tetrahedron"}),
     [](const ::testing::TestParamInfo<Edit>& info) {
-      return info.param.extension.substr(1) + "_" + std::to_string(info.index);
+      std::string name = info.param.extension.substr(1) + "_" + std::to_string(info.index);
+      for (char& c : name) c = c == '.' ? '_' : c;
+      return name;
     });
 
 INSTANTIATE_TEST_SUITE_P(IoFormats, IoMeshMalformedTest,
-                         ::testing::Values(".vtu", ".vtk", ".msh", ".mesh"));
+                         ::testing::Values(".vtu", ".b64.vtu", ".asc.vtu", ".vtk", ".bin.vtk",
+                                           ".msh", ".bin.msh", ".mesh", ".meshb"),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           std::string name = info.param.substr(1);
+                           for (char& c : name) c = c == '.' ? '_' : c;
+                           return name;
+                         });
 
 }  // namespace
 }  // namespace tetrefine::io

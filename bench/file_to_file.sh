@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# File to file, side by side with Gmsh: a ~202k-tet binary .msh in, ~1.6 M tets out.
+#   gmsh IN.msh -refine -bin               (Gmsh's uniform 1:8 split, binary .msh out)
+#   tetrefine refine --mesh IN.msh ...     (data-driven refinement, ParaView-style .vtu out)
+# Prints each run's wall time, output tets and output tets per second, their ratio, and the size
+# of tetrefine's file in bytes per tet; then mesh_io_bench on tetrefine's output (encode and
+# read times of every format). Both runs are timed the same way, on the same machine, one after
+# the other; run it on a quiet machine (the load average is printed), best of REPEATS.
+#
+# Usage: bash bench/file_to_file.sh [build-dir] [repeats]   (needs gmsh; default build, 3)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build="${1:-build}"
+repeats="${2:-3}"
+command -v gmsh >/dev/null || { echo "gmsh is not installed (apt-get install gmsh)" >&2; exit 2; }
+cmake --build "$build" --target tetrefine mesh_io_bench >/dev/null
+tetrefine="$build/client/tetrefine"
+volume="${TETREFINE_SHARED_DATA_DIR:-../shared/data}/t1_brain_128x128x62.nii.gz"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+
+# The input: the volume's world box (254 x 254 x 183 mm) meshed by Gmsh, one physical volume.
+cat >"$work/box.geo" <<'GEO'
+SetFactory("OpenCASCADE");
+Box(1) = {0, -254, 0, 254, 254, 183};
+Physical Volume(1) = {1};
+Mesh.MeshSizeMax = 6.4;
+Mesh.MeshSizeMin = 6.4;
+GEO
+gmsh -3 -bin -format msh41 -nt 1 "$work/box.geo" -o "$work/in.msh" >/dev/null
+in_tets=$("$tetrefine" info "$work/in.msh" | awk '/^tets/ {print $2}')
+
+# Best wall time of `repeats` runs of a command.
+best_time() {
+  local best=""
+  for _ in $(seq "$repeats"); do
+    local start end t
+    start=$(date +%s.%N)
+    "$@" >/dev/null 2>&1
+    end=$(date +%s.%N)
+    t=$(echo "$end - $start" | bc -l)
+    if [ -z "$best" ] || [ "$(echo "$t < $best" | bc -l)" = 1 ]; then best=$t; fi
+  done
+  echo "$best"
+}
+
+gmsh_time=$(best_time gmsh "$work/in.msh" -refine -bin -format msh41 -nt 1 -o "$work/gmsh.msh")
+gmsh_tets=$("$tetrefine" info "$work/gmsh.msh" | awk '/^tets/ {print $2}')
+# epsilon 0.02, two iterations: about the 8x of Gmsh's split on this volume.
+tet_time=$(best_time "$tetrefine" refine --volume "$volume" --mesh "$work/in.msh" \
+  --fit-mesh-to-volume --epsilon 0.02 --max-iterations 2 --quiet --output "$work/tetrefine.vtu")
+tet_tets=$("$tetrefine" info "$work/tetrefine.vtu" | awk '/^tets/ {print $2}')
+bytes=$(stat -c %s "$work/tetrefine.vtu")
+
+echo "load average: $(cut -d' ' -f1-3 /proc/loadavg); $(nproc) cores"
+echo "input: $in_tets tets, binary .msh 4.1 ($(stat -c %s "$work/in.msh") bytes)"
+printf "%-34s %9s %10s %14s\n" "run" "seconds" "tets out" "M tets out/s"
+printf "%-34s %9.2f %10d %14.2f\n" "gmsh -refine -bin (msh)" "$gmsh_time" "$gmsh_tets" \
+  "$(echo "$gmsh_tets / $gmsh_time / 1000000" | bc -l)"
+printf "%-34s %9.2f %10d %14.2f\n" "tetrefine refine (vtu, zlib)" "$tet_time" "$tet_tets" \
+  "$(echo "$tet_tets / $tet_time / 1000000" | bc -l)"
+printf "ratio of output tets per second (tetrefine / gmsh): %.2f\n" \
+  "$(echo "($tet_tets / $tet_time) / ($gmsh_tets / $gmsh_time)" | bc -l)"
+printf "tetrefine's .vtu: %.2f bytes per tet\n" "$(echo "$bytes / $tet_tets" | bc -l)"
+echo
+echo "mesh_io_bench on tetrefine's output (best of $repeats):"
+"$build/bench/mesh_io_bench" "$work/tetrefine.vtu" "$repeats"

@@ -1,0 +1,183 @@
+#include "client/io/vtk_compressor.h"
+
+#include <libdeflate.h>
+#include <lz4.h>
+#include <lzma.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <new>
+
+#include "absl/strings/str_cat.h"
+
+namespace tetrefine::io {
+namespace {
+
+// libdeflate decodes a zlib stream into a buffer of known size, about twice as fast as zlib's
+// inflate; one decompressor per thread (they are not thread-safe, and cheap to keep).
+absl::Status ZlibDecompress(absl::string_view compressed, char* out, size_t decoded_size) {
+  struct Free {
+    void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
+  };
+  thread_local std::unique_ptr<libdeflate_decompressor, Free> decompressor(
+      libdeflate_alloc_decompressor());
+  if (decompressor == nullptr) return absl::ResourceExhaustedError("cannot allocate a decoder");
+  size_t produced = 0;
+  const libdeflate_result result = libdeflate_zlib_decompress(
+      decompressor.get(), compressed.data(), compressed.size(), out, decoded_size, &produced);
+  switch (result) {
+    case LIBDEFLATE_SUCCESS:
+      if (produced == decoded_size) return absl::OkStatus();
+      return absl::InvalidArgumentError(absl::StrCat("zlib block decodes to ", produced,
+                                                     " bytes, its header says ", decoded_size));
+    case LIBDEFLATE_INSUFFICIENT_SPACE:
+      return absl::InvalidArgumentError(absl::StrCat("zlib block decodes to more than the ",
+                                                     decoded_size, " bytes its header says"));
+    default:
+      return absl::InvalidArgumentError("corrupt or truncated zlib block");
+  }
+}
+
+absl::Status LzmaDecompress(absl::string_view compressed, char* out, size_t decoded_size) {
+  uint64_t memlimit = uint64_t{1} << 30;
+  size_t in_pos = 0;
+  size_t out_pos = 0;
+  const lzma_ret code = lzma_stream_buffer_decode(
+      &memlimit, 0, nullptr, reinterpret_cast<const uint8_t*>(compressed.data()), &in_pos,
+      compressed.size(), reinterpret_cast<uint8_t*>(out), &out_pos, decoded_size);
+  if (code == LZMA_OK && out_pos == decoded_size) return absl::OkStatus();
+  if (code == LZMA_BUF_ERROR) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "lzma block is truncated or decodes to more than the ", decoded_size, " bytes expected"));
+  }
+  if (code == LZMA_OK) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("lzma block decodes to ", out_pos, " bytes, expected ", decoded_size));
+  }
+  return absl::InvalidArgumentError(
+      absl::StrCat("corrupt lzma (xz) block (liblzma code ", static_cast<int>(code), ")"));
+}
+
+absl::Status Lz4Decompress(absl::string_view compressed, char* out, size_t decoded_size) {
+  if (compressed.size() > static_cast<size_t>(std::numeric_limits<int>::max()) ||
+      decoded_size > static_cast<size_t>(std::numeric_limits<int>::max())) {
+    return absl::InvalidArgumentError("lz4 block larger than 2 GiB");
+  }
+  const int produced = LZ4_decompress_safe(
+      compressed.data(), out, static_cast<int>(compressed.size()), static_cast<int>(decoded_size));
+  if (produced < 0) return absl::InvalidArgumentError("corrupt lz4 block");
+  if (static_cast<size_t>(produced) != decoded_size) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("lz4 block decodes to ", produced, " bytes, expected ", decoded_size));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+std::optional<VtkCompressor> VtkCompressorFromName(absl::string_view name) {
+  for (VtkCompressor c : {VtkCompressor::kZlib, VtkCompressor::kLzma, VtkCompressor::kLz4}) {
+    if (name == VtkCompressorName(c)) return c;
+  }
+  return std::nullopt;
+}
+
+absl::string_view VtkCompressorName(VtkCompressor compressor) {
+  switch (compressor) {
+    case VtkCompressor::kZlib:
+      return "vtkZLibDataCompressor";
+    case VtkCompressor::kLzma:
+      return "vtkLZMADataCompressor";
+    case VtkCompressor::kLz4:
+      return "vtkLZ4DataCompressor";
+    case VtkCompressor::kNone:
+      break;
+  }
+  return "";
+}
+
+size_t MaxExpansion(VtkCompressor compressor) {
+  switch (compressor) {
+    case VtkCompressor::kZlib:
+      return 1100;
+    case VtkCompressor::kLz4:
+      return 260;
+    case VtkCompressor::kLzma:
+      return 8000;
+    case VtkCompressor::kNone:
+      break;
+  }
+  return 1;
+}
+
+absl::Status DecompressBlock(VtkCompressor compressor, absl::string_view compressed, char* out,
+                             size_t decoded_size) {
+  switch (compressor) {
+    case VtkCompressor::kZlib:
+      return ZlibDecompress(compressed, out, decoded_size);
+    case VtkCompressor::kLzma:
+      return LzmaDecompress(compressed, out, decoded_size);
+    case VtkCompressor::kLz4:
+      return Lz4Decompress(compressed, out, decoded_size);
+    case VtkCompressor::kNone:
+      break;
+  }
+  if (compressed.size() != decoded_size) {
+    return absl::InvalidArgumentError(absl::StrCat("uncompressed block holds ", compressed.size(),
+                                                   " bytes, expected ", decoded_size));
+  }
+  std::copy(compressed.begin(), compressed.end(), out);
+  return absl::OkStatus();
+}
+
+BlockCompressor::BlockCompressor(VtkCompressor compressor, int level)
+    : compressor_(compressor), level_(level) {
+  if (compressor_ == VtkCompressor::kZlib) {
+    deflate_ = libdeflate_alloc_compressor(std::clamp(level_, 1, 12));
+  }
+}
+
+BlockCompressor::~BlockCompressor() {
+  if (deflate_ != nullptr) libdeflate_free_compressor(deflate_);
+}
+
+void BlockCompressor::Compress(absl::string_view raw, std::string& out) {
+  const size_t start = out.size();
+  switch (compressor_) {
+    case VtkCompressor::kZlib: {
+      // Only out of memory leaves no coder; writing the block uncompressed would corrupt the file.
+      if (deflate_ == nullptr) throw std::bad_alloc();
+      const size_t bound = libdeflate_zlib_compress_bound(deflate_, raw.size());
+      out.resize(start + bound);
+      const size_t size =
+          libdeflate_zlib_compress(deflate_, raw.data(), raw.size(), out.data() + start, bound);
+      out.resize(start + size);
+      return;
+    }
+    case VtkCompressor::kLzma: {
+      const size_t bound = lzma_stream_buffer_bound(raw.size());
+      out.resize(start + bound);
+      size_t out_pos = 0;
+      lzma_easy_buffer_encode(static_cast<uint32_t>(std::clamp(level_, 0, 9)), LZMA_CHECK_CRC64,
+                              nullptr, reinterpret_cast<const uint8_t*>(raw.data()), raw.size(),
+                              reinterpret_cast<uint8_t*>(out.data() + start), &out_pos, bound);
+      out.resize(start + out_pos);
+      return;
+    }
+    case VtkCompressor::kLz4: {
+      const int bound = LZ4_compressBound(static_cast<int>(raw.size()));
+      out.resize(start + bound);
+      const int size =
+          LZ4_compress_default(raw.data(), out.data() + start, static_cast<int>(raw.size()), bound);
+      out.resize(start + size);
+      return;
+    }
+    case VtkCompressor::kNone:
+      break;
+  }
+  out.append(raw.data(), raw.size());
+}
+
+}  // namespace tetrefine::io

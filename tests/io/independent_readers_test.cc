@@ -1,0 +1,271 @@
+// Independent readers: what this library writes, in every format and variant, is read by meshio,
+// VTK 9 (python3-vtk9, what ParaView and 3D Slicer are built on) and Gmsh itself, with the same
+// tets, the labels in order under the expected name, and the frame tag. Each check is skipped
+// when its tool is not installed (scripts/install-deps.sh installs them all).
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "client/io/mesh_io.h"
+#include "gtest/gtest.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/child_process.h"
+
+namespace tetrefine::io {
+namespace {
+
+using iotest::RandomMesh;
+using iotest::RandomMeshOptions;
+using iotest::ScratchDir;
+
+constexpr char kPython[] = "/usr/bin/python3";
+constexpr char kGmsh[] = "/usr/bin/gmsh";
+
+// Runs `argv` to completion (tests/support's RunProcess): exit code and stdout followed by stderr.
+std::pair<std::string, int> RunTool(const std::vector<std::string>& argv) {
+  const testing::ProcessResult result = testing::RunProcess(argv);
+  return {result.out + result.err, result.exit_code};
+}
+
+bool PythonImports(const std::string& module) {
+  return std::filesystem::exists(kPython) &&
+         RunTool({kPython, "-c", absl::StrCat("import ", module)}).second == 0;
+}
+
+// What a reader reported: counts and checksums. Labels are summed plainly and weighted by
+// position (sum of (i + 1) * label over tets), so a reordering shows.
+struct Report {
+  long long points = -1;
+  long long tets = -1;
+  long long index_sum = -1;
+  double coordinate_sum = 0;
+  long long label_count = -1;
+  long long label_sum = 0;
+  long long label_weighted = 0;
+  std::string space;  // frame tag the reader saw, "-" for none
+};
+
+Report Expected(const MeshFile& file, bool negate_xy) {
+  Report r;
+  r.points = static_cast<long long>(file.mesh.points.size());
+  r.tets = static_cast<long long>(file.mesh.tets.size());
+  r.index_sum = 0;
+  for (const Tet& t : file.mesh.tets) r.index_sum += t[0] + t[1] + t[2] + t[3];
+  for (const Vec3& p : file.mesh.points) {
+    r.coordinate_sum += (negate_xy ? -p[0] - p[1] : p[0] + p[1]) + p[2];
+  }
+  r.label_count = static_cast<long long>(file.mesh.labels.size());
+  for (size_t i = 0; i < file.mesh.labels.size(); ++i) {
+    r.label_sum += file.mesh.labels[i];
+    r.label_weighted += static_cast<long long>(i + 1) * file.mesh.labels[i];
+  }
+  return r;
+}
+
+// Runs `script` on `path` with one extra argument; parses the last line it prints.
+Report RunReader(const std::string& script, const std::string& path, const std::string& arg) {
+  const testing::ProcessResult run = testing::RunProcess({kPython, "-c", script, path, arg});
+  const std::string& out = run.out;
+  EXPECT_EQ(run.exit_code, 0) << out << run.err;
+  const size_t start = out.find_last_of('\n', out.size() - 2);
+  std::istringstream fields(start == std::string::npos ? out : out.substr(start + 1));
+  Report r;
+  fields >> r.points >> r.tets >> r.index_sum >> r.coordinate_sum >> r.label_count >> r.label_sum >>
+      r.label_weighted >> r.space;
+  EXPECT_FALSE(fields.fail()) << out << run.err;
+  return r;
+}
+
+// `check_order`: whether the reader must see the tets in our order. Gmsh files group elements by
+// entity, one per physical group, so other readers see a .msh's tets grouped by label.
+void ExpectReport(const Report& got, const Report& want, bool check_space,
+                  bool check_order = true) {
+  EXPECT_EQ(got.points, want.points);
+  EXPECT_EQ(got.tets, want.tets);
+  EXPECT_EQ(got.index_sum, want.index_sum);
+  EXPECT_NEAR(got.coordinate_sum, want.coordinate_sum, 1e-9 * (1 + std::abs(want.coordinate_sum)));
+  EXPECT_EQ(got.label_count, want.label_count);
+  EXPECT_EQ(got.label_sum, want.label_sum);
+  if (check_order) {
+    EXPECT_EQ(got.label_weighted, want.label_weighted);
+  }
+  if (check_space) {
+    EXPECT_EQ(got.space, want.space);
+  }
+}
+
+constexpr char kMeshioScript[] = R"(
+import sys, warnings
+warnings.simplefilter("ignore")
+import meshio, numpy as np
+m = meshio.read(sys.argv[1])
+key = sys.argv[2]
+tets, labels = [], []
+for i, c in enumerate(m.cells):
+    if c.type == "tetra":
+        tets.append(c.data)
+        if key in m.cell_data:
+            labels.append(np.asarray(m.cell_data[key][i]).astype(np.int64).reshape(-1))
+t = np.concatenate(tets)
+l = np.concatenate(labels) if labels else np.zeros(0, dtype=np.int64)
+w = int(np.sum(l * np.arange(1, len(l) + 1))) if len(l) else 0
+print(len(m.points), len(t), int(t.sum()), repr(float(m.points.sum())), len(l), int(l.sum()), w, "-")
+)";
+
+constexpr char kVtkScript[] = R"(
+import sys
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+path, key = sys.argv[1], sys.argv[2]
+if path.endswith(".vtu"):
+    r = vtk.vtkXMLUnstructuredGridReader()
+else:
+    r = vtk.vtkUnstructuredGridReader()
+    r.ReadAllScalarsOn()
+    r.ReadAllFieldsOn()
+r.SetFileName(path)
+r.Update()
+g = r.GetOutput()
+types = vtk_to_numpy(g.GetCellTypesArray())
+conn = vtk_to_numpy(g.GetCells().GetConnectivityArray()).astype("int64")
+pts = vtk_to_numpy(g.GetPoints().GetData())
+a = g.GetCellData().GetArray(key)
+l = vtk_to_numpy(a).astype("int64") if a is not None else conn[:0]
+w = int((l * (1 + vtk.util.numpy_support.numpy.arange(len(l)))).sum())
+space = "-"
+f = g.GetFieldData().GetAbstractArray("SPACE")
+if f is not None:
+    space = f.GetValue(0)
+elif not path.endswith(".vtu") and "SPACE=" in r.GetHeader():
+    space = r.GetHeader().split("SPACE=")[1][:3]
+assert (types == 10).all()
+print(g.GetNumberOfPoints(), g.GetNumberOfCells(), int(conn.sum()), repr(float(pts.sum())),
+      len(l), int(l.sum()), w, space)
+)";
+
+MeshFile TestMesh(uint64_t seed, MeshFrame frame, const std::string& label_name) {
+  RandomMeshOptions options;
+  options.vertices = 60;
+  options.tets = 90;
+  options.labels = true;
+  options.label_name = label_name;
+  options.frame = frame;
+  MeshFile mesh = RandomMesh(seed, options);
+  // Region numbers every format stores as they are (Gmsh physical groups are positive).
+  for (size_t i = 0; i < mesh.mesh.labels.size(); ++i) mesh.mesh.labels[i] = 1 + (i * 7 + seed) % 4;
+  return mesh;
+}
+
+struct Case {
+  std::string name;
+  std::string extension;
+  MeshWriteOptions options;
+};
+
+std::vector<Case> Cases() {
+  using Layout = VtuWriteOptions::Layout;
+  std::vector<Case> all = {
+      {"vtk_ascii", ".vtk", {}},  {"vtk_binary", ".vtk", {.binary = true}},
+      {"msh_ascii", ".msh", {}},  {"msh_binary", ".msh", {.binary = true}},
+      {"mesh", ".mesh", {}},      {"meshb_v2", ".meshb", {.meshb_version = 2}},
+      {"meshb_v3", ".meshb", {}}, {"meshb_v4", ".meshb", {.meshb_version = 4}}};
+  for (Layout layout : {Layout::kAppendedRaw, Layout::kInlineBase64, Layout::kAscii}) {
+    for (VtkCompressor c :
+         {VtkCompressor::kNone, VtkCompressor::kZlib, VtkCompressor::kLzma, VtkCompressor::kLz4}) {
+      if (layout == Layout::kAscii && c != VtkCompressor::kNone) continue;
+      Case k{absl::StrCat("vtu_", static_cast<int>(layout), "_", static_cast<int>(c)), ".vtu", {}};
+      k.options.vtu.layout = layout;
+      k.options.vtu.compressor = c;
+      k.options.vtu.block_size = 1024;
+      all.push_back(k);
+    }
+  }
+  return all;
+}
+
+class IoIndependentReaderTest : public ::testing::TestWithParam<Case> {};
+
+TEST_P(IoIndependentReaderTest, MeshioReadsLabels) {
+  if (!PythonImports("meshio")) GTEST_SKIP() << "python3-meshio is not installed";
+  const Case& c = GetParam();
+  // meshio's VTU reader does not take lz4 (it knows zlib and lzma only).
+  if (c.extension == ".vtu" && c.options.vtu.compressor == VtkCompressor::kLz4) {
+    GTEST_SKIP() << "meshio does not read lz4-compressed VTU";
+  }
+  ScratchDir dir;
+  const std::string path = dir.File("m" + c.extension);
+  const std::string key = c.extension == ".msh"                               ? "gmsh:physical"
+                          : c.extension == ".mesh" || c.extension == ".meshb" ? "medit:ref"
+                                                                              : "region";
+  const MeshFile mesh = TestMesh(5, MeshFrame::kUntagged, "region");
+  ASSERT_TRUE(WriteMesh(path, mesh, c.options).ok());
+  ExpectReport(RunReader(kMeshioScript, path, key), Expected(mesh, false), false,
+               c.extension != ".msh");
+}
+
+TEST_P(IoIndependentReaderTest, VtkReadsLabelsAndFrame) {
+  const Case& c = GetParam();
+  if (c.extension != ".vtu" && c.extension != ".vtk") GTEST_SKIP() << "not a VTK format";
+  if (!PythonImports("vtk")) GTEST_SKIP() << "python3-vtk9 is not installed";
+  ScratchDir dir;
+  const std::string path = dir.File("m" + c.extension);
+  for (MeshFrame frame : {MeshFrame::kUntagged, MeshFrame::kLps, MeshFrame::kRas}) {
+    SCOPED_TRACE(static_cast<int>(frame));
+    const MeshFile mesh = TestMesh(7, frame, "CellEntityIds");
+    ASSERT_TRUE(WriteMesh(path, mesh, c.options).ok());
+    Report want = Expected(mesh, frame == MeshFrame::kLps);
+    want.space = frame == MeshFrame::kUntagged ? "-" : std::string(FrameTag(frame));
+    ExpectReport(RunReader(kVtkScript, path, "CellEntityIds"), want, true);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(IoFormats, IoIndependentReaderTest, ::testing::ValuesIn(Cases()),
+                         [](const ::testing::TestParamInfo<Case>& info) {
+                           return info.param.name;
+                         });
+
+// Each tet as its sorted corner coordinates with its label, sorted: what a mesh is regardless
+// of vertex and tet numbering.
+std::vector<std::pair<std::array<Vec3, 4>, int32_t>> TetsWithLabels(const MeshFile& file) {
+  std::vector<std::pair<std::array<Vec3, 4>, int32_t>> out;
+  for (size_t t = 0; t < file.mesh.tets.size(); ++t) {
+    std::array<Vec3, 4> corners;
+    for (int k = 0; k < 4; ++k) corners[k] = file.mesh.points[file.mesh.tets[t][k]];
+    std::sort(corners.begin(), corners.end());
+    out.emplace_back(corners, file.mesh.labels[t]);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Gmsh itself opens what we write (ASCII and binary 4.1 with physical groups) and saves it again
+// as binary MSH 2.2 (binary, so the coordinates come back to the bit); reading that back gives
+// the same tets with the same labels.
+TEST(IoIndependentReaderTest, GmshResavesOurMsh) {
+  if (!std::filesystem::exists(kGmsh) || RunTool({kGmsh, "--version"}).second != 0) {
+    GTEST_SKIP() << "gmsh is not installed";
+  }
+  ScratchDir dir;
+  for (bool binary : {false, true}) {
+    SCOPED_TRACE(binary ? "binary" : "ascii");
+    const MeshFile mesh = TestMesh(9, MeshFrame::kUntagged, "gmsh:physical");
+    const std::string in = dir.File("ours.msh");
+    const std::string out = dir.File("resaved.msh");
+    ASSERT_TRUE(WriteMesh(in, mesh, {.binary = binary}).ok());
+    const auto [log, status] =
+        RunTool({kGmsh, in, "-save", "-format", "msh22", "-bin", "-o", out, "-nt", "1"});
+    ASSERT_EQ(status, 0) << log;
+    absl::StatusOr<MeshFile> back = ReadMesh(out);
+    ASSERT_TRUE(back.ok()) << back.status();
+    EXPECT_EQ(back->label_name, "gmsh:physical");
+    // Gmsh renumbers elements by entity, so compare (tet corners, label) as sets.
+    EXPECT_EQ(TetsWithLabels(*back), TetsWithLabels(mesh));
+  }
+}
+
+}  // namespace
+}  // namespace tetrefine::io

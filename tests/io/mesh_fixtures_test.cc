@@ -1,0 +1,127 @@
+// Files written by real tools (tests/data/meshes, made by make_fixtures.py there with VTK 9.1,
+// meshio and Gmsh 4.8): every variant reads as the same tetrahedra, labels, values and RAS
+// points, and non-tet cells are skipped.
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "client/io/mesh_io.h"
+#include "gtest/gtest.h"
+
+namespace tetrefine::io {
+namespace {
+
+std::string FixturePath(const std::string& name) {
+  return std::string(TETREFINE_SOURCE_DIR) + "/tests/data/meshes/" + name;
+}
+
+// The mesh of make_fixtures.py: a 2 x 3 x 1.5 box, six tets around its diagonal, two regions.
+std::vector<Vec3> BoxCorners() {
+  std::vector<Vec3> corners;
+  for (double z : {0.0, 1.5}) {
+    for (double y : {0.0, 3.0}) {
+      for (double x : {0.0, 2.0}) corners.push_back({x, y, z});
+    }
+  }
+  return corners;
+}
+const std::vector<Tet> kBoxTets = {{0, 1, 3, 7}, {0, 3, 2, 7}, {0, 2, 6, 7},
+                                   {0, 6, 4, 7}, {0, 4, 5, 7}, {0, 5, 1, 7}};
+const std::vector<int32_t> kBoxLabels = {1, 1, 1, 2, 2, 2};
+
+struct FixtureCase {
+  std::string file;
+  std::string label_name;
+  MeshFrame frame = MeshFrame::kUntagged;
+  bool values = true;  // the format carries the point data "value"
+};
+
+void PrintTo(const FixtureCase& f, std::ostream* os) { *os << f.file; }
+
+class IoFixtureTest : public ::testing::TestWithParam<FixtureCase> {};
+
+TEST_P(IoFixtureTest, ReadsTheBoxWithItsLabels) {
+  const FixtureCase& f = GetParam();
+  absl::StatusOr<MeshFile> file = ReadMesh(FixturePath(f.file));
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.points, BoxCorners());  // in RAS, whatever the file's frame
+  EXPECT_EQ(file->mesh.tets, kBoxTets);
+  EXPECT_EQ(file->mesh.labels, kBoxLabels);
+  EXPECT_EQ(file->label_name, f.label_name);
+  EXPECT_EQ(file->frame, f.frame);
+  if (f.values) {
+    std::vector<double> values;
+    for (const Vec3& p : BoxCorners()) values.push_back(p[0] + 10 * p[1] + 100 * p[2]);
+    EXPECT_EQ(file->mesh.values, values);
+  }
+}
+
+std::vector<FixtureCase> AllFixtures() {
+  std::vector<FixtureCase> all;
+  for (const char* name : {"vtk9_ascii_none.vtu", "vtk9_binary_none.vtu", "vtk9_binary_zlib.vtu",
+                           "vtk9_binary_lz4.vtu", "vtk9_binary_lzma.vtu", "vtk9_appended_none.vtu",
+                           "vtk9_appended_zlib.vtu", "vtk9_appended_lz4.vtu",
+                           "vtk9_appended_lzma.vtu", "vtk9_appended_base64_uint32_zlib.vtu"}) {
+    all.push_back({name, "region"});
+  }
+  all.push_back({"slicer_lps.vtu", "region", MeshFrame::kLps});
+  for (const char* name : {"vtk9_legacy42_ascii.vtk", "vtk9_legacy42_binary.vtk",
+                           "vtk9_legacy51_ascii.vtk", "vtk9_legacy51_binary.vtk"}) {
+    all.push_back({name, "region"});
+  }
+  all.push_back({"slicer_lps.vtk", "region", MeshFrame::kLps});
+  for (const char* name : {"meshio.vtu", "meshio_ascii.vtk", "meshio_binary.vtk"}) {
+    all.push_back({name, "region"});
+  }
+  for (const char* name : {"meshio_22_ascii.msh", "meshio_22_binary.msh", "meshio_41_ascii.msh",
+                           "meshio_41_binary.msh"}) {
+    all.push_back({name, "gmsh:physical"});
+  }
+  for (const char* name : {"meshio.mesh", "meshio.meshb"}) {
+    all.push_back({name, "medit:ref", MeshFrame::kUntagged, /*values=*/false});
+  }
+  return all;
+}
+
+INSTANTIATE_TEST_SUITE_P(IoFixtures, IoFixtureTest, ::testing::ValuesIn(AllFixtures()),
+                         [](const ::testing::TestParamInfo<FixtureCase>& info) {
+                           std::string name = info.param.file;
+                           for (char& c : name) c = std::isalnum(c) ? c : '_';
+                           return name;
+                         });
+
+// Gmsh 4.8 meshed two unit cubes as physical volumes 5 and 7 (two_cubes.geo); every variant it
+// writes reads as the same tets with the same labels, and each region keeps its unit volume.
+TEST(IoFixtureTest, GmshPhysicalVolumesInEveryVariant) {
+  absl::StatusOr<MeshFile> reference = ReadMesh(FixturePath("gmsh_41_binary.msh"));
+  ASSERT_TRUE(reference.ok()) << reference.status();
+  EXPECT_EQ(reference->label_name, "gmsh:physical");
+  std::map<int32_t, double> volume;
+  for (size_t t = 0; t < reference->mesh.tets.size(); ++t) {
+    const Tet& tet = reference->mesh.tets[t];
+    const auto& p = reference->mesh.points;
+    volume[reference->mesh.labels[t]] +=
+        std::abs(SignedVolume6(p[tet[0]], p[tet[1]], p[tet[2]], p[tet[3]])) / 6;
+  }
+  ASSERT_EQ(volume.size(), 2u);
+  EXPECT_NEAR(volume[5], 1.0, 1e-12);
+  EXPECT_NEAR(volume[7], 1.0, 1e-12);
+  for (const char* name : {"gmsh_41_ascii.msh", "gmsh_22_ascii.msh", "gmsh_22_binary.msh"}) {
+    SCOPED_TRACE(name);
+    absl::StatusOr<MeshFile> file = ReadMesh(FixturePath(name));
+    ASSERT_TRUE(file.ok()) << file.status();
+    EXPECT_EQ(file->mesh.tets, reference->mesh.tets);
+    EXPECT_EQ(file->mesh.labels, reference->mesh.labels);
+    // ASCII files print 16 significant digits: equal to 1e-15 relative, not to the bit.
+    ASSERT_EQ(file->mesh.points.size(), reference->mesh.points.size());
+    for (size_t i = 0; i < file->mesh.points.size(); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(file->mesh.points[i][a], reference->mesh.points[i][a], 1e-15);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tetrefine::io
