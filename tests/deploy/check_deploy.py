@@ -179,11 +179,13 @@ def check_healthcheck_runs(source, server, cli):
                 return
             healthcheck = [cli] + [a.replace(f"127.0.0.1:{local_port}", local) for a in command[1:]]
             check(run(healthcheck) == 0, "HEALTHCHECK: fails against a serving TLS server")
-            check(run([cli, "health", "--server", f"localhost:{live.port}",
+            # A generous --timeout: under the sanitizers the TLS handshake alone can take more
+            # than the default 3 s on a loaded 2-core machine (CI saw it fail there).
+            check(run([cli, "health", "--server", f"localhost:{live.port}", "--timeout", "30",
                        "--tls-ca", f"{tls}/ca.crt"]) == 0,
                   "a TLS client trusting the dev CA cannot reach the server")
-            check(run([cli, "health", "--server", f"localhost:{live.port}"]) != 0,
-                  "the TLS port answers plaintext")
+            check(run([cli, "health", "--server", f"localhost:{live.port}", "--timeout", "30"])
+                  != 0, "the TLS port answers plaintext")
         check(run(healthcheck) != 0, "HEALTHCHECK: succeeds with no server")
 
 
