@@ -17,6 +17,8 @@ packages=(
   python3-protobuf python3-venv python3-setuptools python3-wheel python3-pytest python3-nibabel
   # tetrefine slice draws its figures with Cairo and writes them as PNG through it.
   libcairo2-dev
+  # tetrefine plot reads refine's --stats-json files with it (header-only).
+  nlohmann-json3-dev
 )
 # Fuzzing and sanitizer runs (clang's libFuzzer) only when asked: TETREFINE_WITH_FUZZ=1.
 if [ "${TETREFINE_WITH_FUZZ:-0}" = "1" ]; then
