@@ -63,5 +63,12 @@ echo "== tetrefine slice: the plane z = 8 mm before and after (the README's pict
   --output out/anatomical_cube.slice_z8.png
 
 echo
+echo "== tetrefine plot: error and tets per iteration of both schemes (the README's convergence plot)"
+"$tetrefine" plot \
+  --stats-json out/anatomical_cube.stats.json --stats-json out/anatomical_cube.paper.stats.json \
+  --output out/anatomical_cube.convergence.png
+
+echo
 echo "Done: out/anatomical_cube.refined.vtu (open it in ParaView: point data 'value', cell data"
-echo "'iteration' and 'quality'), out/anatomical_cube.stats.json and out/anatomical_cube.slice_z8.png."
+echo "'iteration' and 'quality'), out/anatomical_cube.stats.json, out/anatomical_cube.slice_z8.png"
+echo "and out/anatomical_cube.convergence.png."

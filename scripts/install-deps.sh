@@ -17,6 +17,8 @@ packages=(
   python3-protobuf python3-venv python3-setuptools python3-wheel python3-pytest python3-nibabel
   # tetrefine slice draws its figures with Cairo and writes them as PNG through it.
   libcairo2-dev
+  # tetrefine plot reads refine's --stats-json files with it (header-only).
+  nlohmann-json3-dev
 )
 # Independent readers and writers the tests compare against (VTK 9 and Gmsh, beside meshio
 # above); the container's build stage sets TETREFINE_WITH_TEST_TOOLS=0 as it builds no tests.

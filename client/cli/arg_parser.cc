@@ -29,6 +29,12 @@ std::string CommandName(const CommandSpec& spec) { return absl::StrCat("tetrefin
 std::optional<std::string> ParsedArgs::Get(std::string_view flag) const {
   auto it = values_.find(std::string(flag));
   if (it == values_.end()) return std::nullopt;
+  return it->second.back();
+}
+
+std::vector<std::string> ParsedArgs::GetAll(std::string_view flag) const {
+  auto it = values_.find(std::string(flag));
+  if (it == values_.end()) return {};
   return it->second;
 }
 
@@ -69,7 +75,7 @@ absl::StatusOr<ParsedArgs> ParseArgs(const CommandSpec& spec,
                                                      CommandName(spec), "' (see ",
                                                      CommandName(spec), " --help)"));
     }
-    if (parsed.values_.count(name) > 0) {
+    if (parsed.values_.count(name) > 0 && !flag->repeated) {
       return absl::InvalidArgumentError(absl::StrCat("--", name, " given twice"));
     }
     std::string value;
@@ -87,7 +93,7 @@ absl::StatusOr<ParsedArgs> ParseArgs(const CommandSpec& spec,
       }
       value = args[++i];
     }
-    parsed.values_[name] = value;
+    parsed.values_[name].push_back(std::move(value));
   }
   if (parsed.help_) return parsed;
   for (const FlagSpec& flag : spec.flags) {
@@ -120,7 +126,7 @@ std::string HelpText(const CommandSpec& spec) {
   for (size_t i = 0; i < spec.flags.size(); ++i) {
     const FlagSpec& flag = spec.flags[i];
     absl::StrAppend(&text, heads[i], std::string(width + 2 - heads[i].size(), ' '), flag.help,
-                    flag.required ? " (required)" : "", "\n");
+                    flag.required ? " (required)" : "", flag.repeated ? " (repeatable)" : "", "\n");
   }
   const std::string help_head = "  -h, --help";
   absl::StrAppend(&text, help_head,

@@ -20,6 +20,8 @@ struct FlagSpec {
   std::string value_name;  // shown in help ("FILE"); empty: a switch that takes no value
   std::string help;
   bool required = false;
+  // May be given more than once (--stats-json A --stats-json B); ParsedArgs::GetAll has them all.
+  bool repeated = false;
 };
 
 struct CommandSpec {
@@ -37,19 +39,22 @@ class ParsedArgs {
   bool Has(std::string_view flag) const { return values_.count(std::string(flag)) > 0; }
   // The value given for `flag`, or nullopt. Switches have the value "".
   std::optional<std::string> Get(std::string_view flag) const;
+  // Every value given for `flag`, in command-line order (empty when not given). For a flag that is
+  // not `repeated` this is at most one.
+  std::vector<std::string> GetAll(std::string_view flag) const;
   // The positional argument, or "" when the command takes none.
   const std::string& positional() const { return positional_; }
 
  private:
   friend absl::StatusOr<ParsedArgs> ParseArgs(const CommandSpec&, const std::vector<std::string>&);
   bool help_ = false;
-  std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> values_;  // at least one value per flag given
   std::string positional_;
 };
 
 // Parses `args` (without the program and subcommand names): --flag VALUE, --flag=VALUE, switches,
-// -h/--help. Errors are one line naming the flag: unknown, given twice, missing value, missing
-// required flag (not checked when help is asked for).
+// -h/--help. Errors are one line naming the flag: unknown, given twice (unless `repeated`),
+// missing value, missing required flag (not checked when help is asked for).
 absl::StatusOr<ParsedArgs> ParseArgs(const CommandSpec& spec, const std::vector<std::string>& args);
 
 // The subcommand's help: usage, description and every flag with its help.

@@ -28,6 +28,8 @@ std::string ProgramHelp() {
                   "  tetrefine health --server localhost:50051\n"
                   "  tetrefine slice --volume head.nii.gz --mesh head.vtu --mesh-after "
                   "head.refined.vtu --axis z --output slice.png\n"
+                  "  tetrefine plot --stats-json default.json --stats-json paper.json --output "
+                  "convergence.png\n"
                   "\nExit codes: 0 success, 1 failed (invalid mesh, not serving, service error),\n"
                   "2 bad flags or unusable input/output file (one line on stderr names it).\n"
                   "The gRPC server is a separate program: tetrefine_server --help.\n");
@@ -38,8 +40,8 @@ std::string ProgramHelp() {
 
 const std::vector<Subcommand>& Subcommands() {
   static const std::vector<Subcommand> commands = {
-      {RefineSpec, RunRefine}, {MeshSpec, RunMesh},     {VerifySpec, RunVerify},
-      {InfoSpec, RunInfo},     {HealthSpec, RunHealth}, {SliceSpec, RunSlice},
+      {RefineSpec, RunRefine}, {MeshSpec, RunMesh},   {VerifySpec, RunVerify}, {InfoSpec, RunInfo},
+      {HealthSpec, RunHealth}, {SliceSpec, RunSlice}, {PlotSpec, RunPlot},
   };
   return commands;
 }
@@ -47,8 +49,8 @@ const std::vector<Subcommand>& Subcommands() {
 int RunTetrefine(const std::vector<std::string>& argv) {
   if (argv.size() < 2) {
     return Fail(
-        "missing command: expected refine, mesh, verify, info, health or slice (see tetrefine "
-        "--help)",
+        "missing command: expected refine, mesh, verify, info, health, slice or plot (see "
+        "tetrefine --help)",
         kExitUsage);
   }
   const std::string& name = argv[1];
@@ -71,10 +73,11 @@ int RunTetrefine(const std::vector<std::string>& argv) {
       return command.run(std::vector<std::string>(argv.begin() + 2, argv.end()));
     }
   }
-  return Fail(absl::StrCat(
-                  "unknown command '", name,
-                  "': expected refine, mesh, verify, info, health or slice (see tetrefine --help)"),
-              kExitUsage);
+  return Fail(
+      absl::StrCat(
+          "unknown command '", name,
+          "': expected refine, mesh, verify, info, health, slice or plot (see tetrefine --help)"),
+      kExitUsage);
 }
 
 }  // namespace tetrefine::cli

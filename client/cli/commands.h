@@ -32,6 +32,9 @@ int RunHealth(const std::vector<std::string>& args);
 const CommandSpec& SliceSpec();
 int RunSlice(const std::vector<std::string>& args);
 
+const CommandSpec& PlotSpec();
+int RunPlot(const std::vector<std::string>& args);
+
 // All of the above, in the order `tetrefine --help` lists them.
 const std::vector<Subcommand>& Subcommands();
 

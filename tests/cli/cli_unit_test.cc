@@ -72,6 +72,21 @@ TEST(CliArgParser, ErrorsNameTheFlag) {
   }
 }
 
+TEST(CliArgParser, RepeatedFlagsKeepEveryValueInOrder) {
+  CommandSpec spec = TestSpec();
+  spec.flags.push_back({"label", "NAME", "a label", false, /*repeated=*/true});
+  absl::StatusOr<ParsedArgs> parsed =
+      ParseArgs(spec, {"--label", "a", "--in", "x", "--label=b", "--label", "c"});
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  EXPECT_EQ(parsed->GetAll("label"), (std::vector<std::string>{"a", "b", "c"}));
+  EXPECT_EQ(parsed->Get("label"), "c");
+  EXPECT_EQ(parsed->GetAll("in"), (std::vector<std::string>{"x"}));
+  EXPECT_TRUE(parsed->GetAll("max-count").empty());
+  EXPECT_NE(HelpText(spec).find("a label (repeatable)"), std::string::npos) << HelpText(spec);
+  // A flag that is not repeatable is still refused twice.
+  EXPECT_FALSE(ParseArgs(spec, {"--in", "x", "--in", "y", "--label", "a"}).ok());
+}
+
 TEST(CliArgParser, HelpSkipsRequiredFlagsAndListsEveryFlag) {
   absl::StatusOr<ParsedArgs> parsed = ParseArgs(TestSpec(), {"--help"});
   ASSERT_TRUE(parsed.ok());

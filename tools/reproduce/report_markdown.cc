@@ -448,6 +448,16 @@ std::string ReportMarkdown(const ReportData& d) {
     for (const std::string& n : d.notes) absl::StrAppend(&s, "- ", n, "\n");
     s += "\n";
   }
+  // The demo's pictures (scripts/demo.sh; docs/images is next to docs/results, the usual
+  // --out_dir), so a regenerated report keeps them.
+  s += "Figures for the demo (`bash scripts/demo.sh`: the bundled 33x41x25 MRI and the 1782-tet "
+       "unit cube, ε = 0.1; not part of the runs below): the plane z = 8 mm before and after "
+       "refinement (`tetrefine slice`), and the largest edge-midpoint error and tets per iteration "
+       "of the longest-edge and paper schemes (`tetrefine plot`).\n\n"
+       "![The demo at z = 8 mm: volume, mesh interpolation and discrepancy, before and after "
+       "refinement](../images/demo_slice_z8.png)\n\n"
+       "![The demo's convergence: largest edge-midpoint error and tets per iteration, longest-edge "
+       "and paper schemes](../images/demo_convergence.png)\n\n";
   Findings(d, s);
   Method(d, s);
   MethodsTable(d, s);

@@ -1,0 +1,127 @@
+#include "client/cli/convergence_stats.h"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "absl/strings/str_cat.h"
+#include "client/io/file_bytes.h"
+
+namespace tetrefine::cli {
+namespace {
+
+using Json = nlohmann::json;
+
+absl::Status FieldError(const std::string& field, absl::string_view problem) {
+  return absl::InvalidArgumentError(absl::StrCat(field, ": ", problem));
+}
+
+// A number (not null: the writer writes NaN and infinities as null).
+absl::StatusOr<double> Number(const Json& object, const std::string& key,
+                              const std::string& field) {
+  auto it = object.find(key);
+  if (it == object.end()) return FieldError(field, "missing");
+  if (!it->is_number())
+    return FieldError(field, absl::StrCat("expected a number, got ", it->dump()));
+  return it->get<double>();
+}
+
+absl::StatusOr<int64_t> Count(const Json& object, const std::string& key,
+                              const std::string& field) {
+  auto it = object.find(key);
+  if (it == object.end()) return FieldError(field, "missing");
+  if (!it->is_number_integer() || it->get<int64_t>() < 0) {
+    return FieldError(field, absl::StrCat("expected a whole number >= 0, got ", it->dump()));
+  }
+  return it->get<int64_t>();
+}
+
+// The string at `key`, "" when absent; an error when it is there but not a string.
+absl::StatusOr<std::string> OptionalString(const Json& object, const std::string& key,
+                                           const std::string& field) {
+  auto it = object.find(key);
+  if (it == object.end() || it->is_null()) return std::string();
+  if (!it->is_string())
+    return FieldError(field, absl::StrCat("expected a string, got ", it->dump()));
+  return it->get<std::string>();
+}
+
+absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
+  if (!root.is_object()) return absl::InvalidArgumentError("expected a JSON object at the top");
+  ConvergenceRun run;
+  auto options = root.find("options");
+  if (options == root.end() || !options->is_object()) {
+    return FieldError("options", "missing (not a tetrefine refine --stats-json file?)");
+  }
+  absl::StatusOr<double> epsilon = Number(*options, "epsilon", "options.epsilon");
+  if (!epsilon.ok()) return epsilon.status();
+  if (!(*epsilon > 0.0))
+    return FieldError("options.epsilon", absl::StrCat("must be > 0, got ", *epsilon));
+  run.epsilon = *epsilon;
+  absl::StatusOr<std::string> scheme = OptionalString(*options, "scheme", "options.scheme");
+  if (!scheme.ok()) return scheme.status();
+  run.scheme = *scheme;
+  absl::StatusOr<std::string> stop = OptionalString(root, "stop_reason", "stop_reason");
+  if (!stop.ok()) return stop.status();
+  run.stop_reason = *stop;
+
+  auto iterations = root.find("iterations");
+  if (iterations == root.end()) return FieldError("iterations", "missing");
+  if (!iterations->is_array()) return FieldError("iterations", "expected an array");
+  if (iterations->empty()) {
+    return FieldError("iterations",
+                      "empty: the run made no iteration, so there is no convergence to plot");
+  }
+  for (size_t i = 0; i < iterations->size(); ++i) {
+    const Json& it = (*iterations)[i];
+    const std::string at = absl::StrCat("iterations[", i, "]");
+    if (!it.is_object()) return FieldError(at, "expected an object");
+    if (i == 0) {
+      absl::StatusOr<int64_t> initial = Count(it, "initial_tets", at + ".initial_tets");
+      if (!initial.ok()) return initial.status();
+      run.tets.push_back(*initial);
+    }
+    absl::StatusOr<double> error = Number(it, "max_error", at + ".max_error");
+    if (!error.ok()) return error.status();
+    absl::StatusOr<int64_t> final_tets = Count(it, "final_tets", at + ".final_tets");
+    if (!final_tets.ok()) return final_tets.status();
+    run.max_error.push_back(*error);
+    run.tets.push_back(*final_tets);
+  }
+  auto final_error = root.find("final_max_error");
+  if (final_error != root.end() && final_error->is_number() && run.stop_reason != "cancelled") {
+    run.max_error.push_back(final_error->get<double>());
+  }
+  return run;
+}
+
+// "[json.exception.parse_error.101] parse error at ..." -> "parse error at ...".
+std::string WithoutExceptionId(const std::string& what) {
+  if (what.empty() || what[0] != '[') return what;
+  const size_t end = what.find("] ");
+  return end == std::string::npos ? what : what.substr(end + 2);
+}
+
+}  // namespace
+
+absl::StatusOr<ConvergenceRun> ParseConvergenceRun(std::string_view json_text) {
+  Json root;
+  try {
+    root = Json::parse(json_text);
+  } catch (const Json::exception& e) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("not valid JSON: ", WithoutExceptionId(e.what())));
+  }
+  return FromJson(root);
+}
+
+absl::StatusOr<ConvergenceRun> ReadConvergenceRun(const std::string& path) {
+  absl::StatusOr<std::string> text = io::ReadFileBytes(path);
+  if (!text.ok()) return text.status();
+  absl::StatusOr<ConvergenceRun> run = ParseConvergenceRun(*text);
+  if (!run.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": ", run.status().message()));
+  }
+  return run;
+}
+
+}  // namespace tetrefine::cli
