@@ -126,7 +126,12 @@ absl::Status ExportPlazaCase(const Volume& volume, const Mesh& mesh, double norm
   io::MeshFile file;
   file.mesh.points = mesh.points;
   file.mesh.tets = mesh.tets;
-  return io::WriteMesh((dir / "mesh.vtu").string(), file);
+  // Inline base64 without compression: the layout plaza_refine.py parses with ElementTree (the
+  // default, ParaView's appended raw section, is not well-formed XML to a plain XML parser).
+  io::MeshWriteOptions layout;
+  layout.vtu.layout = io::VtuWriteOptions::Layout::kInlineBase64;
+  layout.vtu.compressor = io::VtkCompressor::kNone;
+  return io::WriteMesh((dir / "mesh.vtu").string(), file, layout);
 }
 
 absl::StatusOr<PlazaResult> RunPlaza(const PlazaPeer& peer, const std::filesystem::path& case_dir,
