@@ -7,22 +7,12 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
+#include "sharding/point_key.h"
 
 namespace tetrefine::sharding {
 namespace {
 
 constexpr uint32_t kUnset = std::numeric_limits<uint32_t>::max();
-
-using PointKey = std::array<uint64_t, 3>;
-
-PointKey KeyOf(const Vec3& p) {
-  return {std::bit_cast<uint64_t>(p[0]), std::bit_cast<uint64_t>(p[1]),
-          std::bit_cast<uint64_t>(p[2])};
-}
-
-bool SameBits(double a, double b) {
-  return std::bit_cast<uint64_t>(a) == std::bit_cast<uint64_t>(b);
-}
 
 bool InAnotherBox(const Vec3& p, const std::vector<MeshPart>& parts, size_t self) {
   for (size_t q = 0; q < parts.size(); ++q) {
