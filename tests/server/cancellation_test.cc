@@ -36,6 +36,17 @@ const HeavyCase& Heavy() {
   return *heavy;
 }
 
+// "Promptly": the core polls cancellation every few thousand tets and between iterations, and the
+// longest stretch without a poll is well under a second in a release build. AddressSanitizer makes
+// it about three times longer, and CI runs two sanitized tests at once on two cores: there this
+// test once needed more than the release bounds (CI, sanitizer stage), so they are tripled.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr int kSlowdown = 3;
+#else
+constexpr int kSlowdown = 1;
+#endif
+constexpr milliseconds kPromptly{1000 * kSlowdown};
+
 // How long the server still worked on the call after `since`.
 milliseconds IdleAfter(server::RefinerService& service, Clock::time_point since) {
   while (service.open_calls() != 0 && Clock::now() - since < std::chrono::seconds(30)) {
@@ -55,8 +66,8 @@ TEST(ServiceCancellationTest, DeadlineStopsTheRefinement) {
   const Clock::time_point returned = Clock::now();
   ASSERT_FALSE(result.ok());
   EXPECT_EQ(result.status().code(), absl::StatusCode::kDeadlineExceeded) << result.status();
-  EXPECT_LT(returned - start, milliseconds(2000));
-  EXPECT_LT(IdleAfter(server.service(), start + milliseconds(200)), milliseconds(1000));
+  EXPECT_LT(returned - start, milliseconds(200) + 2 * kPromptly);
+  EXPECT_LT(IdleAfter(server.service(), start + milliseconds(200)), kPromptly);
 }
 
 TEST(ServiceCancellationTest, ShouldCancelStopsTheRefinement) {
@@ -78,7 +89,7 @@ TEST(ServiceCancellationTest, ShouldCancelStopsTheRefinement) {
   EXPECT_EQ(result.status().code(), absl::StatusCode::kCancelled) << result.status();
   ASSERT_TRUE(first_iteration_done.load());
   const Clock::time_point cancelled_at{Clock::duration(cancelled_at_ns.load())};
-  EXPECT_LT(IdleAfter(server.service(), cancelled_at), milliseconds(1000));
+  EXPECT_LT(IdleAfter(server.service(), cancelled_at), kPromptly);
 }
 
 TEST(ServiceCancellationTest, ServerStillServesAfterCancellations) {
