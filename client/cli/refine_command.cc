@@ -2,8 +2,10 @@
 // process, or a tetrefine_server), prints progress and the paper's tables, writes the result.
 
 #include <algorithm>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <optional>
 #include <string>
@@ -20,6 +22,8 @@
 #include "client/cli/file_kind.h"
 #include "client/cli/grpc_channel.h"
 #include "client/cli/mesh_placement.h"
+#include "client/cli/mesh_write_flags.h"
+#include "client/cli/progress.h"
 #include "client/cli/refine_backend.h"
 #include "client/cli/refine_report.h"
 #include "client/cli/stats_json.h"
@@ -27,6 +31,7 @@
 #include "client/io/mesh_io.h"
 #include "core/quality.h"
 #include "core/refine_options.h"
+#include "core/voxel_type.h"
 #include "wire/service_limits.h"
 
 namespace tetrefine::cli {
@@ -41,6 +46,7 @@ struct RefineSettings {
   TlsFiles tls;
   std::string token;  // --token-file's
   client::RefineRequestOptions options;
+  io::MeshWriteOptions write;  // how the output files are encoded
   int threads = 0;
   int shards = 0;  // > 0: sharded over the comma-separated --server list
   bool every_iteration = false;
@@ -142,6 +148,9 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
         "--every-iteration: not available with a sharded refinement (--shards or several "
         "--server addresses): parts are merged once they are done");
   }
+  absl::StatusOr<io::MeshWriteOptions> write = MeshWriteOptionsFromArgs(args);
+  if (!write.ok()) return write.status();
+  s->write = *write;
   absl::StatusOr<TlsFiles> tls = TlsFilesFromArgs(args);
   if (!tls.ok()) return tls.status();
   s->tls = *tls;
@@ -241,12 +250,61 @@ io::MeshFile WithQuality(const Mesh& mesh, const InputTags& tags) {
   return file;
 }
 
+// The size of the file at `path` in bytes, or -1 when it cannot be read (progress lines only).
+int64_t FileSize(const std::string& path) {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  return error ? -1 : static_cast<int64_t>(size);
+}
+
+// "1.6 M tets, 31 MB" for a mesh file just written or read.
+std::string MeshFileSummary(const std::string& path, int64_t tets) {
+  std::string text = absl::StrCat(FormatCount(tets), " tets");
+  if (const int64_t bytes = FileSize(path); bytes >= 0) {
+    absl::StrAppend(&text, ", ", FormatBytes(bytes));
+  }
+  return text;
+}
+
+// Writes `file` to `path` as `s.write` says, reporting it as a progress phase.
+absl::Status WriteMeshReported(const RefineSettings& s, Progress& progress, const std::string& path,
+                               const io::MeshFile& file) {
+  progress.Begin(absl::StrCat("writing ", path));
+  absl::Status written = io::WriteMesh(path, file, s.write);
+  if (!written.ok()) {
+    progress.Abandon();
+    return written;
+  }
+  progress.End(MeshFileSummary(path, static_cast<int64_t>(file.mesh.tets.size())));
+  return absl::OkStatus();
+}
+
 int RunRefinement(const RefineSettings& s) {
+  Progress progress(s.quiet);
+  progress.Begin(absl::StrCat("reading volume ", s.volume_path));
   absl::StatusOr<io::VolumeFile> volume = LoadVolume(s.volume_path, "--volume");
-  if (!volume.ok()) return Fail(volume.status(), kExitUsage);
+  if (!volume.ok()) {
+    progress.Abandon();
+    return Fail(volume.status(), kExitUsage);
+  }
+  {
+    const Volume& v = volume->volume;
+    const Index3& d = v.grid().dims;
+    progress.End(absl::StrFormat(
+        "%dx%dx%d %s, %s", static_cast<long long>(d[0]), static_cast<long long>(d[1]),
+        static_cast<long long>(d[2]), std::string(VoxelTypeName(v.type())),
+        FormatBytes(v.voxel_count() * static_cast<int64_t>(VoxelSize(v.type())))));
+  }
   PrintVolumeWarnings(*volume);
+  progress.Begin(absl::StrCat("reading mesh ", s.mesh_path));
   absl::StatusOr<io::MeshFile> mesh_file = LoadMesh(s.mesh_path, "--mesh");
-  if (!mesh_file.ok()) return Fail(mesh_file.status(), kExitUsage);
+  if (!mesh_file.ok()) {
+    progress.Abandon();
+    return Fail(mesh_file.status(), kExitUsage);
+  }
+  progress.End(absl::StrCat(
+      FormatCount(static_cast<int64_t>(mesh_file->mesh.points.size())), " vertices, ",
+      MeshFileSummary(s.mesh_path, static_cast<int64_t>(mesh_file->mesh.tets.size()))));
   const InputTags tags{.label_name = mesh_file->label_name, .frame = mesh_file->frame};
   // Region labels (mesh.labels) go in with the mesh; every child tet inherits its parent's.
   Mesh mesh = std::move(mesh_file->mesh);
@@ -293,14 +351,47 @@ int RunRefinement(const RefineSettings& s) {
 
   absl::Status iteration_write;
   client::RefineCallbacks callbacks;
+  // The service's phases, as far as the stream shows them: the input sent, each iteration, the
+  // final checks (known to be over when the result's header arrives), the result received.
+  auto phase_start = std::chrono::steady_clock::now();
+  int iterations_seen = 0;
+  progress.Line(s.shards > 0 ? absl::StrCat("cutting the mesh into ", s.shards,
+                                            " parts and sending each to its server ...")
+                             : std::string("sending the input ..."));
+  callbacks.on_input_sent = [&](int64_t bytes) {
+    progress.Line(absl::StrCat("sent ", FormatBytes(bytes), ", ",
+                               FormatSeconds(SecondsSince(phase_start)),
+                               "; the service validates the input and refines"));
+    phase_start = std::chrono::steady_clock::now();
+  };
   callbacks.on_iteration = [&](const IterationStats& stats) {
-    if (!s.quiet) std::fprintf(stderr, "tetrefine: %s\n", FormatProgressLine(stats).c_str());
+    progress.Line(FormatProgressLine(stats));
+    ++iterations_seen;
+    phase_start = std::chrono::steady_clock::now();
+  };
+  callbacks.on_result_started = [&](int64_t vertices, int64_t tets) {
+    // The stream carries no message between the last iteration and the result, so the final
+    // checks are reported once over, with their time.
+    std::string checks = "the stop test";
+    if (s.options.refine.lattice_n > 0) {
+      absl::StrAppend(&checks, " and the lattice check (order ", s.options.refine.lattice_n, ")");
+    }
+    progress.Line(absl::StrCat("service done after ", iterations_seen, " iteration",
+                               iterations_seen == 1 ? "" : "s", "; ", checks, " took ",
+                               FormatSeconds(SecondsSince(phase_start))));
+    progress.Line(absl::StrCat("receiving the refined mesh: ", FormatCount(tets), " tets, ",
+                               FormatCount(vertices), " vertices ..."));
+    phase_start = std::chrono::steady_clock::now();
+  };
+  callbacks.on_result_received = [&](int64_t bytes) {
+    progress.Line(absl::StrCat("received the refined mesh: ", FormatBytes(bytes), ", ",
+                               FormatSeconds(SecondsSince(phase_start))));
   };
   if (s.every_iteration) {
     callbacks.on_mesh = [&](int iteration, const Mesh& m) {
       if (!iteration_write.ok()) return;
-      iteration_write =
-          io::WriteMesh(IterationPath(s.output_path, iteration), WithQuality(m, tags));
+      iteration_write = WriteMeshReported(s, progress, IterationPath(s.output_path, iteration),
+                                          WithQuality(m, tags));
     };
   }
   InterruptGuard interrupt_guard;
@@ -345,11 +436,16 @@ int RunRefinement(const RefineSettings& s) {
     PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
                               " is written without them"));
   }
-  absl::Status written = io::WriteMesh(s.output_path, out);
+  absl::Status written = WriteMeshReported(s, progress, s.output_path, out);
   if (!written.ok()) return Fail(written, kExitUsage);
   if (!s.stats_json_path.empty()) {
+    progress.Begin(absl::StrCat("writing ", s.stats_json_path));
     absl::Status json = io::WriteFileAtomically(s.stats_json_path, stats_json);
-    if (!json.ok()) return Fail(json, kExitUsage);
+    if (!json.ok()) {
+      progress.Abandon();
+      return Fail(json, kExitUsage);
+    }
+    progress.End(FormatBytes(static_cast<int64_t>(stats_json.size())));
   }
   std::fputs(report.c_str(), stdout);
   std::printf(
@@ -424,6 +520,7 @@ const CommandSpec& RefineSpec() {
                 {"quiet", "", "no progress lines on stderr"},
             },
         .positional = ""};
+    for (FlagSpec& flag : MeshWriteFlagSpecs()) s->flags.push_back(std::move(flag));
     for (FlagSpec& flag : TlsFlagSpecs()) s->flags.push_back(std::move(flag));
     s->flags.push_back(TokenFlagSpec());
     return s;
