@@ -24,11 +24,13 @@
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_write_flags.h"
 #include "client/cli/progress.h"
+#include "client/cli/pvtu_pieces.h"
 #include "client/cli/refine_backend.h"
 #include "client/cli/refine_report.h"
 #include "client/cli/stats_json.h"
 #include "client/io/file_bytes.h"
 #include "client/io/mesh_io.h"
+#include "client/io/pvtu_writer.h"
 #include "core/quality.h"
 #include "core/refine_options.h"
 #include "core/voxel_type.h"
@@ -48,7 +50,8 @@ struct RefineSettings {
   client::RefineRequestOptions options;
   io::MeshWriteOptions write;  // how the output files are encoded
   int threads = 0;
-  int shards = 0;  // > 0: sharded over the comma-separated --server list
+  int shards = 0;     // > 0: sharded over the comma-separated --server list
+  bool pvtu = false;  // output_path is a .pvtu index written with one .vtu piece per shard
   bool every_iteration = false;
   bool fit_mesh_to_volume = false;
   bool quiet = false;
@@ -167,7 +170,19 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   }
   s->output_path =
       args.Get("output").value_or(absl::StrCat(FileStem(s->mesh_path), ".refined.vtu"));
-  absl::Status output = CheckOutputPath(s->output_path, "--output", /*mesh=*/true);
+  // A .pvtu output, or --pvtu beside another name: the result in pieces, one per shard.
+  s->pvtu = args.Has("pvtu") || absl::EndsWithIgnoreCase(s->output_path, ".pvtu");
+  if (s->pvtu) {
+    if (!absl::EndsWithIgnoreCase(s->output_path, ".pvtu")) {
+      s->output_path = absl::StrCat(PathStem(s->output_path), ".pvtu");
+    }
+    if (s->shards == 0) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          args.Has("pvtu") ? "--pvtu" : "--output", ": a .pvtu holds one piece per shard; it ",
+          "needs a sharded run (--shards K with --server, or several --server addresses)"));
+    }
+  }
+  absl::Status output = CheckOutputPath(s->output_path, "--output", /*mesh=*/!s->pvtu);
   if (!output.ok()) return output;
   s->stats_json_path = args.Get("stats-json").value_or("");
   if (args.Has("stats-json")) {
@@ -276,6 +291,26 @@ absl::Status WriteMeshReported(const RefineSettings& s, Progress& progress, cons
     return written;
   }
   progress.End(MeshFileSummary(path, static_cast<int64_t>(file.mesh.tets.size())));
+  return absl::OkStatus();
+}
+
+// Writes `file` as the .pvtu at s.output_path with one .vtu piece per shard, reported as one
+// progress phase (sizes summed over the pieces and the index).
+absl::Status WritePiecesReported(const RefineSettings& s, Progress& progress,
+                                 const io::MeshFile& file) {
+  const std::vector<io::MeshFile> pieces = CutIntoPieces(file, s.shards);
+  progress.Begin(absl::StrCat("writing ", s.output_path, " and ", pieces.size(), " pieces"));
+  absl::Status written = io::WritePvtu(s.output_path, pieces, s.write.vtu);
+  if (!written.ok()) {
+    progress.Abandon();
+    return written;
+  }
+  int64_t bytes = std::max<int64_t>(FileSize(s.output_path), 0);
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    bytes += std::max<int64_t>(FileSize(io::PvtuPiecePath(s.output_path, static_cast<int>(k))), 0);
+  }
+  progress.End(absl::StrCat(FormatCount(static_cast<int64_t>(file.mesh.tets.size())), " tets, ",
+                            FormatBytes(bytes)));
   return absl::OkStatus();
 }
 
@@ -397,8 +432,16 @@ int RunRefinement(const RefineSettings& s) {
   InterruptGuard interrupt_guard;
   callbacks.should_cancel = [&] { return g_interrupted != 0 || !iteration_write.ok(); };
 
+  const auto refine_start = std::chrono::steady_clock::now();
   absl::StatusOr<client::ClientResult> reply =
       (*backend)->Refine(volume->volume, mesh, s.options, callbacks);
+  if (reply.ok() && s.shards > 0) {
+    // Sharded runs report the combined iterations once all parts are done, and their calls'
+    // phases not at all: say at least that the parts are back and merged.
+    progress.Line(absl::StrCat("parts refined, measured and merged: ",
+                               FormatCount(static_cast<int64_t>(reply->result.mesh.tets.size())),
+                               " tets, ", FormatSeconds(SecondsSince(refine_start))));
+  }
   if (!iteration_write.ok()) return Fail(iteration_write, kExitUsage);
   if (g_interrupted != 0) return Fail("interrupted; no output written", 130);
   if (!reply.ok()) {
@@ -436,7 +479,8 @@ int RunRefinement(const RefineSettings& s) {
     PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
                               " is written without them"));
   }
-  absl::Status written = WriteMeshReported(s, progress, s.output_path, out);
+  absl::Status written = s.pvtu ? WritePiecesReported(s, progress, out)
+                                : WriteMeshReported(s, progress, s.output_path, out);
   if (!written.ok()) return Fail(written, kExitUsage);
   if (!s.stats_json_path.empty()) {
     progress.Begin(absl::StrCat("writing ", s.stats_json_path));
@@ -449,7 +493,12 @@ int RunRefinement(const RefineSettings& s) {
   }
   std::fputs(report.c_str(), stdout);
   std::printf(
-      "Wrote %s: %zu vertices, %zu tets%s\n", s.output_path.c_str(), out_vertices, out_tets,
+      "Wrote %s%s: %zu vertices, %zu tets%s\n", s.output_path.c_str(),
+      s.pvtu ? absl::StrCat(" (", std::min<size_t>(static_cast<size_t>(s.shards), out_tets),
+                            " .vtu pieces)")
+                   .c_str()
+             : "",
+      out_vertices, out_tets,
       s.stats_json_path.empty() ? "" : absl::StrCat("; statistics in ", s.stats_json_path).c_str());
   return kExitOk;
 }
@@ -499,8 +548,13 @@ const CommandSpec& RefineSpec() {
                               "tet; 0 skips the check (default ",
                               RefineOptions{}.lattice_n, ", the paper's 165 points)")},
                 {"output", "FILE",
-                 "refined mesh, .vtu .vtk .msh .mesh .meshb (default <mesh name>.refined.vtu "
+                 "refined mesh, .vtu .vtk .msh .mesh .meshb, or .pvtu with --shards (default "
+                 "<mesh name>.refined.vtu "
                  "in the working directory)"},
+                {"pvtu", "",
+                 "with --shards K: write the result as a .pvtu index (the --output name with "
+                 "the extension .pvtu) and K .vtu pieces <stem>_<k>.vtu beside it, for "
+                 "ParaView's parallel reader; also chosen by an --output ending in .pvtu"},
                 {"every-iteration", "",
                  "also write each iteration's mesh as <output stem>.iterNN.<ext>"},
                 {"stats-json", "FILE", "write the statistics as JSON"},
