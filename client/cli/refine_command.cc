@@ -2,6 +2,7 @@
 // process, or a tetrefine_server), prints progress and the paper's tables, writes the result.
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -389,7 +390,17 @@ int RunRefinement(const RefineSettings& s) {
   // The service's phases, as far as the stream shows them: the input sent, each iteration, the
   // final checks (known to be over when the result's header arrives), the result received.
   auto phase_start = std::chrono::steady_clock::now();
-  int iterations_seen = 0;
+  std::atomic<int> iterations_seen{0};
+  // Between the input sent and the result's header the stream is silent while the service
+  // works; long silences get a line saying so.
+  SilenceWatch silence(progress, [&](double seconds) {
+    std::string next = absl::StrCat("iteration ", iterations_seen.load() + 1);
+    if (s.options.refine.max_iterations <= iterations_seen.load()) next.clear();
+    return absl::StrCat("the service is still working (", next, next.empty() ? "" : " or ",
+                        "its final checks: the stop test",
+                        s.options.refine.lattice_n > 0 ? ", the lattice check" : "", "), ",
+                        FormatSeconds(seconds), " since the last line");
+  });
   progress.Line(s.shards > 0 ? absl::StrCat("cutting the mesh into ", s.shards,
                                             " parts and sending each to its server ...")
                              : std::string("sending the input ..."));
@@ -398,11 +409,13 @@ int RunRefinement(const RefineSettings& s) {
                                FormatSeconds(SecondsSince(phase_start)),
                                "; the service validates the input and refines"));
     phase_start = std::chrono::steady_clock::now();
+    silence.Touch(/*armed=*/true);
   };
   callbacks.on_iteration = [&](const IterationStats& stats) {
     progress.Line(FormatProgressLine(stats));
     ++iterations_seen;
     phase_start = std::chrono::steady_clock::now();
+    silence.Touch(/*armed=*/true);
   };
   callbacks.on_result_started = [&](int64_t vertices, int64_t tets) {
     // The stream carries no message between the last iteration and the result, so the final
@@ -411,8 +424,10 @@ int RunRefinement(const RefineSettings& s) {
     if (s.options.refine.lattice_n > 0) {
       absl::StrAppend(&checks, " and the lattice check (order ", s.options.refine.lattice_n, ")");
     }
-    progress.Line(absl::StrCat("service done after ", iterations_seen, " iteration",
-                               iterations_seen == 1 ? "" : "s", "; ", checks, " took ",
+    silence.Touch(/*armed=*/false);
+    const int iterations = iterations_seen.load();
+    progress.Line(absl::StrCat("service done after ", iterations, " iteration",
+                               iterations == 1 ? "" : "s", "; ", checks, " took ",
                                FormatSeconds(SecondsSince(phase_start))));
     progress.Line(absl::StrCat("receiving the refined mesh: ", FormatCount(tets), " tets, ",
                                FormatCount(vertices), " vertices ..."));
@@ -435,6 +450,7 @@ int RunRefinement(const RefineSettings& s) {
   const auto refine_start = std::chrono::steady_clock::now();
   absl::StatusOr<client::ClientResult> reply =
       (*backend)->Refine(volume->volume, mesh, s.options, callbacks);
+  silence.Touch(/*armed=*/false);
   if (reply.ok() && s.shards > 0) {
     // Sharded runs report the combined iterations once all parts are done, and their calls'
     // phases not at all: say at least that the parts are back and merged.
