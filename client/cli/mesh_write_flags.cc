@@ -98,9 +98,12 @@ absl::StatusOr<io::MeshWriteOptions> MeshWriteOptionsFromArgs(const ParsedArgs& 
     return absl::InvalidArgumentError("--binary, --ascii: give one of them, not both");
   }
   // Binary by default, unlike the io library: what the CLI writes is usually a refined mesh of
-  // millions of tets, which binary stores in about a third of the bytes and writes and reads
-  // several times faster, and every reader of these formats in use (Gmsh 4, VTK/ParaView,
-  // meshio, 3D Slicer) takes it. --ascii is there for editors and older tools.
+  // millions of tets, and binary writes and reads several times faster (a 1.05 M-tet refine
+  // result: .msh written in 0.21 s instead of 0.68 s, .vtk in 0.67 s instead of 0.94 s;
+  // bench/mesh_io_bench at 3.3 M tets reads .msh in 0.27 s instead of 1.06 s). Sizes are close
+  // (.vtk 17% smaller, .msh 13% larger: Gmsh's binary tags are 8 bytes), and every reader of
+  // these formats in use (Gmsh 4, VTK/ParaView, meshio, 3D Slicer) takes binary. --ascii is
+  // there for editors and older tools.
   options.binary = !args.Has("ascii");
   return options;
 }
