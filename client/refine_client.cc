@@ -72,14 +72,33 @@ absl::StatusOr<ClientResult> RefineViaService(std::shared_ptr<grpc::Channel> cha
     CancelWatcher watcher(callbacks.should_cancel, &context);
     // The server reads the whole input before it answers, so writing everything first cannot
     // deadlock. A failed write means the server has already ended the call: its status tells.
-    if (wire::WriteRequest(sent, volume, mesh, call.chunk_bytes,
-                           [&](const v1::RefineRequest& r) { return stream->Write(r); })) {
+    int64_t bytes_sent = 0;
+    if (wire::WriteRequest(sent, volume, mesh, call.chunk_bytes, [&](const v1::RefineRequest& r) {
+          bytes_sent += static_cast<int64_t>(r.ByteSizeLong());
+          return stream->Write(r);
+        })) {
       stream->WritesDone();
+      if (callbacks.on_input_sent) callbacks.on_input_sent(bytes_sent);
     }
     wire::ResponseReader reader(callbacks.on_iteration, callbacks.on_mesh, !sent.skip_final_mesh);
     v1::RefineResponse response;
+    // Bytes of the result (final mesh and summary) received so far; -1 before its start.
+    int64_t result_bytes = -1;
     while (reader_status.ok() && stream->Read(&response)) {
+      const bool result_start =
+          response.kind_case() == v1::RefineResponse::kMeshHeader && response.mesh_header().final();
+      // A skipped final mesh: the summary is the whole result.
+      if (result_start || (result_bytes < 0 && response.has_summary())) result_bytes = 0;
+      if (result_bytes >= 0) result_bytes += static_cast<int64_t>(response.ByteSizeLong());
       reader_status = reader.Add(response);
+      if (!reader_status.ok()) break;
+      if (result_start && callbacks.on_result_started) {
+        callbacks.on_result_started(response.mesh_header().vertex_count(),
+                                    response.mesh_header().tet_count());
+      }
+      if (response.has_summary() && callbacks.on_result_received) {
+        callbacks.on_result_received(result_bytes);
+      }
     }
     if (!reader_status.ok()) context.TryCancel();
     grpc::Status status = stream->Finish();

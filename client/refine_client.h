@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -39,6 +40,17 @@ struct RefineCallbacks {
   std::function<void(int iteration, const Mesh& mesh)> on_mesh;
   // Polled about every 10 ms from a helper thread while the call runs; true cancels it.
   std::function<bool()> should_cancel;
+  // Progress of the call's phases, for reporting; each is called at most once, in this order,
+  // on the calling thread, between the on_iteration calls where they fall.
+  // The whole request has been written (`bytes`: its messages' serialized size). The server
+  // validates it and refines next.
+  std::function<void(int64_t bytes)> on_input_sent;
+  // The final mesh's header has arrived: refinement and the server's final checks (the stop
+  // test, the lattice check) are done; `vertices` and `tets` of the mesh whose chunks follow.
+  std::function<void(int64_t vertices, int64_t tets)> on_result_started;
+  // The summary has arrived: the response is complete (`bytes`: the serialized size of the
+  // messages from the final mesh's header to the summary).
+  std::function<void(int64_t bytes)> on_result_received;
 };
 
 struct CallOptions {

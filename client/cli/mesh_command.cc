@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "client/cli/command_support.h"
@@ -11,32 +12,37 @@
 #include "client/cli/file_kind.h"
 #include "client/cli/grid_mesher.h"
 #include "client/cli/mesh_report.h"
+#include "client/cli/mesh_write_flags.h"
 #include "client/io/mesh_io.h"
 
 namespace tetrefine::cli {
 
 const CommandSpec& MeshSpec() {
-  static const CommandSpec spec{
-      .name = "mesh",
-      .summary = "Make an initial tet mesh of a volume's voxel grid",
-      .usage = "tetrefine mesh --volume V [--block B] [--mask-threshold T] --output OUT",
-      .description =
-          "Cuts the volume's grid into cells of B x B x B voxels (the last cell along an axis\n"
-          "takes what remains, so the mesh spans the whole volume) and each cell into 5 tets,\n"
-          "alternating the split between neighbouring cells so shared faces match. Vertices sit\n"
-          "on voxel samples (world RAS mm) and carry the sample as `value`; tets are positively\n"
-          "oriented; only vertices some tet uses are written.\n"
-          "With --mask-threshold T only cells whose 8 corner samples are all >= T are meshed:\n"
-          "the paper's liver set-up, a tetrahedrization of the voxels inside the organ.",
-      .flags =
-          {
-              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
-              {"output", "FILE", "mesh to write: .vtu .vtk .msh .mesh .meshb", true},
-              {"block", "B", "voxels per cell edge (default 1)"},
-              {"mask-threshold", "T", "mesh only cells whose 8 corner samples are all >= T"},
-          },
-      .positional = ""};
-  return spec;
+  static const CommandSpec* spec = [] {
+    auto* s = new CommandSpec{
+        .name = "mesh",
+        .summary = "Make an initial tet mesh of a volume's voxel grid",
+        .usage = "tetrefine mesh --volume V [--block B] [--mask-threshold T] --output OUT",
+        .description =
+            "Cuts the volume's grid into cells of B x B x B voxels (the last cell along an axis\n"
+            "takes what remains, so the mesh spans the whole volume) and each cell into 5 tets,\n"
+            "alternating the split between neighbouring cells so shared faces match. Vertices sit\n"
+            "on voxel samples (world RAS mm) and carry the sample as `value`; tets are positively\n"
+            "oriented; only vertices some tet uses are written.\n"
+            "With --mask-threshold T only cells whose 8 corner samples are all >= T are meshed:\n"
+            "the paper's liver set-up, a tetrahedrization of the voxels inside the organ.",
+        .flags =
+            {
+                {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd", true},
+                {"output", "FILE", "mesh to write: .vtu .vtk .msh .mesh .meshb", true},
+                {"block", "B", "voxels per cell edge (default 1)"},
+                {"mask-threshold", "T", "mesh only cells whose 8 corner samples are all >= T"},
+            },
+        .positional = ""};
+    for (FlagSpec& flag : MeshWriteFlagSpecs()) s->flags.push_back(std::move(flag));
+    return s;
+  }();
+  return *spec;
 }
 
 int RunMesh(const std::vector<std::string>& args) {
@@ -54,6 +60,8 @@ int RunMesh(const std::vector<std::string>& args) {
     if (!threshold.ok()) return Fail(threshold.status(), kExitUsage);
     options.mask_threshold = *threshold;
   }
+  absl::StatusOr<io::MeshWriteOptions> write = MeshWriteOptionsFromArgs(*parsed);
+  if (!write.ok()) return Fail(write.status(), kExitUsage);
   const std::string volume_path = *parsed->Get("volume");
   const std::string output = *parsed->Get("output");
   absl::Status output_ok = CheckOutputPath(output, "--output", /*mesh=*/true);
@@ -66,7 +74,7 @@ int RunMesh(const std::vector<std::string>& args) {
   if (!grid.ok()) return Fail(absl::StrCat(volume_path, ": ", grid.status().message()), kExitUsage);
   const MeshReport report = AnalyzeMesh(grid->mesh);
   io::MeshFile file{.mesh = std::move(grid->mesh), .tet_iteration = {}, .tet_quality = {}};
-  absl::Status written = io::WriteMesh(output, file);
+  absl::Status written = io::WriteMesh(output, file, *write);
   if (!written.ok()) return Fail(written, kExitUsage);
   std::printf(
       "Wrote %s: %lld vertices, %lld tets from %lld of %lld cells (block %lld), volume %g "

@@ -2,8 +2,11 @@
 // process, or a tetrefine_server), prints progress and the paper's tables, writes the result.
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <optional>
 #include <string>
@@ -20,13 +23,18 @@
 #include "client/cli/file_kind.h"
 #include "client/cli/grpc_channel.h"
 #include "client/cli/mesh_placement.h"
+#include "client/cli/mesh_write_flags.h"
+#include "client/cli/progress.h"
+#include "client/cli/pvtu_pieces.h"
 #include "client/cli/refine_backend.h"
 #include "client/cli/refine_report.h"
 #include "client/cli/stats_json.h"
 #include "client/io/file_bytes.h"
 #include "client/io/mesh_io.h"
+#include "client/io/pvtu_writer.h"
 #include "core/quality.h"
 #include "core/refine_options.h"
+#include "core/voxel_type.h"
 #include "wire/service_limits.h"
 
 namespace tetrefine::cli {
@@ -41,8 +49,10 @@ struct RefineSettings {
   TlsFiles tls;
   std::string token;  // --token-file's
   client::RefineRequestOptions options;
+  io::MeshWriteOptions write;  // how the output files are encoded
   int threads = 0;
-  int shards = 0;  // > 0: sharded over the comma-separated --server list
+  int shards = 0;     // > 0: sharded over the comma-separated --server list
+  bool pvtu = false;  // output_path is a .pvtu index written with one .vtu piece per shard
   bool every_iteration = false;
   bool fit_mesh_to_volume = false;
   bool quiet = false;
@@ -142,6 +152,9 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
         "--every-iteration: not available with a sharded refinement (--shards or several "
         "--server addresses): parts are merged once they are done");
   }
+  absl::StatusOr<io::MeshWriteOptions> write = MeshWriteOptionsFromArgs(args);
+  if (!write.ok()) return write.status();
+  s->write = *write;
   absl::StatusOr<TlsFiles> tls = TlsFilesFromArgs(args);
   if (!tls.ok()) return tls.status();
   s->tls = *tls;
@@ -158,7 +171,19 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   }
   s->output_path =
       args.Get("output").value_or(absl::StrCat(FileStem(s->mesh_path), ".refined.vtu"));
-  absl::Status output = CheckOutputPath(s->output_path, "--output", /*mesh=*/true);
+  // A .pvtu output, or --pvtu beside another name: the result in pieces, one per shard.
+  s->pvtu = args.Has("pvtu") || absl::EndsWithIgnoreCase(s->output_path, ".pvtu");
+  if (s->pvtu) {
+    if (!absl::EndsWithIgnoreCase(s->output_path, ".pvtu")) {
+      s->output_path = absl::StrCat(PathStem(s->output_path), ".pvtu");
+    }
+    if (s->shards == 0) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          args.Has("pvtu") ? "--pvtu" : "--output", ": a .pvtu holds one piece per shard; it ",
+          "needs a sharded run (--shards K with --server, or several --server addresses)"));
+    }
+  }
+  absl::Status output = CheckOutputPath(s->output_path, "--output", /*mesh=*/!s->pvtu);
   if (!output.ok()) return output;
   s->stats_json_path = args.Get("stats-json").value_or("");
   if (args.Has("stats-json")) {
@@ -241,12 +266,81 @@ io::MeshFile WithQuality(const Mesh& mesh, const InputTags& tags) {
   return file;
 }
 
+// The size of the file at `path` in bytes, or -1 when it cannot be read (progress lines only).
+int64_t FileSize(const std::string& path) {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  return error ? -1 : static_cast<int64_t>(size);
+}
+
+// "1.6 M tets, 31 MB" for a mesh file just written or read.
+std::string MeshFileSummary(const std::string& path, int64_t tets) {
+  std::string text = absl::StrCat(FormatCount(tets), " tets");
+  if (const int64_t bytes = FileSize(path); bytes >= 0) {
+    absl::StrAppend(&text, ", ", FormatBytes(bytes));
+  }
+  return text;
+}
+
+// Writes `file` to `path` as `s.write` says, reporting it as a progress phase.
+absl::Status WriteMeshReported(const RefineSettings& s, Progress& progress, const std::string& path,
+                               const io::MeshFile& file) {
+  progress.Begin(absl::StrCat("writing ", path));
+  absl::Status written = io::WriteMesh(path, file, s.write);
+  if (!written.ok()) {
+    progress.Abandon();
+    return written;
+  }
+  progress.End(MeshFileSummary(path, static_cast<int64_t>(file.mesh.tets.size())));
+  return absl::OkStatus();
+}
+
+// Writes `file` as the .pvtu at s.output_path with one .vtu piece per shard, reported as one
+// progress phase (sizes summed over the pieces and the index).
+absl::Status WritePiecesReported(const RefineSettings& s, Progress& progress,
+                                 const io::MeshFile& file) {
+  const std::vector<io::MeshFile> pieces = CutIntoPieces(file, s.shards);
+  progress.Begin(absl::StrCat("writing ", s.output_path, " and ", pieces.size(), " pieces"));
+  absl::Status written = io::WritePvtu(s.output_path, pieces, s.write.vtu);
+  if (!written.ok()) {
+    progress.Abandon();
+    return written;
+  }
+  int64_t bytes = std::max<int64_t>(FileSize(s.output_path), 0);
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    bytes += std::max<int64_t>(FileSize(io::PvtuPiecePath(s.output_path, static_cast<int>(k))), 0);
+  }
+  progress.End(absl::StrCat(FormatCount(static_cast<int64_t>(file.mesh.tets.size())), " tets, ",
+                            FormatBytes(bytes)));
+  return absl::OkStatus();
+}
+
 int RunRefinement(const RefineSettings& s) {
+  Progress progress(s.quiet);
+  progress.Begin(absl::StrCat("reading volume ", s.volume_path));
   absl::StatusOr<io::VolumeFile> volume = LoadVolume(s.volume_path, "--volume");
-  if (!volume.ok()) return Fail(volume.status(), kExitUsage);
+  if (!volume.ok()) {
+    progress.Abandon();
+    return Fail(volume.status(), kExitUsage);
+  }
+  {
+    const Volume& v = volume->volume;
+    const Index3& d = v.grid().dims;
+    progress.End(absl::StrFormat(
+        "%dx%dx%d %s, %s", static_cast<long long>(d[0]), static_cast<long long>(d[1]),
+        static_cast<long long>(d[2]), std::string(VoxelTypeName(v.type())),
+        FormatBytes(v.voxel_count() * static_cast<int64_t>(VoxelSize(v.type())))));
+  }
   PrintVolumeWarnings(*volume);
+  progress.Begin(absl::StrCat("reading mesh ", s.mesh_path));
   absl::StatusOr<io::MeshFile> mesh_file = LoadMesh(s.mesh_path, "--mesh");
-  if (!mesh_file.ok()) return Fail(mesh_file.status(), kExitUsage);
+  if (!mesh_file.ok()) {
+    progress.Abandon();
+    return Fail(mesh_file.status(), kExitUsage);
+  }
+  progress.End(absl::StrCat(
+      FormatCount(static_cast<int64_t>(mesh_file->mesh.points.size())), " vertices, ",
+      MeshFileSummary(s.mesh_path, static_cast<int64_t>(mesh_file->mesh.tets.size()))));
   const InputTags tags{.label_name = mesh_file->label_name, .frame = mesh_file->frame};
   // Region labels (mesh.labels) go in with the mesh; every child tet inherits its parent's.
   Mesh mesh = std::move(mesh_file->mesh);
@@ -293,21 +387,77 @@ int RunRefinement(const RefineSettings& s) {
 
   absl::Status iteration_write;
   client::RefineCallbacks callbacks;
+  // The service's phases, as far as the stream shows them: the input sent, each iteration, the
+  // final checks (known to be over when the result's header arrives), the result received.
+  auto phase_start = std::chrono::steady_clock::now();
+  std::atomic<int> iterations_seen{0};
+  // Between the input sent and the result's header the stream is silent while the service
+  // works; long silences get a line saying so.
+  SilenceWatch silence(progress, [&](double seconds) {
+    std::string next = absl::StrCat("iteration ", iterations_seen.load() + 1);
+    if (s.options.refine.max_iterations <= iterations_seen.load()) next.clear();
+    return absl::StrCat("the service is still working (", next, next.empty() ? "" : " or ",
+                        "its final checks: the stop test",
+                        s.options.refine.lattice_n > 0 ? ", the lattice check" : "", "), ",
+                        FormatSeconds(seconds), " since the last line");
+  });
+  progress.Line(s.shards > 0 ? absl::StrCat("cutting the mesh into ", s.shards,
+                                            " parts and sending each to its server ...")
+                             : std::string("sending the input ..."));
+  callbacks.on_input_sent = [&](int64_t bytes) {
+    progress.Line(absl::StrCat("sent ", FormatBytes(bytes), ", ",
+                               FormatSeconds(SecondsSince(phase_start)),
+                               "; the service validates the input and refines"));
+    phase_start = std::chrono::steady_clock::now();
+    silence.Touch(/*armed=*/true);
+  };
   callbacks.on_iteration = [&](const IterationStats& stats) {
-    if (!s.quiet) std::fprintf(stderr, "tetrefine: %s\n", FormatProgressLine(stats).c_str());
+    progress.Line(FormatProgressLine(stats));
+    ++iterations_seen;
+    phase_start = std::chrono::steady_clock::now();
+    silence.Touch(/*armed=*/true);
+  };
+  callbacks.on_result_started = [&](int64_t vertices, int64_t tets) {
+    // The stream carries no message between the last iteration and the result, so the final
+    // checks are reported once over, with their time.
+    std::string checks = "the stop test";
+    if (s.options.refine.lattice_n > 0) {
+      absl::StrAppend(&checks, " and the lattice check (order ", s.options.refine.lattice_n, ")");
+    }
+    silence.Touch(/*armed=*/false);
+    const int iterations = iterations_seen.load();
+    progress.Line(absl::StrCat("service done after ", iterations, " iteration",
+                               iterations == 1 ? "" : "s", "; ", checks, " took ",
+                               FormatSeconds(SecondsSince(phase_start))));
+    progress.Line(absl::StrCat("receiving the refined mesh: ", FormatCount(tets), " tets, ",
+                               FormatCount(vertices), " vertices ..."));
+    phase_start = std::chrono::steady_clock::now();
+  };
+  callbacks.on_result_received = [&](int64_t bytes) {
+    progress.Line(absl::StrCat("received the refined mesh: ", FormatBytes(bytes), ", ",
+                               FormatSeconds(SecondsSince(phase_start))));
   };
   if (s.every_iteration) {
     callbacks.on_mesh = [&](int iteration, const Mesh& m) {
       if (!iteration_write.ok()) return;
-      iteration_write =
-          io::WriteMesh(IterationPath(s.output_path, iteration), WithQuality(m, tags));
+      iteration_write = WriteMeshReported(s, progress, IterationPath(s.output_path, iteration),
+                                          WithQuality(m, tags));
     };
   }
   InterruptGuard interrupt_guard;
   callbacks.should_cancel = [&] { return g_interrupted != 0 || !iteration_write.ok(); };
 
+  const auto refine_start = std::chrono::steady_clock::now();
   absl::StatusOr<client::ClientResult> reply =
       (*backend)->Refine(volume->volume, mesh, s.options, callbacks);
+  silence.Touch(/*armed=*/false);
+  if (reply.ok() && s.shards > 0) {
+    // Sharded runs report the combined iterations once all parts are done, and their calls'
+    // phases not at all: say at least that the parts are back and merged.
+    progress.Line(absl::StrCat("parts refined, measured and merged: ",
+                               FormatCount(static_cast<int64_t>(reply->result.mesh.tets.size())),
+                               " tets, ", FormatSeconds(SecondsSince(refine_start))));
+  }
   if (!iteration_write.ok()) return Fail(iteration_write, kExitUsage);
   if (g_interrupted != 0) return Fail("interrupted; no output written", 130);
   if (!reply.ok()) {
@@ -345,15 +495,26 @@ int RunRefinement(const RefineSettings& s) {
     PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
                               " is written without them"));
   }
-  absl::Status written = io::WriteMesh(s.output_path, out);
+  absl::Status written = s.pvtu ? WritePiecesReported(s, progress, out)
+                                : WriteMeshReported(s, progress, s.output_path, out);
   if (!written.ok()) return Fail(written, kExitUsage);
   if (!s.stats_json_path.empty()) {
+    progress.Begin(absl::StrCat("writing ", s.stats_json_path));
     absl::Status json = io::WriteFileAtomically(s.stats_json_path, stats_json);
-    if (!json.ok()) return Fail(json, kExitUsage);
+    if (!json.ok()) {
+      progress.Abandon();
+      return Fail(json, kExitUsage);
+    }
+    progress.End(FormatBytes(static_cast<int64_t>(stats_json.size())));
   }
   std::fputs(report.c_str(), stdout);
   std::printf(
-      "Wrote %s: %zu vertices, %zu tets%s\n", s.output_path.c_str(), out_vertices, out_tets,
+      "Wrote %s%s: %zu vertices, %zu tets%s\n", s.output_path.c_str(),
+      s.pvtu ? absl::StrCat(" (", std::min<size_t>(static_cast<size_t>(s.shards), out_tets),
+                            " .vtu pieces)")
+                   .c_str()
+             : "",
+      out_vertices, out_tets,
       s.stats_json_path.empty() ? "" : absl::StrCat("; statistics in ", s.stats_json_path).c_str());
   return kExitOk;
 }
@@ -403,8 +564,13 @@ const CommandSpec& RefineSpec() {
                               "tet; 0 skips the check (default ",
                               RefineOptions{}.lattice_n, ", the paper's 165 points)")},
                 {"output", "FILE",
-                 "refined mesh, .vtu .vtk .msh .mesh .meshb (default <mesh name>.refined.vtu "
+                 "refined mesh, .vtu .vtk .msh .mesh .meshb, or .pvtu with --shards (default "
+                 "<mesh name>.refined.vtu "
                  "in the working directory)"},
+                {"pvtu", "",
+                 "with --shards K: write the result as a .pvtu index (the --output name with "
+                 "the extension .pvtu) and K .vtu pieces <stem>_<k>.vtu beside it, for "
+                 "ParaView's parallel reader; also chosen by an --output ending in .pvtu"},
                 {"every-iteration", "",
                  "also write each iteration's mesh as <output stem>.iterNN.<ext>"},
                 {"stats-json", "FILE", "write the statistics as JSON"},
@@ -424,6 +590,7 @@ const CommandSpec& RefineSpec() {
                 {"quiet", "", "no progress lines on stderr"},
             },
         .positional = ""};
+    for (FlagSpec& flag : MeshWriteFlagSpecs()) s->flags.push_back(std::move(flag));
     for (FlagSpec& flag : TlsFlagSpecs()) s->flags.push_back(std::move(flag));
     s->flags.push_back(TokenFlagSpec());
     return s;

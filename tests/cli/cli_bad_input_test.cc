@@ -95,14 +95,31 @@ TEST_P(CliBadInput, OneLineNamingTheProblemExitTwoNothingWritten) {
   const ProcessResult run = RunTetrefine(args, "", /*timeout_seconds=*/60);
   EXPECT_FALSE(run.timed_out);
   EXPECT_EQ(run.exit_code, 2) << run.err;
-  const std::vector<std::string> lines = SplitLines(run.err);
-  ASSERT_EQ(lines.size(), 1u) << "stderr:\n" << run.err;
-  EXPECT_TRUE(absl::StartsWith(lines[0], "tetrefine: ")) << lines[0];
+  // refine reports its phases (reading the volume, the mesh) before the error: those lines come
+  // first, each ended ("... 0.05 s", or "... failed" for the phase the error is about).
+  std::vector<std::string> lines = SplitLines(run.err);
+  ASSERT_GE(lines.size(), 1u) << "stderr:\n" << run.err;
+  const std::string error = lines.back();
+  lines.pop_back();
+  for (const std::string& line : lines) {
+    EXPECT_TRUE(absl::StartsWith(line, "tetrefine: reading ") &&
+                (absl::EndsWith(line, " s") || absl::EndsWith(line, " ... failed")))
+        << "not a progress line: " << line << "\nstderr:\n"
+        << run.err;
+  }
+  EXPECT_TRUE(absl::StartsWith(error, "tetrefine: ")) << error;
   const std::string expected = Expand(c.expected, dir_->path());
-  EXPECT_TRUE(absl::StrContains(lines[0], expected))
-      << "'" << lines[0] << "' should contain '" << expected << "'";
+  EXPECT_TRUE(absl::StrContains(error, expected))
+      << "'" << error << "' should contain '" << expected << "'";
   EXPECT_EQ(run.out, "");
   EXPECT_EQ(Listing(dir_->path()), before) << "a file was created or removed";
+  if (!args.empty() && args[0] == "refine") {
+    // Without progress the error is the only line.
+    args.insert(args.begin() + 1, "--quiet");
+    const ProcessResult quiet = RunTetrefine(args, "", /*timeout_seconds=*/60);
+    EXPECT_EQ(quiet.exit_code, 2) << quiet.err;
+    EXPECT_EQ(quiet.err, error + "\n");
+  }
 }
 
 const std::vector<std::string> kRefine = {"refine",   "--volume", "$D/v.nii",  "--mesh",
