@@ -6,10 +6,12 @@
 // the default verification (order 8 on a sample of 200 000 tets). scheme: 0 the paper's, 1
 // longest-edge (the default), so that the two are measured side by side in one run.
 #include <benchmark/benchmark.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <map>
 
+#include "core/mesh_validation.h"
 #include "core/refine.h"
 #include "tests/support/geometry.h"
 
@@ -72,6 +74,43 @@ BENCHMARK(BM_OneIteration)
     ->Args({58, 1, 10, 0, 0})
     ->Args({58, 1, 10, 1, 0})
     ->Args({58, 2, 10, 0, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Input validation of the same mesh at 1 and 2 threads, in its parts: 0 the face check alone,
+// 1 the conformity check alone (hanging nodes, closed boundary; on the face check's boundary
+// faces), 2 both (CheckConformity: the face check listing the boundary, then the conformity
+// check), 3 all of ValidateMesh (points, tets, orientation, box, faces, conformity).
+void BM_Validation(benchmark::State& state) {
+  const Fixture& f = Setup(static_cast<int>(state.range(0)));
+  const int part = static_cast<int>(state.range(2));
+  std::vector<BoundaryFace> boundary;
+  if (!CheckFaces(f.mesh.points, f.mesh.tets, &boundary).ok()) state.SkipWithError("faces");
+  tbb::task_arena arena(static_cast<int>(state.range(1)));
+  for (auto _ : state) {
+    absl::Status s;
+    arena.execute([&] {
+      if (part == 0) {
+        s = CheckFaces(f.mesh.points, f.mesh.tets);
+      } else if (part == 1) {
+        s = CheckBoundaryConformity(f.mesh.points, f.mesh.tets, boundary);
+      } else if (part == 2) {
+        s = CheckConformity(f.mesh.points, f.mesh.tets);
+      } else {
+        std::vector<Tet> tets;
+        int64_t reoriented = 0;
+        s = ValidateMesh(f.mesh, f.volume, OutsidePolicy::kReject, OrientationPolicy::kReject,
+                         &tets, &reoriented);
+      }
+    });
+    if (!s.ok()) state.SkipWithError(std::string(s.message()).c_str());
+  }
+  state.counters["tets_in"] = static_cast<double>(f.mesh.tets.size());
+  state.counters["boundary_faces"] = static_cast<double>(boundary.size());
+}
+BENCHMARK(BM_Validation)
+    ->ArgNames({"cells", "threads", "part"})
+    ->ArgsProduct({{60}, {1, 2}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -108,26 +108,35 @@ bool BucketIsManifold(uint32_t v, const FaceUse* b, const FaceUse* e, std::vecto
   const size_t slots = std::bit_ceil(static_cast<size_t>(2 * (e - b) + 2));
   table.assign(slots, FaceSlot{kNoFace, 0, 0});
   const int shift = 64 - std::countr_zero(slots);
-  for (const FaceUse* p = b; p < e; ++p) {
-    const uint64_t face = FaceOf(*p);
-    const auto side = static_cast<uint8_t>(FaceSide(*p));
+  auto find = [&](uint64_t face) -> FaceSlot& {
     // Fibonacci hashing; linear probing in a table at most half full.
     size_t h = (face * 0x9E3779B97F4A7C15ull) >> shift;
     while (table[h].face != kNoFace && table[h].face != face) h = (h + 1) & (slots - 1);
-    FaceSlot& slot = table[h];
+    return table[h];
+  };
+  int64_t singles = 0;  // faces seen once so far
+  for (const FaceUse* p = b; p < e; ++p) {
+    const uint64_t face = FaceOf(*p);
+    const auto side = static_cast<uint8_t>(FaceSide(*p));
+    FaceSlot& slot = find(face);
     if (slot.face == kNoFace) {
       slot = {face, side, 1};
+      ++singles;
     } else if (slot.uses == 1 && slot.side != side) {
       slot.uses = 2;
+      --singles;
     } else {
       return false;
     }
   }
-  if (boundary != nullptr) {
-    for (const FaceSlot& slot : table) {
-      if (slot.face == kNoFace || slot.uses != 1) continue;
-      boundary->push_back({v, static_cast<uint32_t>(slot.face >> 31),
-                           static_cast<uint32_t>(slot.face & 0x7fffffffu)});
+  // Most buckets of a volume mesh hold no boundary face; the others are probed again in the
+  // order of their uses, which depends only on the tets.
+  if (boundary != nullptr && singles > 0) {
+    for (const FaceUse* p = b; p < e; ++p) {
+      const uint64_t face = FaceOf(*p);
+      if (find(face).uses != 1) continue;
+      boundary->push_back(
+          {v, static_cast<uint32_t>(face >> 31), static_cast<uint32_t>(face & 0x7fffffffu)});
     }
   }
   return true;
