@@ -16,6 +16,7 @@
 #include "core/mesh_validation.h"
 #include "core/refine.h"
 #include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
 
 namespace tetrefine {
 namespace {
@@ -198,6 +199,33 @@ TEST(BoundaryConformity, CubeWithCavityAndSeparateComponentsPass) {
     }
     EXPECT_TRUE(Check(m).ok()) << Check(m);
   }
+}
+
+// The real Delaunay mesh passes, where it is and scaled into a millimetre box far from the
+// origin (where the tolerance's rounding term is largest), and a hanging node in it is found.
+TEST(BoundaryConformity, RealMeshPasses) {
+  Mesh m = testing::ReadMeditForTest(std::string(TETREFINE_SHARED_DATA_DIR) +
+                                     "/unit_cube_1782tets.mesh");
+  ASSERT_EQ(m.tets.size(), 1782u);
+  for (const Tet& t : m.tets) {
+    ASSERT_GT(SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]), 0.0);
+  }
+  EXPECT_TRUE(Check(m).ok()) << Check(m);
+  Mesh far = m;
+  for (Vec3& p : far.points) {
+    for (double& x : p) x = 3000.0 + 7.3 * x;
+  }
+  EXPECT_TRUE(Check(far).ok()) << Check(far);
+  size_t t = 0;
+  while (TetsOnEdge(far, far.tets[t][0], far.tets[t][1]) < 2) ++t;
+  const Tet tet = far.tets[t];
+  const Vec3& a = far.points[tet[0]];
+  const Vec3& b = far.points[tet[1]];
+  const auto mid = static_cast<uint32_t>(far.points.size());
+  far.points.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
+  far.tets[t] = {mid, tet[1], tet[2], tet[3]};
+  far.tets.push_back({tet[0], mid, tet[2], tet[3]});
+  ExpectNamed(Check(far), absl::StrCat("vertex ", mid, " at "));
 }
 
 // Two cubes side by side with matching faces but each with its own vertices: the face between
