@@ -114,6 +114,61 @@ BENCHMARK(BM_Validation)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The conformity check where its work is largest relative to the face check's: 0 250 000
+// separate tets (every face is boundary), 1 a 40^3-cell FiveTetMesh graded so its cells span a
+// factor 2^13 in size (the hash grid's levels). Parts as in BM_Validation, 1 thread.
+const Mesh& HardMesh(int kind) {
+  static std::map<int, Mesh>* cache = new std::map<int, Mesh>();
+  auto it = cache->find(kind);
+  if (it != cache->end()) return it->second;
+  Mesh m;
+  if (kind == 0) {
+    for (int i = 0; i < 250'000; ++i) {
+      const Vec3 o = {2.0 * (i % 100), 2.0 * (i / 100 % 50), 2.0 * (i / 5000)};
+      const auto v = static_cast<uint32_t>(m.points.size());
+      m.points.push_back(o);
+      m.points.push_back({o[0] + 1, o[1], o[2]});
+      m.points.push_back({o[0], o[1] + 1, o[2]});
+      m.points.push_back({o[0], o[1], o[2] + 1});
+      m.tets.push_back({v, v + 1, v + 2, v + 3});
+    }
+  } else {
+    m = testing::FiveTetMesh({0, 0, 0}, {40, 40, 40}, {40, 40, 40});
+    for (Vec3& p : m.points) {
+      for (double& x : p) x = std::exp2(x / 3.0);
+    }
+  }
+  return cache->emplace(kind, std::move(m)).first->second;
+}
+
+void BM_ValidationHard(benchmark::State& state) {
+  const Mesh& m = HardMesh(static_cast<int>(state.range(0)));
+  const int part = static_cast<int>(state.range(1));
+  std::vector<BoundaryFace> boundary;
+  if (!CheckFaces(m.points, m.tets, &boundary).ok()) state.SkipWithError("faces");
+  tbb::task_arena arena(1);
+  for (auto _ : state) {
+    absl::Status s;
+    arena.execute([&] {
+      if (part == 0) {
+        s = CheckFaces(m.points, m.tets);
+      } else if (part == 1) {
+        s = CheckBoundaryConformity(m.points, m.tets, boundary);
+      } else {
+        s = CheckConformity(m.points, m.tets);
+      }
+    });
+    if (!s.ok()) state.SkipWithError(std::string(s.message()).c_str());
+  }
+  state.counters["tets_in"] = static_cast<double>(m.tets.size());
+  state.counters["boundary_faces"] = static_cast<double>(boundary.size());
+}
+BENCHMARK(BM_ValidationHard)
+    ->ArgNames({"kind", "part"})
+    ->ArgsProduct({{0, 1}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 }  // namespace
 }  // namespace tetrefine
 

@@ -153,9 +153,13 @@ class FaceGrid {
   double CellSize(int level) const { return std::ldexp(cell0_, level); }
 
   // Clamped, so a point and a box that holds it agree on the cell even where the division
-  // rounds (clamping is monotone).
+  // rounds (clamping is monotone). NaN (coordinates near the double range, which verify
+  // reads; ValidateMesh refuses them first) goes to the lowest cell rather than to a cast's
+  // undefined behaviour.
   static int64_t Cell(double x, double origin, double h) {
-    return static_cast<int64_t>(std::clamp(std::floor((x - origin) / h), -4.0, 0x1p50));
+    const double c = std::floor((x - origin) / h);
+    if (!(c >= -4.0)) return -4;
+    return static_cast<int64_t>(std::min(c, 0x1p50));
   }
 
   uint64_t Bucket(int level, int64_t i, int64_t j, int64_t k) const {
@@ -179,7 +183,9 @@ class FaceGrid {
     int64_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
       lo[a] = Cell(b.lo[a], origin_[a], h);
-      hi[a] = Cell(b.hi[a], origin_[a], h);
+      // A box no wider than its level's cells spans at most three of them; the bound only
+      // matters where the arithmetic overflowed.
+      hi[a] = std::clamp(Cell(b.hi[a], origin_[a], h), lo[a], lo[a] + 2);
     }
     for (int64_t i = lo[0]; i <= hi[0]; ++i) {
       for (int64_t j = lo[1]; j <= hi[1]; ++j) {

@@ -278,6 +278,22 @@ TEST(BoundaryConformity, SliverOnItsOwnFacePasses) {
   ExpectNamed(Check(m), "vertex 3 at ");
 }
 
+// verify runs the check on any finite coordinates, not only those ValidateMesh lets through:
+// near the double range the arithmetic overflows, and the check must still return.
+TEST(BoundaryConformity, HugeCoordinatesDoNotBreakIt) {
+  for (double scale : {1e200, 1e300, -1e306}) {
+    Mesh m = testing::FiveTetMesh({0, 0, 0}, {2, 2, 2}, {2, 2, 2});
+    for (Vec3& p : m.points) {
+      for (double& x : p) x *= scale;
+    }
+    if (scale < 0) {
+      for (Tet& t : m.tets) std::swap(t[2], t[3]);
+    }
+    const absl::Status s = Check(m);
+    EXPECT_TRUE(s.ok() || s.code() == absl::StatusCode::kInvalidArgument) << s;
+  }
+}
+
 // The verdict and the message do not depend on the thread count.
 TEST(BoundaryConformity, SameMessageForAnyThreadCount) {
   for (uint64_t seed : testing::Seeds(5)) {
