@@ -11,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/counting_sort.h"
+#include "core/fill_later.h"
 #include "core/parallel.h"
 #include "core/sorted_tet.h"
 
@@ -64,7 +65,7 @@ struct FaceBox {
 // A hash grid with one level per power of two of cell size: a face is filed under the level
 // whose cells are at least as wide as its box, so it lands in at most 2 x 2 x 2 cells (3 when
 // rounding puts a box edge just on a cell wall), whatever the spread of face sizes; a vertex
-// looks in its one cell on each level that holds faces. Cells are hashed into buckets; faces of
+// looks in its one cell on each level that holds faces. Cells map to buckets (Bucket); faces of
 // other cells that share a bucket are weeded out by their boxes.
 class FaceGrid {
  public:
@@ -96,15 +97,18 @@ class FaceGrid {
     // A counting sort of (cell, face) entries into buckets, faces in index order within each.
     uint64_t entries = 0;
     for (int64_t f = 0; f < n; ++f) ForEachCell(f, [&](uint64_t) { ++entries; });
-    const uint64_t buckets = std::bit_ceil(std::max<uint64_t>(entries, 64));
-    shift_ = 64 - std::countr_zero(buckets);
+    // About four entries a bucket: the offsets stay small enough to be cached, and a bucket
+    // still holds few faces.
+    const uint64_t buckets = std::bit_ceil(std::max<uint64_t>(entries / 4, 64));
+    mask_ = buckets - 1;
+    // Counted at the bucket's end, summed to where the bucket ends, then filled backwards, so
+    // each bucket lists its faces in index order and no second offset array is needed.
     start_.assign(buckets + 1, 0);
-    for (int64_t f = 0; f < n; ++f) ForEachCell(f, [&](uint64_t k) { ++start_[k + 1]; });
-    for (uint64_t k = 0; k < buckets; ++k) start_[k + 1] += start_[k];
+    for (int64_t f = 0; f < n; ++f) ForEachCell(f, [&](uint64_t k) { ++start_[k]; });
+    for (uint64_t k = 1; k <= buckets; ++k) start_[k] += start_[k - 1];
     faces_.resize(entries);
-    std::vector<uint64_t> next(start_.begin(), start_.end() - 1);
-    for (int64_t f = 0; f < n; ++f) {
-      ForEachCell(f, [&](uint64_t k) { faces_[next[k]++] = static_cast<uint32_t>(f); });
+    for (int64_t f = n - 1; f >= 0; --f) {
+      ForEachCell(f, [&](uint64_t k) { faces_[--start_[k]] = static_cast<uint32_t>(f); });
     }
   }
 
@@ -162,18 +166,22 @@ class FaceGrid {
     return static_cast<int64_t>(std::min(c, 0x1p50));
   }
 
+  // The cell's Morton code (21 bits per axis, interleaved), offset per level, modulo the bucket
+  // count: neighbouring cells land in nearby buckets, so building and querying in a spatially
+  // coherent order (faces and vertices of a mesh mostly are) stays in cache. Far cells that
+  // share a bucket cost a box test each.
+  static uint64_t Spread(int64_t c) {
+    uint64_t x = static_cast<uint64_t>(c) & 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  }
   uint64_t Bucket(int level, int64_t i, int64_t j, int64_t k) const {
-    uint64_t x = static_cast<uint64_t>(level) * 0x9E3779B97F4A7C15ull ^
-                 static_cast<uint64_t>(i) * 0xC2B2AE3D27D4EB4Full ^
-                 static_cast<uint64_t>(j) * 0x165667B19E3779F9ull ^
-                 static_cast<uint64_t>(k) * 0xD6E8FEB86659FD93ull;
-    // splitmix64's finalizer: the high bits pick the bucket.
-    x ^= x >> 30;
-    x *= 0xBF58476D1CE4E5B9ull;
-    x ^= x >> 27;
-    x *= 0x94D049BB133111EBull;
-    x ^= x >> 31;
-    return x >> shift_;
+    const uint64_t morton = Spread(i) | Spread(j) << 1 | Spread(k) << 2;
+    return (morton + static_cast<uint64_t>(level) * 0x9E3779B97F4A7C15ull) & mask_;
   }
 
   template <typename Body>
@@ -194,11 +202,11 @@ class FaceGrid {
     }
   }
 
-  std::vector<FaceBox> boxes_;
+  FillLater<FaceBox> boxes_;  // every one written by the constructor's first pass
   Vec3 origin_{};
   double cell0_ = 1.0;
-  uint64_t levels_ = 0;  // bit l: some face is filed under level l
-  int shift_ = 0;
+  uint64_t levels_ = 0;          // bit l: some face is filed under level l
+  uint64_t mask_ = 0;            // bucket count - 1 (a power of two)
   std::vector<uint64_t> start_;  // bucket k holds faces_[start_[k], start_[k + 1])
   std::vector<uint32_t> faces_;
 };
