@@ -6,10 +6,12 @@
 // the default verification (order 8 on a sample of 200 000 tets). scheme: 0 the paper's, 1
 // longest-edge (the default), so that the two are measured side by side in one run.
 #include <benchmark/benchmark.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <map>
 
+#include "core/mesh_validation.h"
 #include "core/refine.h"
 #include "tests/support/geometry.h"
 
@@ -72,6 +74,98 @@ BENCHMARK(BM_OneIteration)
     ->Args({58, 1, 10, 0, 0})
     ->Args({58, 1, 10, 1, 0})
     ->Args({58, 2, 10, 0, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Input validation of the same mesh at 1 and 2 threads, in its parts: 0 the face check alone,
+// 1 the conformity check alone (hanging nodes, closed boundary; on the face check's boundary
+// faces), 2 both (CheckConformity: the face check listing the boundary, then the conformity
+// check), 3 all of ValidateMesh (points, tets, orientation, box, faces, conformity).
+void BM_Validation(benchmark::State& state) {
+  const Fixture& f = Setup(static_cast<int>(state.range(0)));
+  const int part = static_cast<int>(state.range(2));
+  std::vector<BoundaryFace> boundary;
+  if (!CheckFaces(f.mesh.points, f.mesh.tets, &boundary).ok()) state.SkipWithError("faces");
+  tbb::task_arena arena(static_cast<int>(state.range(1)));
+  for (auto _ : state) {
+    absl::Status s;
+    arena.execute([&] {
+      if (part == 0) {
+        s = CheckFaces(f.mesh.points, f.mesh.tets);
+      } else if (part == 1) {
+        s = CheckBoundaryConformity(f.mesh.points, f.mesh.tets, boundary);
+      } else if (part == 2) {
+        s = CheckConformity(f.mesh.points, f.mesh.tets);
+      } else {
+        std::vector<Tet> tets;
+        int64_t reoriented = 0;
+        s = ValidateMesh(f.mesh, f.volume, OutsidePolicy::kReject, OrientationPolicy::kReject,
+                         &tets, &reoriented);
+      }
+    });
+    if (!s.ok()) state.SkipWithError(std::string(s.message()).c_str());
+  }
+  state.counters["tets_in"] = static_cast<double>(f.mesh.tets.size());
+  state.counters["boundary_faces"] = static_cast<double>(boundary.size());
+}
+BENCHMARK(BM_Validation)
+    ->ArgNames({"cells", "threads", "part"})
+    ->ArgsProduct({{60}, {1, 2}, {0, 1, 2, 3}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The conformity check where its work is largest relative to the face check's: 0 250 000
+// separate tets (every face is boundary), 1 a 40^3-cell FiveTetMesh graded so its cells span a
+// factor 2^13 in size (the hash grid's levels). Parts as in BM_Validation, 1 thread.
+const Mesh& HardMesh(int kind) {
+  static std::map<int, Mesh>* cache = new std::map<int, Mesh>();
+  auto it = cache->find(kind);
+  if (it != cache->end()) return it->second;
+  Mesh m;
+  if (kind == 0) {
+    for (int i = 0; i < 250'000; ++i) {
+      const Vec3 o = {2.0 * (i % 100), 2.0 * (i / 100 % 50), 2.0 * (i / 5000)};
+      const auto v = static_cast<uint32_t>(m.points.size());
+      m.points.push_back(o);
+      m.points.push_back({o[0] + 1, o[1], o[2]});
+      m.points.push_back({o[0], o[1] + 1, o[2]});
+      m.points.push_back({o[0], o[1], o[2] + 1});
+      m.tets.push_back({v, v + 1, v + 2, v + 3});
+    }
+  } else {
+    m = testing::FiveTetMesh({0, 0, 0}, {40, 40, 40}, {40, 40, 40});
+    for (Vec3& p : m.points) {
+      for (double& x : p) x = std::exp2(x / 3.0);
+    }
+  }
+  return cache->emplace(kind, std::move(m)).first->second;
+}
+
+void BM_ValidationHard(benchmark::State& state) {
+  const Mesh& m = HardMesh(static_cast<int>(state.range(0)));
+  const int part = static_cast<int>(state.range(1));
+  std::vector<BoundaryFace> boundary;
+  if (!CheckFaces(m.points, m.tets, &boundary).ok()) state.SkipWithError("faces");
+  tbb::task_arena arena(1);
+  for (auto _ : state) {
+    absl::Status s;
+    arena.execute([&] {
+      if (part == 0) {
+        s = CheckFaces(m.points, m.tets);
+      } else if (part == 1) {
+        s = CheckBoundaryConformity(m.points, m.tets, boundary);
+      } else {
+        s = CheckConformity(m.points, m.tets);
+      }
+    });
+    if (!s.ok()) state.SkipWithError(std::string(s.message()).c_str());
+  }
+  state.counters["tets_in"] = static_cast<double>(m.tets.size());
+  state.counters["boundary_faces"] = static_cast<double>(boundary.size());
+}
+BENCHMARK(BM_ValidationHard)
+    ->ArgNames({"kind", "part"})
+    ->ArgsProduct({{0, 1}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

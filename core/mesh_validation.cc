@@ -101,23 +101,42 @@ constexpr uint64_t kNoFace = ~uint64_t{0};  // FaceOf() is below 2^63
 // True when every face in [b, e) (the faces whose smallest vertex is one bucket's) is used by
 // at most two tets, and by two only from opposite sides. A hash table instead of a sort: a
 // check that passes needs no order.
-bool BucketIsManifold(const FaceUse* b, const FaceUse* e, std::vector<FaceSlot>& table) {
+// When `boundary` is not null, the bucket's faces of one tet go there, as (v, b, c) with v the
+// bucket's vertex.
+bool BucketIsManifold(uint32_t v, const FaceUse* b, const FaceUse* e, std::vector<FaceSlot>& table,
+                      std::vector<BoundaryFace>* boundary) {
   const size_t slots = std::bit_ceil(static_cast<size_t>(2 * (e - b) + 2));
   table.assign(slots, FaceSlot{kNoFace, 0, 0});
   const int shift = 64 - std::countr_zero(slots);
-  for (const FaceUse* p = b; p < e; ++p) {
-    const uint64_t face = FaceOf(*p);
-    const auto side = static_cast<uint8_t>(FaceSide(*p));
+  auto find = [&](uint64_t face) -> FaceSlot& {
     // Fibonacci hashing; linear probing in a table at most half full.
     size_t h = (face * 0x9E3779B97F4A7C15ull) >> shift;
     while (table[h].face != kNoFace && table[h].face != face) h = (h + 1) & (slots - 1);
-    FaceSlot& slot = table[h];
+    return table[h];
+  };
+  int64_t singles = 0;  // faces seen once so far
+  for (const FaceUse* p = b; p < e; ++p) {
+    const uint64_t face = FaceOf(*p);
+    const auto side = static_cast<uint8_t>(FaceSide(*p));
+    FaceSlot& slot = find(face);
     if (slot.face == kNoFace) {
       slot = {face, side, 1};
+      ++singles;
     } else if (slot.uses == 1 && slot.side != side) {
       slot.uses = 2;
+      --singles;
     } else {
       return false;
+    }
+  }
+  // Most buckets of a volume mesh hold no boundary face; the others are probed again in the
+  // order of their uses, which depends only on the tets.
+  if (boundary != nullptr && singles > 0) {
+    for (const FaceUse* p = b; p < e; ++p) {
+      const uint64_t face = FaceOf(*p);
+      if (find(face).uses != 1) continue;
+      boundary->push_back(
+          {v, static_cast<uint32_t>(face >> 31), static_cast<uint32_t>(face & 0x7fffffffu)});
     }
   }
   return true;
@@ -139,7 +158,8 @@ std::vector<int64_t> TetsOnFace(const std::vector<Tet>& tets, const std::array<u
 
 }  // namespace
 
-absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>& tets) {
+absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                        std::vector<BoundaryFace>* boundary) {
   const int64_t num_points = static_cast<int64_t>(points.size());
   const int64_t num_tets = static_cast<int64_t>(tets.size());
   // Bucket each face by its smallest vertex (a counting sort). With a tet's vertices sorted
@@ -168,10 +188,16 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
   const auto& start = layout.start;
   // The first bad vertex bucket, so the message does not depend on thread timing.
   std::atomic<int64_t> first_bad{num_points};
-  ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
+  // Per block, so the list's order does not depend on the thread count.
+  std::vector<std::vector<BoundaryFace>> found(boundary != nullptr ? BlockCount(num_points) : 0);
+  ForEachBlock(num_points, [&](int64_t block, int64_t begin, int64_t end) {
     std::vector<FaceSlot> table;
+    std::vector<BoundaryFace>* out = boundary != nullptr ? &found[block] : nullptr;
     for (int64_t v = begin; v < end && v < first_bad.load(); ++v) {
-      if (BucketIsManifold(uses.get() + start[v], uses.get() + start[v + 1], table)) continue;
+      if (BucketIsManifold(static_cast<uint32_t>(v), uses.get() + start[v],
+                           uses.get() + start[v + 1], table, out)) {
+        continue;
+      }
       int64_t cur = first_bad.load();
       while (v < cur && !first_bad.compare_exchange_weak(cur, v)) {
       }
@@ -179,7 +205,14 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
     }
   });
   const int64_t v = first_bad.load();
-  if (v == num_points) return absl::OkStatus();
+  if (v == num_points) {
+    if (boundary != nullptr) {
+      boundary->clear();
+      for (const std::vector<BoundaryFace>& f : found)
+        boundary->insert(boundary->end(), f.begin(), f.end());
+    }
+    return absl::OkStatus();
+  }
   // The bad bucket, sorted, names its first bad face; the tets on it are found again.
   FaceUse* b = uses.get() + start[v];
   FaceUse* e = uses.get() + start[v + 1];
@@ -280,7 +313,13 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
                        " lies outside the volume's sampled box ", box));
     }
   }
-  return CheckFaces(mesh.points, tets->empty() ? mesh.tets : *tets);
+  return CheckConformity(mesh.points, tets->empty() ? mesh.tets : *tets);
+}
+
+absl::Status CheckConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets) {
+  std::vector<BoundaryFace> boundary;
+  if (absl::Status s = CheckFaces(points, tets, &boundary); !s.ok()) return s;
+  return CheckBoundaryConformity(points, tets, boundary);
 }
 
 }  // namespace tetrefine

@@ -118,7 +118,10 @@ MeshReport AnalyzeMesh(const Mesh& mesh) {
   report.quality_mean = quality_sum;
   report.unused_vertices = std::count(used.begin(), used.end(), false);
   CountDuplicates(mesh, &report);
-  report.faces = CheckFaces(mesh.points, oriented);
+  // With degenerate tets left out their neighbours' faces would look like boundary, and the
+  // conformity check would report what is really the degenerate tets, already reported.
+  report.faces = report.degenerate_tets > 0 ? CheckFaces(mesh.points, oriented)
+                                            : CheckConformity(mesh.points, oriented);
   MeasureBoundary(mesh, &report);
   return report;
 }

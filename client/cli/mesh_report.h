@@ -22,8 +22,9 @@ struct MeshReport {
   int64_t duplicate_vertices = 0;  // vertices with the coordinates of an earlier vertex
   std::array<int64_t, 2> first_duplicate = {-1, -1};
   int64_t unused_vertices = 0;
-  // core CheckFaces on the tets with inverted ones flipped and degenerate ones left out, so a face
-  // shared by three tets is reported whatever the orientation: OK, or the first bad face.
+  // core CheckConformity (the face check, then no hanging node and a closed boundary) on the tets
+  // with inverted ones flipped, so a face shared by three tets is reported whatever the
+  // orientation: OK, or the first problem. With degenerate tets, only CheckFaces, on the others.
   absl::Status faces;
 
   double volume = 0.0;         // sum of |V|

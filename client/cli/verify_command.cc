@@ -61,8 +61,11 @@ const CommandSpec& VerifySpec() {
       .usage = "tetrefine verify --volume V --mesh M [--epsilon E] [--norm-coeff X] [--clamp]",
       .description =
           "Valid means: every face in at most two tets with no overlap across a shared face\n"
-          "(the core's face check), no two vertices at the same point, no inverted or\n"
-          "degenerate tet, every vertex inside the volume's world box (unless --clamp).\n"
+          "and a conformal boundary: no vertex on a boundary face it is not a vertex of (a\n"
+          "hanging node), every boundary edge in an even number of boundary faces (the\n"
+          "core's checks, as refine runs them); no two vertices at the same point, no\n"
+          "inverted or degenerate tet, every vertex inside the volume's world box (unless\n"
+          "--clamp).\n"
           "Also reports total volume, boundary area, mean-ratio quality, and the discrepancy\n"
           "|trilinear - linear| / normCoeff on the 165-point barycentric lattice of every tet\n"
           "(at most 200000 tets, sampled with seed 1): max, mean and share of points above\n"
@@ -138,8 +141,9 @@ int RunVerify(const std::vector<std::string>& args) {
   std::vector<std::vector<std::string>> rows = {
       {"mesh", absl::StrCat(mesh_path, ": ", report.vertices, " vertices, ", report.tets, " tets")},
       {"volume file", volume_path},
-      {"face check", report.faces.ok() ? "ok: every face in at most two tets, no overlap"
-                                       : std::string(report.faces.message())},
+      {"face check", report.faces.ok()
+                         ? "ok: every face in at most two tets, no overlap, no hanging node"
+                         : std::string(report.faces.message())},
       {"duplicate vertices", count(report.duplicate_vertices)},
       {"inverted tets", count(report.inverted_tets)},
       {"degenerate tets", count(report.degenerate_tets)},

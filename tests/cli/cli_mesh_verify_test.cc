@@ -1,9 +1,11 @@
 // `tetrefine mesh`, `verify` and `info` on generated files.
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
 #include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
 #include "client/io/mesh_io.h"
 #include "core/mesh_validation.h"
 #include "gtest/gtest.h"
@@ -117,6 +119,49 @@ TEST_F(CliMeshVerify, DuplicateVerticesAreNotValid) {
   const ProcessResult run = Verify(dir_.File("crack.vtu"));
   EXPECT_EQ(run.exit_code, 1) << run.out;
   EXPECT_TRUE(absl::StrContains(run.err, "duplicate vertices")) << run.err;
+}
+
+// A hanging node: one tet split in two at the midpoint of an edge another tet shares, that tet
+// left whole. The face check alone passes it; verify and refine name the vertex and the file.
+TEST_F(CliMeshVerify, HangingNodeIsNotValidAndRefineRefusesIt) {
+  io::MeshFile mesh = MakeMesh("grid.vtu", {"--block", "3"});
+  Mesh& m = mesh.mesh;
+  auto tets_on_edge = [&](uint32_t u, uint32_t v) {
+    return std::count_if(m.tets.begin(), m.tets.end(), [&](const Tet& t) {
+      return std::find(t.begin(), t.end(), u) != t.end() &&
+             std::find(t.begin(), t.end(), v) != t.end();
+    });
+  };
+  size_t t = 0;
+  while (tets_on_edge(m.tets[t][0], m.tets[t][1]) < 2) ++t;
+  const Tet tet = m.tets[t];
+  const Vec3& a = m.points[tet[0]];
+  const Vec3& b = m.points[tet[1]];
+  const auto mid = static_cast<uint32_t>(m.points.size());
+  m.points.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
+  m.values.push_back(0.5 * (m.values[tet[0]] + m.values[tet[1]]));
+  m.tets[t] = {mid, tet[1], tet[2], tet[3]};
+  m.tets.push_back({tet[0], mid, tet[2], tet[3]});
+  ASSERT_TRUE(CheckFaces(m.points, m.tets).ok());
+  const std::string path = dir_.File("hanging.vtu");
+  ASSERT_TRUE(io::WriteMesh(path, mesh).ok());
+  const std::string problem = absl::StrCat("mesh is not conformal: vertex ", mid, " at ");
+
+  const ProcessResult verify = Verify(path);
+  EXPECT_EQ(verify.exit_code, 1) << verify.out;
+  ASSERT_EQ(SplitLines(verify.err).size(), 1u) << verify.err;
+  EXPECT_TRUE(absl::StrContains(verify.err, path)) << verify.err;
+  EXPECT_TRUE(absl::StrContains(verify.err, problem)) << verify.err;
+  EXPECT_TRUE(absl::StrContains(verify.out, problem)) << verify.out;
+  EXPECT_TRUE(absl::StrContains(verify.out, "NOT VALID")) << verify.out;
+
+  const ProcessResult refine =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", path, "--epsilon", "0.05", "--output",
+                    dir_.File("out.vtu"), "--quiet"});
+  EXPECT_EQ(refine.exit_code, 2) << refine.out;
+  EXPECT_TRUE(absl::StrContains(refine.err, path)) << refine.err;
+  EXPECT_TRUE(absl::StrContains(refine.err, problem)) << refine.err;
+  EXPECT_FALSE(FileExists(dir_.File("out.vtu")));
 }
 
 TEST_F(CliMeshVerify, VerticesOutsideNeedClamp) {

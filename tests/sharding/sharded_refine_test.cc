@@ -316,7 +316,9 @@ TEST_F(ShardedRefineTest, CertifyEqualsUnsharded) {
 }
 
 // A mesh much longer than the halo: each part then sees only part of it, and a halo of one ring
-// gives a different mesh (the closure reaches further), which the default halo does not.
+// gives a different mesh (the closure reaches further), which the default halo does not. Here
+// the parts even disagree on a shared edge by the third iteration: the merged mesh has a
+// hanging node, and the measuring round's parts are refused by the servers' conformity check.
 TEST_F(ShardedRefineTest, TheHaloIsWideEnoughAndANarrowOneIsNot) {
   const Volume volume = TestVolume({66, 10, 8}, VoxelType::kInt16);
   const Mesh mesh = FiveTetMesh({0.5, 0.5, 0.5}, {64.5, 8.5, 6.5}, {48, 6, 4});
@@ -332,9 +334,14 @@ TEST_F(ShardedRefineTest, TheHaloIsWideEnoughAndANarrowOneIsNot) {
   shard.halo_rings = 1;
   absl::StatusOr<sharding::ShardedResult> narrow =
       sharding::ShardedRefine(channels_, volume, mesh, options, shard);
-  ASSERT_TRUE(narrow.ok()) << narrow.status();
-  EXPECT_NE(narrow->reply.result.mesh.tets.size(), whole.result.mesh.tets.size())
-      << "a one-ring halo gave the unsharded mesh: this case does not exercise the halo";
+  if (!narrow.ok()) {
+    EXPECT_EQ(narrow.status().code(), absl::StatusCode::kInvalidArgument) << narrow.status();
+    EXPECT_NE(narrow.status().message().find("mesh is not conformal"), std::string::npos)
+        << narrow.status();
+  } else {
+    EXPECT_NE(narrow->reply.result.mesh.tets.size(), whole.result.mesh.tets.size())
+        << "a one-ring halo gave the unsharded mesh: this case does not exercise the halo";
+  }
 }
 
 // Labels and input parents travel with each part and come back as the unsharded run gives them.

@@ -129,6 +129,28 @@ Mesh NonManifoldMesh() {
   return mesh;
 }
 
+// SmallMesh with one tet split in two at the midpoint of an edge another tet shares, that tet
+// left whole: a hanging node (vertex 27) that the face check alone lets through.
+Mesh HangingNodeMesh() {
+  Mesh mesh = SmallMesh();
+  auto tets_on_edge = [&](uint32_t u, uint32_t v) {
+    return std::count_if(mesh.tets.begin(), mesh.tets.end(), [&](const Tet& t) {
+      return std::find(t.begin(), t.end(), u) != t.end() &&
+             std::find(t.begin(), t.end(), v) != t.end();
+    });
+  };
+  size_t t = 0;
+  while (tets_on_edge(mesh.tets[t][0], mesh.tets[t][1]) < 2) ++t;
+  const Tet tet = mesh.tets[t];
+  const Vec3& a = mesh.points[tet[0]];
+  const Vec3& b = mesh.points[tet[1]];
+  const auto mid = static_cast<uint32_t>(mesh.points.size());
+  mesh.points.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
+  mesh.tets[t] = {mid, tet[1], tet[2], tet[3]};
+  mesh.tets.push_back({tet[0], mid, tet[2], tet[3]});
+  return mesh;
+}
+
 // A case built by editing the good stream.
 MalformedRequest Edit(std::string name, std::function<void(Requests&)> edit,
                       std::vector<std::string> parts,
@@ -646,6 +668,9 @@ std::vector<MalformedRequest> MalformedRequests() {
       {"FaceInThreeTets",
        [] { return Write(SmallVolume(), NonManifoldMesh()); },
        {"is shared by 3 tets", "a face may belong to at most two"}},
+      {"HangingNode",
+       [] { return Write(SmallVolume(), HangingNodeMesh()); },
+       {"mesh is not conformal: vertex 27 at", "a hanging node"}},
       // A slab and a mesh that reaches beyond it.
       {"MeshOutsideItsSlab",
        [] {

@@ -54,7 +54,7 @@ std::string ConformityProblem(const Mesh& in, const Mesh& out) {
       return "tet " + std::to_string(t) + " is not positively oriented";
     }
   }
-  if (absl::Status s = CheckFaces(out.points, out.tets); !s.ok()) {
+  if (absl::Status s = CheckConformity(out.points, out.tets); !s.ok()) {
     return std::string(s.message());
   }
   std::vector<Vec3> sorted = out.points;

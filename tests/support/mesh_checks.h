@@ -14,7 +14,8 @@ struct MeshMeasure {
 MeshMeasure Measure(const Mesh& m);
 
 // Empty when `out` is a conformal refinement of `in`: every tet positive, every face in at most
-// two tets lying on opposite sides, no two vertices at the same position, volume and boundary
+// two tets lying on opposite sides, no hanging node (CheckConformity), no two vertices at the
+// same position, volume and boundary
 // area unchanged (relative 1e-9; hanging vertices would add boundary area inside). Otherwise,
 // what is wrong.
 std::string ConformityProblem(const Mesh& in, const Mesh& out);

@@ -1,0 +1,373 @@
+#include "core/boundary_conformity.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "core/counting_sort.h"
+#include "core/fill_later.h"
+#include "core/parallel.h"
+#include "core/sorted_tet.h"
+
+namespace tetrefine {
+namespace {
+
+constexpr double kRelativeTolerance = 1e-13;
+// How many roundings of the coordinates' magnitude a vertex may be off a face and still be on
+// it: a midpoint or a centroid is exact only to half an ulp, and the distance itself is computed
+// from coordinate differences.
+constexpr double kRoundings = 8.0;
+
+Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double Dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double Norm2(const Vec3& a) { return Dot(a, a); }
+Vec3 Axpy(double s, const Vec3& x, const Vec3& y) {
+  return {y[0] + s * x[0], y[1] + s * x[1], y[2] + s * x[2]};
+}
+
+// Squared distance from p to the closed triangle (a, b, c), by the Voronoi regions of its
+// corners, edges and interior (Ericson, Real-Time Collision Detection, 5.1.5).
+double DistanceToTriangle2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = Sub(b, a), ac = Sub(c, a), ap = Sub(p, a);
+  const double d1 = Dot(ab, ap), d2 = Dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return Norm2(ap);
+  const Vec3 bp = Sub(p, b);
+  const double d3 = Dot(ab, bp), d4 = Dot(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) return Norm2(bp);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return Norm2(Axpy(-d1 / (d1 - d3), ab, ap));
+  const Vec3 cp = Sub(p, c);
+  const double d5 = Dot(ab, cp), d6 = Dot(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) return Norm2(cp);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return Norm2(Axpy(-d2 / (d2 - d6), ac, ap));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+    return Norm2(Axpy(-(d4 - d3) / ((d4 - d3) + (d5 - d6)), Sub(c, b), bp));
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  return Norm2(Axpy(-vc * denom, ac, Axpy(-vb * denom, ab, ap)));
+}
+
+// A boundary face's box, grown by its tolerance, and the grid level it is filed under.
+struct FaceBox {
+  Vec3 lo, hi;
+  double tolerance;
+  int level;
+};
+
+// A hash grid with one level per power of two of cell size: a face is filed under the level
+// whose cells are at least as wide as its box, so it lands in at most 2 x 2 x 2 cells (3 when
+// rounding puts a box edge just on a cell wall), whatever the spread of face sizes; a vertex
+// looks in its one cell on each level that holds faces. Cells map to buckets (Bucket); faces of
+// other cells that share a bucket are weeded out by their boxes.
+class FaceGrid {
+ public:
+  FaceGrid(const std::vector<Vec3>& points, const std::vector<BoundaryFace>& boundary) {
+    const int64_t n = static_cast<int64_t>(boundary.size());
+    boxes_.resize(n);
+    ForEachBlock(n, [&](int64_t, int64_t begin, int64_t end) {
+      for (int64_t f = begin; f < end; ++f) boxes_[f] = Box(points, boundary[f]);
+    });
+    origin_ = boxes_[0].lo;
+    double smallest = std::numeric_limits<double>::infinity();
+    Vec3 top = boxes_[0].hi;
+    for (const FaceBox& b : boxes_) {
+      for (int a = 0; a < 3; ++a) {
+        origin_[a] = std::min(origin_[a], b.lo[a]);
+        top[a] = std::max(top[a], b.hi[a]);
+      }
+      smallest = std::min(smallest, Width(b));
+    }
+    const double extent = std::max({top[0] - origin_[0], top[1] - origin_[1], top[2] - origin_[2]});
+    // The finest level is no finer than 2^-40 of the extent, so cell numbers stay exact in a
+    // double and small in an int64; faces smaller than that share level 0.
+    cell0_ = std::max({smallest, std::ldexp(extent, -40), std::numeric_limits<double>::min()});
+    for (FaceBox& b : boxes_) {
+      const double w = Width(b);
+      while (b.level < kMaxLevel && CellSize(b.level) < w) ++b.level;
+      levels_ |= uint64_t{1} << b.level;
+    }
+    // A counting sort of (cell, face) entries into buckets, faces in index order within each.
+    uint64_t entries = 0;
+    for (int64_t f = 0; f < n; ++f) ForEachCell(f, [&](uint64_t) { ++entries; });
+    // About four entries a bucket: the offsets stay small enough to be cached, and a bucket
+    // still holds few faces.
+    const uint64_t buckets = std::bit_ceil(std::max<uint64_t>(entries / 4, 64));
+    mask_ = buckets - 1;
+    // Counted at the bucket's end, summed to where the bucket ends, then filled backwards, so
+    // each bucket lists its faces in index order and no second offset array is needed.
+    start_.assign(buckets + 1, 0);
+    for (int64_t f = 0; f < n; ++f) ForEachCell(f, [&](uint64_t k) { ++start_[k]; });
+    for (uint64_t k = 1; k <= buckets; ++k) start_[k] += start_[k - 1];
+    faces_.resize(entries);
+    for (int64_t f = n - 1; f >= 0; --f) {
+      ForEachCell(f, [&](uint64_t k) { faces_[--start_[k]] = static_cast<uint32_t>(f); });
+    }
+  }
+
+  // Calls visit(face) for every face whose grown box may hold p (and some that do not).
+  template <typename Visit>
+  void ForEachNear(const Vec3& p, Visit visit) const {
+    for (uint64_t levels = levels_; levels != 0; levels &= levels - 1) {
+      const int level = std::countr_zero(levels);
+      const double h = CellSize(level);
+      const uint64_t k = Bucket(level, Cell(p[0], origin_[0], h), Cell(p[1], origin_[1], h),
+                                Cell(p[2], origin_[2], h));
+      for (uint64_t e = start_[k]; e < start_[k + 1]; ++e) visit(faces_[e]);
+    }
+  }
+
+  const FaceBox& box(uint32_t f) const { return boxes_[f]; }
+
+ private:
+  static constexpr int kMaxLevel = 62;
+
+  static FaceBox Box(const std::vector<Vec3>& points, const BoundaryFace& face) {
+    const Vec3& a = points[face[0]];
+    const Vec3& b = points[face[1]];
+    const Vec3& c = points[face[2]];
+    const double longest =
+        std::sqrt(std::max({Norm2(Sub(a, b)), Norm2(Sub(b, c)), Norm2(Sub(c, a))}));
+    double magnitude = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      magnitude = std::max({magnitude, std::abs(a[i]), std::abs(b[i]), std::abs(c[i])});
+    }
+    FaceBox box;
+    box.tolerance = kRelativeTolerance * longest +
+                    kRoundings * std::numeric_limits<double>::epsilon() * magnitude;
+    for (int i = 0; i < 3; ++i) {
+      box.lo[i] = std::min({a[i], b[i], c[i]}) - box.tolerance;
+      box.hi[i] = std::max({a[i], b[i], c[i]}) + box.tolerance;
+    }
+    box.level = 0;
+    return box;
+  }
+
+  static double Width(const FaceBox& b) {
+    return std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
+  }
+
+  double CellSize(int level) const { return std::ldexp(cell0_, level); }
+
+  // Clamped, so a point and a box that holds it agree on the cell even where the division
+  // rounds (clamping is monotone). NaN (coordinates near the double range, which verify
+  // reads; ValidateMesh refuses them first) goes to the lowest cell rather than to a cast's
+  // undefined behaviour.
+  static int64_t Cell(double x, double origin, double h) {
+    const double c = std::floor((x - origin) / h);
+    if (!(c >= -4.0)) return -4;
+    return static_cast<int64_t>(std::min(c, 0x1p50));
+  }
+
+  // The cell's Morton code (21 bits per axis, interleaved), offset per level, modulo the bucket
+  // count: neighbouring cells land in nearby buckets, so building and querying in a spatially
+  // coherent order (faces and vertices of a mesh mostly are) stays in cache. Far cells that
+  // share a bucket cost a box test each.
+  static uint64_t Spread(int64_t c) {
+    uint64_t x = static_cast<uint64_t>(c) & 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  }
+  uint64_t Bucket(int level, int64_t i, int64_t j, int64_t k) const {
+    const uint64_t morton = Spread(i) | Spread(j) << 1 | Spread(k) << 2;
+    return (morton + static_cast<uint64_t>(level) * 0x9E3779B97F4A7C15ull) & mask_;
+  }
+
+  template <typename Body>
+  void ForEachCell(int64_t f, Body body) const {
+    const FaceBox& b = boxes_[f];
+    const double h = CellSize(b.level);
+    int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = Cell(b.lo[a], origin_[a], h);
+      // A box no wider than its level's cells spans at most three of them; the bound only
+      // matters where the arithmetic overflowed.
+      hi[a] = std::clamp(Cell(b.hi[a], origin_[a], h), lo[a], lo[a] + 2);
+    }
+    for (int64_t i = lo[0]; i <= hi[0]; ++i) {
+      for (int64_t j = lo[1]; j <= hi[1]; ++j) {
+        for (int64_t k = lo[2]; k <= hi[2]; ++k) body(Bucket(b.level, i, j, k));
+      }
+    }
+  }
+
+  FillLater<FaceBox> boxes_;  // every one written by the constructor's first pass
+  Vec3 origin_{};
+  double cell0_ = 1.0;
+  uint64_t levels_ = 0;          // bit l: some face is filed under level l
+  uint64_t mask_ = 0;            // bucket count - 1 (a power of two)
+  std::vector<uint64_t> start_;  // bucket k holds faces_[start_[k], start_[k + 1])
+  std::vector<uint32_t> faces_;
+};
+
+// A boundary vertex found on a boundary face it is not a vertex of.
+struct Hit {
+  uint32_t vertex;
+  uint32_t face;  // index into the boundary list
+};
+
+std::array<uint32_t, 4> SortedQuad(const BoundaryFace& f, uint32_t v) {
+  std::array<uint32_t, 4> q = {f[0], f[1], f[2], v};
+  std::sort(q.begin(), q.end());
+  return q;
+}
+
+// The first tet, in index order, that has all of face's vertices.
+int64_t TetOnFace(const std::vector<Tet>& tets, const BoundaryFace& face) {
+  return FirstIndexWhere(static_cast<int64_t>(tets.size()), [&](int64_t t) {
+    const Tet& tet = tets[t];
+    return std::all_of(face.begin(), face.end(), [&](uint32_t v) {
+      return std::find(tet.begin(), tet.end(), v) != tet.end();
+    });
+  });
+}
+
+std::string FaceName(const BoundaryFace& f) {
+  return absl::StrCat("(", f[0], ", ", f[1], ", ", f[2], ")");
+}
+
+absl::Status CheckNoVertexOnFace(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                                 const std::vector<BoundaryFace>& boundary) {
+  const int64_t num_points = static_cast<int64_t>(points.size());
+  std::vector<uint8_t> on_boundary(num_points, 0);
+  for (const BoundaryFace& f : boundary) {
+    for (uint32_t v : f) on_boundary[v] = 1;
+  }
+  std::vector<uint32_t> vertices;
+  for (int64_t v = 0; v < num_points; ++v) {
+    if (on_boundary[v]) vertices.push_back(static_cast<uint32_t>(v));
+  }
+  const FaceGrid grid(points, boundary);
+  const int64_t n = static_cast<int64_t>(vertices.size());
+  std::vector<std::vector<Hit>> found(BlockCount(n));
+  ForEachBlock(n, [&](int64_t block, int64_t begin, int64_t end) {
+    for (int64_t i = begin; i < end; ++i) {
+      const uint32_t w = vertices[i];
+      const Vec3& p = points[w];
+      grid.ForEachNear(p, [&](uint32_t f) {
+        const BoundaryFace& face = boundary[f];
+        if (face[0] == w || face[1] == w || face[2] == w) return;
+        const FaceBox& b = grid.box(f);
+        for (int a = 0; a < 3; ++a) {
+          if (p[a] < b.lo[a] || p[a] > b.hi[a]) return;
+        }
+        const double d2 = DistanceToTriangle2(p, points[face[0]], points[face[1]], points[face[2]]);
+        if (d2 <= b.tolerance * b.tolerance) found[block].push_back({w, f});
+      });
+    }
+  });
+  std::vector<Hit> hits;
+  for (const std::vector<Hit>& h : found) hits.insert(hits.end(), h.begin(), h.end());
+  if (hits.empty()) return absl::OkStatus();
+  // A face's own tet's fourth vertex may come within tolerance of it (a sliver), and that is no
+  // hanging node: drop the hits whose vertex and face make up a tet. Hits are rare, so one pass
+  // over the tets, only when there are any.
+  std::vector<std::pair<std::array<uint32_t, 4>, int64_t>> quads(hits.size());
+  for (size_t i = 0; i < hits.size(); ++i) {
+    quads[i] = {SortedQuad(boundary[hits[i].face], hits[i].vertex), static_cast<int64_t>(i)};
+  }
+  std::sort(quads.begin(), quads.end());
+  // The tet with a hit's four vertices is its face's own tet (a boundary face has one), and two
+  // tets with the same vertices failed the face check: each flag has one writer.
+  std::vector<uint8_t> own(hits.size(), 0);
+  ForEachBlock(static_cast<int64_t>(tets.size()), [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t t = begin; t < end; ++t) {
+      const std::array<uint32_t, 4> q = SortTet(tets[t]).v;
+      auto it = std::lower_bound(quads.begin(), quads.end(), std::make_pair(q, int64_t{-1}));
+      for (; it != quads.end() && it->first == q; ++it) own[it->second] = 1;
+    }
+  });
+  const Hit* first = nullptr;
+  for (size_t i = 0; i < hits.size(); ++i) {
+    if (own[i]) continue;
+    const Hit& h = hits[i];
+    if (first == nullptr || h.vertex < first->vertex ||
+        (h.vertex == first->vertex && boundary[h.face] < boundary[first->face])) {
+      first = &h;
+    }
+  }
+  if (first == nullptr) return absl::OkStatus();
+  const BoundaryFace& face = boundary[first->face];
+  const Vec3& p = points[first->vertex];
+  return absl::InvalidArgumentError(absl::StrCat(
+      "mesh is not conformal: vertex ", first->vertex,
+      absl::StrFormat(" at (%g, %g, %g)", p[0], p[1], p[2]), " lies on boundary face ",
+      FaceName(face), " of mesh.tets[", TetOnFace(tets, face),
+      "] without being one of its vertices (a hanging node, or two boundary faces that overlap "
+      "inside the mesh)"));
+}
+
+absl::Status CheckClosed(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                         const std::vector<BoundaryFace>& boundary) {
+  const int64_t num_points = static_cast<int64_t>(points.size());
+  // Each edge (u < v) of a boundary face, filed under u as v.
+  std::unique_ptr<uint32_t[]> ends;
+  const BucketLayout layout = CountingSort(
+      static_cast<int64_t>(boundary.size()), num_points,
+      [&](int64_t f, auto add) {
+        add(boundary[f][0], 2);
+        add(boundary[f][1], 1);
+      },
+      [&](uint64_t total) { ends.reset(new uint32_t[total]); },
+      [&](int64_t f, auto slot) {
+        const BoundaryFace& face = boundary[f];
+        uint32_t* out = ends.get() + slot(face[0], 2);
+        out[0] = face[1];
+        out[1] = face[2];
+        ends[slot(face[1], 1)] = face[2];
+      });
+  const auto& start = layout.start;
+  // The bucket's first edge used by an odd number of faces, as (other end, uses); the bucket is
+  // left sorted.
+  auto first_odd = [&](int64_t u) -> std::pair<uint32_t, int64_t> {
+    uint32_t* b = ends.get() + start[u];
+    uint32_t* e = ends.get() + start[u + 1];
+    SortSmall(b, e);
+    for (uint32_t* p = b; p < e;) {
+      uint32_t* q = p;
+      while (q < e && *q == *p) ++q;
+      if ((q - p) % 2 == 1) return {*p, q - p};
+      p = q;
+    }
+    return {0, 0};
+  };
+  // Each bucket is sorted by the one thread that reaches it; the first bad one is sorted again
+  // below, which changes nothing.
+  const int64_t u =
+      FirstIndexWhere(num_points, [&](int64_t u) { return first_odd(u).second != 0; });
+  if (u == num_points) return absl::OkStatus();
+  const auto [v, uses] = first_odd(u);
+  const BoundaryFace* face = nullptr;
+  for (const BoundaryFace& f : boundary) {
+    const bool has_u = f[0] == u || f[1] == u || f[2] == u;
+    const bool has_v = f[0] == v || f[1] == v || f[2] == v;
+    if (has_u && has_v && (face == nullptr || f < *face)) face = &f;
+  }
+  return absl::InvalidArgumentError(
+      absl::StrCat("mesh is not conformal: edge (", u, ", ", v, ") lies on ", uses,
+                   " boundary faces, an odd number (one is face ", FaceName(*face),
+                   " of mesh.tets[", TetOnFace(tets, *face),
+                   "]), so the boundary is not closed: a hanging node on the edge, or a crack"));
+}
+
+}  // namespace
+
+absl::Status CheckBoundaryConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                                     const std::vector<BoundaryFace>& boundary) {
+  if (boundary.empty()) return absl::OkStatus();
+  if (absl::Status s = CheckNoVertexOnFace(points, tets, boundary); !s.ok()) return s;
+  return CheckClosed(points, tets, boundary);
+}
+
+}  // namespace tetrefine

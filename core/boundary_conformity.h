@@ -1,0 +1,38 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "core/mesh.h"
+
+namespace tetrefine {
+
+// A face that belongs to exactly one tet: its three vertex ids, ascending.
+using BoundaryFace = std::array<uint32_t, 3>;
+
+// The checks that a face check cannot make, on a mesh that passed it (CheckFaces, which also
+// lists `boundary`: every face of exactly one of `tets`, each once). A hanging node (a vertex
+// inside another tet's edge or face) leaves faces of exactly one tet inside the mesh, which the
+// face check takes for boundary. Two checks find them, and report the first problem found:
+//   1. No boundary vertex lies on a boundary face it is not a vertex of, within
+//      1e-13 L + 8 eps M of the closed triangle (L the face's longest edge, M the largest
+//      coordinate magnitude of its vertices, eps the double epsilon: how far rounding puts a
+//      midpoint off its edge). Covers a vertex in a face, on an edge or at a corner (two
+//      coincident vertices with different ids, e.g. two cubes touching with duplicated
+//      vertices, or a crack). The opposite vertex of the face's own tet never counts: a sliver
+//      close to its boundary face is a valid tet. Reports the smallest such vertex and, among
+//      its faces, the smallest face.
+//   2. The boundary is closed: every edge of the boundary faces is used by an even number of
+//      them (a hanging node on an edge leaves that edge in one face on the unsplit side).
+//      Reports the smallest such edge.
+// Cost: O(T) to name a tet in a message, otherwise about linear in the boundary's size (a hash
+// grid with one level per power of two of face size), parallel, and the verdict and message do
+// not depend on the thread count. `points` must be finite (ValidateMesh checks that first).
+// Errors are InvalidArgument and start with "mesh is not conformal: ", naming the vertex or
+// edge by its ids, the face by its vertex ids and the tet that owns it as mesh.tets[i].
+absl::Status CheckBoundaryConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                                     const std::vector<BoundaryFace>& boundary);
+
+}  // namespace tetrefine

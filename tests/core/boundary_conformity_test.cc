@@ -1,0 +1,349 @@
+// The conformity check (core/boundary_conformity.h): random conformal meshes pass, and each kind
+// of non-conformity (a hanging node on an edge or in a face, a crack, two bodies touching with
+// duplicated vertices) is refused with the vertex or edge named.
+#include "core/boundary_conformity.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "core/mesh_validation.h"
+#include "core/refine.h"
+#include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
+
+namespace tetrefine {
+namespace {
+
+// FiveTetMesh of [0, n]^3 with every interior vertex moved by up to 0.15 per axis: the tets stay
+// positive (checked) and no two faces are coplanar by accident.
+Mesh JitteredCube(std::mt19937_64& rng, int n) {
+  Mesh m = testing::FiveTetMesh({0, 0, 0}, {double(n), double(n), double(n)}, {n, n, n});
+  std::uniform_real_distribution<double> jitter(-0.15, 0.15);
+  for (Vec3& p : m.points) {
+    const bool interior = std::all_of(p.begin(), p.end(), [&](double x) { return x > 0 && x < n; });
+    if (!interior) continue;
+    for (double& x : p) x += jitter(rng);
+  }
+  for (const Tet& t : m.tets) {
+    EXPECT_GT(SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]), 0.0);
+  }
+  return m;
+}
+
+absl::Status Check(const Mesh& m) { return CheckConformity(m.points, m.tets); }
+
+// How many tets have both u and v.
+int TetsOnEdge(const Mesh& m, uint32_t u, uint32_t v) {
+  return static_cast<int>(std::count_if(m.tets.begin(), m.tets.end(), [&](const Tet& t) {
+    return std::find(t.begin(), t.end(), u) != t.end() &&
+           std::find(t.begin(), t.end(), v) != t.end();
+  }));
+}
+
+// The tets with all of face's vertices.
+std::vector<int64_t> TetsOn(const Mesh& m, const std::array<uint32_t, 3>& face) {
+  std::vector<int64_t> on;
+  for (size_t t = 0; t < m.tets.size(); ++t) {
+    if (std::all_of(face.begin(), face.end(), [&](uint32_t v) {
+          return std::find(m.tets[t].begin(), m.tets[t].end(), v) != m.tets[t].end();
+        })) {
+      on.push_back(static_cast<int64_t>(t));
+    }
+  }
+  return on;
+}
+
+void ExpectNamed(const absl::Status& s, const std::string& fragment) {
+  EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << s;
+  EXPECT_NE(s.message().find("mesh is not conformal: "), std::string::npos) << s;
+  EXPECT_NE(s.message().find(fragment), std::string::npos) << "want '" << fragment << "' in " << s;
+}
+
+TEST(BoundaryConformity, RandomConformalMeshesPass) {
+  for (uint64_t seed : testing::Seeds(20)) {
+    std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+    std::mt19937_64 rng(seed);
+    const Mesh m = JitteredCube(rng, 2 + static_cast<int>(seed % 4));
+    EXPECT_TRUE(Check(m).ok()) << Check(m);
+  }
+}
+
+// Split one tet 1:2 at the midpoint of an edge it shares with another tet, and leave that
+// neighbour whole: the midpoint hangs on the neighbour's face.
+TEST(BoundaryConformity, EdgeHangingNodeIsNamed) {
+  for (uint64_t seed : testing::Seeds(20)) {
+    std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+    std::mt19937_64 rng(seed);
+    Mesh m = JitteredCube(rng, 2 + static_cast<int>(seed % 3));
+    const size_t t = rng() % m.tets.size();
+    const Tet tet = m.tets[t];
+    int i = 0, j = 1;
+    for (int tries = 0; tries < 100; ++tries) {
+      i = static_cast<int>(rng() % 4);
+      j = (i + 1 + static_cast<int>(rng() % 3)) % 4;
+      if (TetsOnEdge(m, tet[i], tet[j]) >= 2) break;
+    }
+    ASSERT_GE(TetsOnEdge(m, tet[i], tet[j]), 2);
+    const Vec3& a = m.points[tet[i]];
+    const Vec3& b = m.points[tet[j]];
+    const auto mid = static_cast<uint32_t>(m.points.size());
+    m.points.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
+    Tet first = tet, second = tet;
+    first[j] = mid;
+    second[i] = mid;
+    m.tets[t] = first;
+    m.tets.push_back(second);
+    ASSERT_TRUE(CheckFaces(m.points, m.tets).ok()) << "the face check cannot see it";
+    ExpectNamed(Check(m), absl::StrCat("vertex ", mid, " at "));
+  }
+}
+
+// Split one tet 1:3 at the centroid of a face it shares with a neighbour left whole.
+TEST(BoundaryConformity, FaceHangingNodeIsNamed) {
+  for (uint64_t seed : testing::Seeds(20)) {
+    std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+    std::mt19937_64 rng(seed);
+    Mesh m = JitteredCube(rng, 2 + static_cast<int>(seed % 3));
+    size_t t = 0;
+    int skip = 0;
+    for (int tries = 0; tries < 1000; ++tries) {
+      t = rng() % m.tets.size();
+      skip = static_cast<int>(rng() % 4);
+      std::array<uint32_t, 3> face;
+      for (int k = 0, n = 0; k < 4; ++k) {
+        if (k != skip) face[n++] = m.tets[t][k];
+      }
+      if (TetsOn(m, face).size() == 2) break;
+    }
+    const Tet tet = m.tets[t];
+    Vec3 centroid = {0, 0, 0};
+    for (int k = 0; k < 4; ++k) {
+      if (k == skip) continue;
+      for (int a = 0; a < 3; ++a) centroid[a] += m.points[tet[k]][a] / 3.0;
+    }
+    const auto c = static_cast<uint32_t>(m.points.size());
+    m.points.push_back(centroid);
+    bool first = true;
+    for (int k = 0; k < 4; ++k) {
+      if (k == skip) continue;
+      Tet child = tet;
+      child[k] = c;
+      if (first) {
+        m.tets[t] = child;
+        first = false;
+      } else {
+        m.tets.push_back(child);
+      }
+    }
+    ASSERT_TRUE(CheckFaces(m.points, m.tets).ok()) << "the face check cannot see it";
+    ExpectNamed(Check(m), absl::StrCat("vertex ", c, " at "));
+  }
+}
+
+// A crack: the tets on one side of an interior face get their own copies of its vertices, so
+// the face exists twice, as two coincident boundary faces.
+TEST(BoundaryConformity, CrackIsRefused) {
+  for (uint64_t seed : testing::Seeds(10)) {
+    std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+    std::mt19937_64 rng(seed);
+    Mesh m = JitteredCube(rng, 3);
+    const size_t t = rng() % m.tets.size();
+    const int keep = static_cast<int>(rng() % 4);
+    std::map<uint32_t, uint32_t> copy;
+    for (int k = 0; k < 4; ++k) {
+      if (k == keep) continue;
+      copy[m.tets[t][k]] = static_cast<uint32_t>(m.points.size());
+      m.points.push_back(m.points[m.tets[t][k]]);
+      m.tets[t][k] = copy[m.tets[t][k]];
+    }
+    ASSERT_TRUE(CheckFaces(m.points, m.tets).ok());
+    ExpectNamed(Check(m), "lies on boundary face");
+  }
+}
+
+TEST(BoundaryConformity, CubeWithCavityAndSeparateComponentsPass) {
+  for (uint64_t seed : testing::Seeds(5)) {
+    std::mt19937_64 rng(seed);
+    Mesh m = JitteredCube(rng, 4);
+    // Drop the 2 x 2 x 2 cells in the middle: a cubic cavity. FiveTetMesh writes 5 tets per cell,
+    // cell (i, j, k) at 5 * (i + 4 * (j + 4 * k)).
+    std::vector<Tet> kept;
+    for (size_t t = 0; t < m.tets.size(); ++t) {
+      const size_t cell = t / 5;
+      const size_t i = cell % 4, j = cell / 4 % 4, k = cell / 16;
+      const bool middle = i >= 1 && i <= 2 && j >= 1 && j <= 2 && k >= 1 && k <= 2;
+      if (!middle) kept.push_back(m.tets[t]);
+    }
+    ASSERT_EQ(kept.size(), m.tets.size() - 40);
+    m.tets = kept;
+    EXPECT_TRUE(Check(m).ok()) << Check(m);
+    // A second, disjoint copy of it, shifted by more than its size.
+    const auto n = static_cast<uint32_t>(m.points.size());
+    const size_t tets = m.tets.size();
+    for (uint32_t v = 0; v < n; ++v) {
+      Vec3 p = m.points[v];
+      p[0] += 4.5;
+      m.points.push_back(p);
+    }
+    for (size_t t = 0; t < tets; ++t) {
+      Tet q = m.tets[t];
+      for (uint32_t& v : q) v += n;
+      m.tets.push_back(q);
+    }
+    EXPECT_TRUE(Check(m).ok()) << Check(m);
+  }
+}
+
+// The real Delaunay mesh passes, where it is and scaled into a millimetre box far from the
+// origin (where the tolerance's rounding term is largest), and a hanging node in it is found.
+TEST(BoundaryConformity, RealMeshPasses) {
+  Mesh m = testing::ReadMeditForTest(std::string(TETREFINE_SHARED_DATA_DIR) +
+                                     "/unit_cube_1782tets.mesh");
+  ASSERT_EQ(m.tets.size(), 1782u);
+  for (const Tet& t : m.tets) {
+    ASSERT_GT(SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]), 0.0);
+  }
+  EXPECT_TRUE(Check(m).ok()) << Check(m);
+  Mesh far = m;
+  for (Vec3& p : far.points) {
+    for (double& x : p) x = 3000.0 + 7.3 * x;
+  }
+  EXPECT_TRUE(Check(far).ok()) << Check(far);
+  size_t t = 0;
+  while (TetsOnEdge(far, far.tets[t][0], far.tets[t][1]) < 2) ++t;
+  const Tet tet = far.tets[t];
+  const Vec3& a = far.points[tet[0]];
+  const Vec3& b = far.points[tet[1]];
+  const auto mid = static_cast<uint32_t>(far.points.size());
+  far.points.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
+  far.tets[t] = {mid, tet[1], tet[2], tet[3]};
+  far.tets.push_back({tet[0], mid, tet[2], tet[3]});
+  ExpectNamed(Check(far), absl::StrCat("vertex ", mid, " at "));
+}
+
+// Two cubes side by side with matching faces but each with its own vertices: the face between
+// them is there twice, as boundary faces of both.
+TEST(BoundaryConformity, CubesTouchingWithDuplicatedVerticesAreRefused) {
+  Mesh m = testing::FiveTetMesh({0, 0, 0}, {2, 2, 2}, {2, 2, 2});
+  const Mesh right = testing::FiveTetMesh({2, 0, 0}, {4, 2, 2}, {2, 2, 2});
+  const auto n = static_cast<uint32_t>(m.points.size());
+  m.points.insert(m.points.end(), right.points.begin(), right.points.end());
+  for (Tet q : right.tets) {
+    for (uint32_t& v : q) v += n;
+    m.tets.push_back(q);
+  }
+  ASSERT_TRUE(CheckFaces(m.points, m.tets).ok());
+  // Vertex 2 is (2, 0, 0), a corner of the right cube's face at x = 2.
+  ExpectNamed(Check(m), "vertex 2 at (2, 0, 0) lies on boundary face (");
+  // Shifted apart by a hair more than the tolerance, they are two separate bodies.
+  for (uint32_t v = n; v < m.points.size(); ++v) m.points[v][0] += 1e-9;
+  EXPECT_TRUE(Check(m).ok()) << Check(m);
+}
+
+// Two boundary faces with the same three vertices on the same side are two tets overlapping:
+// the face check refuses them before the conformity check runs.
+TEST(BoundaryConformity, SameFaceTwiceOnOneSideIsAnOverlap) {
+  Mesh m;
+  m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.2, 0.2, 0.5}};
+  m.tets = {{0, 1, 2, 3}, {0, 1, 2, 4}};
+  const absl::Status s = Check(m);
+  EXPECT_NE(s.message().find("overlap"), std::string::npos) << s;
+}
+
+// Far from the origin the tolerance grows with the coordinates' rounding; a sliver whose fourth
+// vertex then comes within it of the tet's own boundary face is still a valid tet.
+TEST(BoundaryConformity, SliverOnItsOwnFacePasses) {
+  Mesh m;
+  const double o = 1e6;
+  m.points = {{o, o, o}, {o + 1, o, o}, {o, o + 1, o}, {o + 0.3, o + 0.3, o + 1e-10}};
+  m.tets = {{0, 1, 2, 3}};
+  ASSERT_GT(SignedVolume6(m.points[0], m.points[1], m.points[2], m.points[3]), 0.0);
+  EXPECT_TRUE(Check(m).ok()) << Check(m);
+  // The same vertex as a separate body's, on the face: a hanging node.
+  m.points.push_back(m.points[3]);
+  m.points.push_back({o + 0.3, o + 0.3, o + 1});
+  m.points.push_back({o + 1, o + 0.3, o + 1});
+  m.points.push_back({o + 0.3, o + 1, o + 1});
+  m.tets.push_back({4, 5, 6, 7});
+  if (SignedVolume6(m.points[4], m.points[5], m.points[6], m.points[7]) < 0) {
+    std::swap(m.tets[1][2], m.tets[1][3]);
+  }
+  ExpectNamed(Check(m), "vertex 3 at ");
+}
+
+// verify runs the check on any finite coordinates, not only those ValidateMesh lets through:
+// near the double range the arithmetic overflows, and the check must still return.
+TEST(BoundaryConformity, HugeCoordinatesDoNotBreakIt) {
+  for (double scale : {1e200, 1e300, -1e306}) {
+    Mesh m = testing::FiveTetMesh({0, 0, 0}, {2, 2, 2}, {2, 2, 2});
+    for (Vec3& p : m.points) {
+      for (double& x : p) x *= scale;
+    }
+    if (scale < 0) {
+      for (Tet& t : m.tets) std::swap(t[2], t[3]);
+    }
+    const absl::Status s = Check(m);
+    EXPECT_TRUE(s.ok() || s.code() == absl::StatusCode::kInvalidArgument) << s;
+  }
+}
+
+// The verdict and the message do not depend on the thread count.
+TEST(BoundaryConformity, SameMessageForAnyThreadCount) {
+  for (uint64_t seed : testing::Seeds(5)) {
+    std::mt19937_64 rng(seed);
+    Mesh m = JitteredCube(rng, 12);
+    // Hanging nodes in many places, so that several blocks find one.
+    for (int h = 0; h < 20; ++h) {
+      const size_t t = rng() % m.tets.size();
+      const Tet tet = m.tets[t];
+      const Vec3& a = m.points[tet[0]];
+      const Vec3& b = m.points[tet[1]];
+      const auto mid = static_cast<uint32_t>(m.points.size());
+      m.points.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
+      m.tets[t] = {mid, tet[1], tet[2], tet[3]};
+      m.tets.push_back({tet[0], mid, tet[2], tet[3]});
+    }
+    std::string one;
+    tbb::task_arena(1).execute([&] { one = std::string(Check(m).message()); });
+    EXPECT_FALSE(one.empty());
+    for (int threads : {2, 4}) {
+      std::string many;
+      tbb::task_arena(threads).execute([&] { many = std::string(Check(m).message()); });
+      EXPECT_EQ(one, many);
+    }
+  }
+}
+
+// ValidateMesh, and so Refine, refuses a hanging node with the same message.
+TEST(BoundaryConformity, RefineRefusesAHangingNode) {
+  std::mt19937_64 rng(7);
+  Mesh m = JitteredCube(rng, 2);
+  // A tet with an edge (0, 1) that another tet shares.
+  size_t t = 0;
+  while (TetsOnEdge(m, m.tets[t][0], m.tets[t][1]) < 2) ++t;
+  const Tet tet = m.tets[t];
+  const Vec3& a = m.points[tet[0]];
+  const Vec3& b = m.points[tet[1]];
+  const auto mid = static_cast<uint32_t>(m.points.size());
+  m.points.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
+  m.tets[t] = {mid, tet[1], tet[2], tet[3]};
+  m.tets.push_back({tet[0], mid, tet[2], tet[3]});
+  const absl::Status expected = Check(m);
+  ASSERT_FALSE(expected.ok());
+  GridGeometry g;
+  g.dims = {4, 4, 4};
+  const Volume volume = testing::AnalyticVolume(g, [](const Vec3& p) { return p[0]; });
+  const absl::StatusOr<RefineResult> r = Refine(volume, m, RefineOptions{});
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status(), expected);
+}
+
+}  // namespace
+}  // namespace tetrefine
