@@ -5,32 +5,10 @@
 #include "absl/strings/str_cat.h"
 #include "client/io/file_bytes.h"
 #include "client/io/number_text.h"
+#include "client/io/xml_escape.h"
 
 namespace tetrefine::io {
 namespace {
-
-std::string EscapeAttribute(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out.push_back(c);
-    }
-  }
-  return out;
-}
 
 std::string RelativeTo(const std::string& file, const std::string& directory) {
   namespace fs = std::filesystem;
@@ -55,7 +33,7 @@ std::string FormatPvd(const std::vector<PvdEntry>& entries, const std::string& p
     out += "    <DataSet timestep=\"";
     AppendDouble(out, e.timestep);
     absl::StrAppend(&out, "\" group=\"\" part=\"", e.part, "\" file=\"",
-                    EscapeAttribute(RelativeTo(e.file, pvd_directory)), "\"/>\n");
+                    EscapeXml(RelativeTo(e.file, pvd_directory)), "\"/>\n");
   }
   out += "  </Collection>\n</VTKFile>\n";
   return out;

@@ -4,32 +4,10 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/io/file_bytes.h"
+#include "client/io/xml_escape.h"
 
 namespace tetrefine::io {
 namespace {
-
-std::string EscapeAttribute(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out.push_back(c);
-    }
-  }
-  return out;
-}
 
 // Which optional arrays a mesh file holds; pieces of one dataset must agree on it, since the
 // index declares one set for all of them.
@@ -64,7 +42,7 @@ std::string FormatPvtu(const MeshFile& like, const std::vector<std::string>& sou
     }
     if (!like.mesh.labels.empty()) {
       absl::StrAppend(&out, "      <PDataArray type=\"Int32\" Name=\"",
-                      EscapeAttribute(LabelArrayName(like)), "\"/>\n");
+                      EscapeXml(LabelArrayName(like)), "\"/>\n");
     }
     out += "    </PCellData>\n";
   }
@@ -73,7 +51,7 @@ std::string FormatPvtu(const MeshFile& like, const std::vector<std::string>& sou
       "      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n"
       "    </PPoints>\n";
   for (const std::string& source : sources) {
-    absl::StrAppend(&out, "    <Piece Source=\"", EscapeAttribute(source), "\"/>\n");
+    absl::StrAppend(&out, "    <Piece Source=\"", EscapeXml(source), "\"/>\n");
   }
   out += "  </PUnstructuredGrid>\n</VTKFile>\n";
   return out;

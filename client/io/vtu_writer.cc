@@ -17,6 +17,7 @@
 #include "client/io/vtk_cells.h"
 #include "client/io/vtk_scalar.h"
 #include "client/io/vtu_format.h"
+#include "client/io/xml_escape.h"
 
 namespace tetrefine::io {
 namespace {
@@ -73,29 +74,6 @@ void SetOwned(OutArray& a, const std::vector<T>& values) {
     for (const T& v : values) AppendLittle(a.owned, v);
   }
   a.raw = a.owned;
-}
-
-std::string EscapeXml(absl::string_view text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out.push_back(c);
-    }
-  }
-  return out;
 }
 
 OutArray Numeric(absl::string_view name, VtkScalar type, int components) {
