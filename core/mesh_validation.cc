@@ -301,16 +301,27 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
       return !volume.Contains(volume.ContinuousIndex(mesh.points[i]));
     });
     if (out < num_points) {
-      const GridGeometry& g = volume.grid();
       std::string box;
+      Vec3 lo, hi;
       for (int a = 0; a < 3; ++a) {
-        absl::StrAppend(&box, a ? " x " : "", "[",
-                        g.origin[a] + static_cast<double>(volume.lo()[a]) * g.spacing[a], ", ",
-                        g.origin[a] + static_cast<double>(volume.hi()[a] - 1) * g.spacing[a], "]");
+        lo[a] = static_cast<double>(volume.lo()[a]);
+        hi[a] = static_cast<double>(volume.hi()[a] - 1);
+      }
+      const std::array<Vec3, 2> world = WorldBounds(volume.grid(), lo, hi);
+      for (int a = 0; a < 3; ++a) {
+        absl::StrAppend(&box, a ? " x " : "", "[", world[0][a], ", ", world[1][a], "]");
+      }
+      // An oblique grid's sampled region is a parallelepiped: the box only bounds it, so the
+      // message also gives the point's continuous index, which is what the test compares.
+      std::string where;
+      if (!volume.axis_aligned()) {
+        const Vec3 u = volume.ContinuousIndex(mesh.points[out]);
+        where = absl::StrCat(" (continuous index ", Point(u), ", sampled index box ", Point(lo),
+                             " to ", Point(hi), ")");
       }
       return absl::InvalidArgumentError(
           absl::StrCat("mesh.points[", out, "] = ", Point(mesh.points[out]),
-                       " lies outside the volume's sampled box ", box));
+                       " lies outside the volume's sampled box ", box, where));
     }
   }
   return CheckConformity(mesh.points, tets->empty() ? mesh.tets : *tets);

@@ -57,7 +57,65 @@ double Trilerp(const std::byte* d, int64_t base, int64_t dy, int64_t dz, const d
   return Lerp(Lerp(c00, c10, t[1]), Lerp(c01, c11, t[1]), t[2]);
 }
 
+// Inverse of a 3x3 matrix with a nonzero determinant, by the adjugate.
+Mat3 Inverse(const Mat3& m) {
+  const double det = Determinant(m);
+  const Mat3 adj{m[4] * m[8] - m[5] * m[7], m[2] * m[7] - m[1] * m[8], m[1] * m[5] - m[2] * m[4],
+                 m[5] * m[6] - m[3] * m[8], m[0] * m[8] - m[2] * m[6], m[2] * m[3] - m[0] * m[5],
+                 m[3] * m[7] - m[4] * m[6], m[1] * m[6] - m[0] * m[7], m[0] * m[4] - m[1] * m[3]};
+  Mat3 inv;
+  for (int i = 0; i < 9; ++i) inv[i] = adj[i] / det;
+  return inv;
+}
+
 }  // namespace
+
+bool IsIdentityDirection(const Mat3& direction) {
+  for (int i = 0; i < 9; ++i) {
+    if (direction[i] != kIdentityDirection[i]) return false;
+  }
+  return true;
+}
+
+double Determinant(const Mat3& m) {
+  return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
+         m[2] * (m[3] * m[7] - m[4] * m[6]);
+}
+
+Vec3 WorldOfIndex(const GridGeometry& grid, const Vec3& u) {
+  if (IsIdentityDirection(grid.direction)) {
+    return {grid.origin[0] + u[0] * grid.spacing[0], grid.origin[1] + u[1] * grid.spacing[1],
+            grid.origin[2] + u[2] * grid.spacing[2]};
+  }
+  const Vec3 s{u[0] * grid.spacing[0], u[1] * grid.spacing[1], u[2] * grid.spacing[2]};
+  const Mat3& d = grid.direction;
+  Vec3 p;
+  for (int row = 0; row < 3; ++row) {
+    p[row] = grid.origin[row] + (d[3 * row] * s[0] + d[3 * row + 1] * s[1] + d[3 * row + 2] * s[2]);
+  }
+  return p;
+}
+
+std::array<Vec3, 8> WorldCorners(const GridGeometry& grid, const Vec3& lo, const Vec3& hi) {
+  std::array<Vec3, 8> corners;
+  for (int c = 0; c < 8; ++c) {
+    corners[c] = WorldOfIndex(
+        grid, {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]});
+  }
+  return corners;
+}
+
+std::array<Vec3, 2> WorldBounds(const GridGeometry& grid, const Vec3& lo, const Vec3& hi) {
+  const std::array<Vec3, 8> corners = WorldCorners(grid, lo, hi);
+  std::array<Vec3, 2> box{corners[0], corners[0]};
+  for (const Vec3& c : corners) {
+    for (int a = 0; a < 3; ++a) {
+      box[0][a] = std::min(box[0][a], c[a]);
+      box[1][a] = std::max(box[1][a], c[a]);
+    }
+  }
+  return box;
+}
 
 absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo, const Index3& hi,
                                       VoxelType type, std::vector<std::byte> data) {
@@ -85,6 +143,28 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
           "): must lie in [0, ", grid.dims[a], ") and hold at least 2 samples"));
     }
   }
+  for (int i = 0; i < 9; ++i) {
+    if (!std::isfinite(grid.direction[i])) {
+      return absl::InvalidArgumentError(absl::StrCat("volume.direction[", i, "] (row ", i / 3,
+                                                     ", column ", i % 3, ") is not finite"));
+    }
+  }
+  // Scale-free test: the determinant of the direction with unit columns, so a direction given
+  // with lengths (e.g. a raw affine) is judged by its angles alone.
+  Mat3 unit = grid.direction;
+  for (int column = 0; column < 3; ++column) {
+    const double length = std::hypot(unit[column], unit[3 + column], unit[6 + column]);
+    if (!(length > 0.0)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "volume.direction column ", column, " is zero: the index axis has no world direction"));
+    }
+    for (int row = 0; row < 3; ++row) unit[3 * row + column] /= length;
+  }
+  if (!(std::abs(Determinant(unit)) >= kMinDirectionDeterminant)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("volume.direction is singular: |det| of its normalised columns is ",
+                     std::abs(Determinant(unit)), ", must be >= ", kMinDirectionDeterminant));
+  }
   const int64_t count = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
   const uint64_t expected = static_cast<uint64_t>(count) * VoxelSize(type);
   if (data.size() != expected) {
@@ -94,6 +174,12 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
   }
   Volume v;
   v.grid_ = grid;
+  v.axis_aligned_ = IsIdentityDirection(grid.direction);
+  if (!v.axis_aligned_) {
+    Mat3 scaled = grid.direction;
+    for (int i = 0; i < 9; ++i) scaled[i] *= grid.spacing[i % 3];
+    v.world_to_index_ = Inverse(scaled);
+  }
   v.lo_ = lo;
   v.hi_ = hi;
   v.type_ = type;

@@ -12,23 +12,56 @@ namespace tetrefine {
 
 using Vec3 = std::array<double, 3>;
 using Index3 = std::array<int64_t, 3>;
+// A 3x3 matrix, row-major: element (row, column) at [3 * row + column].
+using Mat3 = std::array<double, 9>;
+
+inline constexpr Mat3 kIdentityDirection{1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
 
 // Geometry of a whole voxel grid: sample (i, j, k) sits at world position
-// origin + (i, j, k) * spacing, in the caller's world unit (millimetres for imaging data).
-// The grid is axis-aligned; callers with a rotated affine transform the mesh into this frame.
+// origin + direction * diag(spacing) * (i, j, k), in the caller's world unit (millimetres for
+// imaging data). The identity direction is the axis-aligned grid; an oblique one (rotated,
+// sheared or axis-permuted, common in MRI) keeps the samples in storage order, so a mesh in
+// scanner coordinates lines up without resampling.
 struct GridGeometry {
   Index3 dims{0, 0, 0};         // samples per axis, each >= 2 (trilinear needs a cell)
   Vec3 origin{0.0, 0.0, 0.0};   // world position of sample (0, 0, 0)
   Vec3 spacing{1.0, 1.0, 1.0};  // world distance between samples per axis, each > 0
+  // Columns are the world directions of the index axes i, j, k (unit length by convention; the
+  // length lives in spacing). Finite, with |det| >= kMinDirectionDeterminant.
+  Mat3 direction = kIdentityDirection;
 };
+
+// Smallest |det(direction)| a grid accepts: below it the index axes are nearly parallel and the
+// world-to-index map amplifies rounding beyond what sampling tolerates.
+inline constexpr double kMinDirectionDeterminant = 1e-6;
+
+// True when `direction` is exactly the identity (bit for bit, -0 counts as 0): the grid then
+// uses the axis-aligned formulas that every pinned result was computed with.
+bool IsIdentityDirection(const Mat3& direction);
+
+// Determinant of a 3x3 row-major matrix.
+double Determinant(const Mat3& m);
+
+// World position of continuous index u: origin + direction * (spacing * u). For the identity
+// direction exactly origin + spacing * u per axis (the axis-aligned formula).
+Vec3 WorldOfIndex(const GridGeometry& grid, const Vec3& u);
+
+// The world positions of the 8 corners of the index box [lo, hi] (inclusive continuous
+// indices), ordered x fastest. For an axis-aligned grid they span the box's world extent.
+std::array<Vec3, 8> WorldCorners(const GridGeometry& grid, const Vec3& lo, const Vec3& hi);
+
+// The axis-aligned world bounding box [min, max] of the index box [lo, hi].
+std::array<Vec3, 2> WorldBounds(const GridGeometry& grid, const Vec3& lo, const Vec3& hi);
 
 // A scalar voxel volume, or a slab of one: the samples with indices in [lo, hi) of a larger grid.
 // Sampling uses the whole grid's geometry, so a point gives the same bits whether the volume is
 // whole or a slab that contains the point's cell.
 class Volume {
  public:
-  // Checks geometry, range and data length. `data` holds the slab's samples as little-endian
-  // values of `type`, x fastest then y then z, size (hi-lo).prod() * VoxelSize(type) bytes.
+  // Checks geometry (dims, origin, spacing, direction: finite and invertible), range and data
+  // length; errors name the field (e.g. "volume.direction[4]"). `data` holds the slab's samples as
+  // little-endian values of `type`, x fastest then y then z, size (hi-lo).prod() * VoxelSize(type)
+  // bytes.
   static absl::StatusOr<Volume> Create(const GridGeometry& grid, const Index3& lo, const Index3& hi,
                                        VoxelType type, std::vector<std::byte> data);
   // A whole volume: lo = 0, hi = grid.dims.
@@ -48,12 +81,23 @@ class Volume {
   // The sample at grid index (i, j, k), which must lie in [lo, hi).
   double At(int64_t i, int64_t j, int64_t k) const;
 
-  // Continuous grid index of a world point: (p - origin) / spacing per axis.
+  // Continuous grid index of a world point: (p - origin) / spacing per axis for the identity
+  // direction (kept verbatim so axis-aligned results stay bit-identical), otherwise
+  // (direction * diag(spacing))^-1 * (p - origin) with the inverse computed once in Create.
   Vec3 ContinuousIndex(const Vec3& p) const {
-    return {(p[0] - grid_.origin[0]) / grid_.spacing[0],
-            (p[1] - grid_.origin[1]) / grid_.spacing[1],
-            (p[2] - grid_.origin[2]) / grid_.spacing[2]};
+    if (axis_aligned_) {
+      return {(p[0] - grid_.origin[0]) / grid_.spacing[0],
+              (p[1] - grid_.origin[1]) / grid_.spacing[1],
+              (p[2] - grid_.origin[2]) / grid_.spacing[2]};
+    }
+    const double d[3] = {p[0] - grid_.origin[0], p[1] - grid_.origin[1], p[2] - grid_.origin[2]};
+    const Mat3& m = world_to_index_;
+    return {m[0] * d[0] + m[1] * d[1] + m[2] * d[2], m[3] * d[0] + m[4] * d[1] + m[5] * d[2],
+            m[6] * d[0] + m[7] * d[1] + m[8] * d[2]};
   }
+
+  // True when the grid's direction is the identity.
+  bool axis_aligned() const { return axis_aligned_; }
 
   // A point this far (in voxels) outside the grid's own box still counts as inside it: meshes
   // built to span a volume land there by rounding (origin + 11 * 5.74 gives index 11 + 2e-15).
@@ -90,6 +134,8 @@ class Volume {
 
  private:
   GridGeometry grid_;
+  bool axis_aligned_ = true;
+  Mat3 world_to_index_ = kIdentityDirection;  // (direction * diag(spacing))^-1 when oblique
   Index3 lo_{0, 0, 0};
   Index3 hi_{0, 0, 0};
   VoxelType type_ = VoxelType::kFloat64;

@@ -35,6 +35,47 @@ constexpr const char* kAxis[3] = {"x", "y", "z"};
 Index3 IndexFromWire(const v1::GridIndex& i) { return {i.x(), i.y(), i.z()}; }
 Vec3 VectorFromWire(const v1::Vector3& v) { return {v.x(), v.y(), v.z()}; }
 
+// Reads volume_header.direction into *direction: empty is the identity; otherwise 9 finite values
+// (row-major) whose normalised columns have |det| >= kMinDirectionDeterminant, the core's bound,
+// checked here so a bad header is refused before its data is uploaded.
+absl::Status DirectionFromWire(const v1::VolumeHeader& header, Mat3* direction) {
+  const int n = header.direction_size();
+  if (n == 0) {
+    *direction = kIdentityDirection;
+    return absl::OkStatus();
+  }
+  if (n != 9) {
+    return Invalid(
+        absl::StrCat("volume_header.direction: must hold 0 (identity) or 9 values "
+                     "(3x3 row-major), got ",
+                     n));
+  }
+  for (int i = 0; i < 9; ++i) {
+    if (!std::isfinite(header.direction(i))) {
+      return Invalid(absl::StrCat("volume_header.direction[", i, "]: must be finite, got ",
+                                  header.direction(i)));
+    }
+    (*direction)[i] = header.direction(i);
+  }
+  Mat3 unit = *direction;
+  for (int column = 0; column < 3; ++column) {
+    const double length = std::hypot(unit[column], unit[3 + column], unit[6 + column]);
+    if (!(length > 0.0) || !std::isfinite(length)) {
+      return Invalid(absl::StrCat("volume_header.direction: column ", column,
+                                  " is zero (or overflows), so the matrix is singular"));
+    }
+    for (int row = 0; row < 3; ++row) unit[3 * row + column] /= length;
+  }
+  const double det = std::abs(Determinant(unit));
+  if (!(det >= kMinDirectionDeterminant)) {
+    return Invalid(
+        absl::StrCat("volume_header.direction: singular (|det| of the normalised "
+                     "columns is ",
+                     det, ", must be >= ", kMinDirectionDeterminant, ")"));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::Status RequestReader::Add(const v1::RefineRequest& request) {
@@ -183,6 +224,8 @@ absl::Status RequestReader::AddVolumeHeader(const v1::VolumeHeader& header) {
                                   ", ", grid_.dims[a], "], got ", hi_[a]));
     }
   }
+  absl::Status direction = DirectionFromWire(header, &grid_.direction);
+  if (!direction.ok()) return direction;
   absl::StatusOr<VoxelType> type =
       VoxelTypeFromWire(header.voxel_type(), "volume_header.voxel_type");
   if (!type.ok()) return type.status();

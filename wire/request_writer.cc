@@ -32,6 +32,10 @@ bool WriteVolume(const Volume& volume, size_t chunk_bytes, const RequestSink& si
   SetIndex(volume.lo(), header->mutable_slab_lo());
   SetIndex(volume.hi(), header->mutable_slab_hi());
   header->set_voxel_type(VoxelTypeToWire(volume.type()));
+  // The identity travels as the empty list, so axis-aligned requests stay byte-identical.
+  if (!volume.axis_aligned()) {
+    for (double d : volume.grid().direction) header->add_direction(d);
+  }
   const std::vector<std::byte>& data = volume.data();
   header->set_total_bytes(data.size());
   if (!sink(request)) return false;

@@ -13,7 +13,7 @@ namespace tetrefine::bench {
 Volume VolumeFromValues(const GridGeometry& grid, VoxelType type,
                         const std::vector<double>& values);
 
-// Samples f(world position) at every grid point.
+// Samples f(world position) at every grid point (oblique grids included).
 template <typename F>
 Volume SampleField(const GridGeometry& g, VoxelType type, F f) {
   std::vector<double> v;
@@ -21,9 +21,9 @@ Volume SampleField(const GridGeometry& g, VoxelType type, F f) {
   for (int64_t k = 0; k < g.dims[2]; ++k) {
     for (int64_t j = 0; j < g.dims[1]; ++j) {
       for (int64_t i = 0; i < g.dims[0]; ++i) {
-        v.push_back(f(Vec3{g.origin[0] + static_cast<double>(i) * g.spacing[0],
-                           g.origin[1] + static_cast<double>(j) * g.spacing[1],
-                           g.origin[2] + static_cast<double>(k) * g.spacing[2]}));
+        // Through the grid's affine (for the identity exactly origin + index * spacing).
+        v.push_back(f(WorldOfIndex(
+            g, {static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)})));
       }
     }
   }

@@ -49,9 +49,9 @@ absl::StatusOr<GridMesh> MeshVolumeGrid(const Volume& volume, const GridMeshOpti
     if (v == kUnused) {
       v = static_cast<uint32_t>(mesh.points.size());
       const Index3 s = {nodes[0][i], nodes[1][j], nodes[2][k]};
-      mesh.points.push_back({grid.origin[0] + static_cast<double>(s[0]) * grid.spacing[0],
-                             grid.origin[1] + static_cast<double>(s[1]) * grid.spacing[1],
-                             grid.origin[2] + static_cast<double>(s[2]) * grid.spacing[2]});
+      // Through the grid's affine, so an oblique volume's mesh lies in its scanner frame.
+      mesh.points.push_back(WorldOfIndex(
+          grid, {static_cast<double>(s[0]), static_cast<double>(s[1]), static_cast<double>(s[2])}));
       mesh.values.push_back(volume.At(s[0], s[1], s[2]));
     }
     return v;

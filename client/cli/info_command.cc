@@ -50,6 +50,18 @@ int VolumeInfo(const std::string& path) {
       {"world box", absl::StrCat(FormatBox(VolumeWorldBox(v)), " mm")},
       {"value range", absl::StrCat("[", range[0], ", ", range[1], "]")},
   };
+  if (v.axis_aligned()) {
+    rows.push_back({"direction", "identity (axis-aligned)"});
+  } else {
+    // Columns are the world directions of index axes i, j, k (the oblique frame).
+    for (int r = 0; r < 3; ++r) {
+      const double* d = g.direction.data() + 3 * r;
+      rows.push_back(
+          {r == 0 ? "direction" : "",
+           absl::StrFormat("[%12.6g %12.6g %12.6g]%s", d[0], d[1], d[2],
+                           r == 0 ? "  (columns: world axes of i, j, k; oblique)" : "")});
+    }
+  }
   for (int r = 0; r < 4; ++r) {
     const auto& a = file->affine[r];
     rows.push_back({r == 0 ? "file affine" : "",

@@ -6,14 +6,47 @@
 
 namespace tetrefine::cli {
 
-Box VolumeWorldBox(const Volume& volume) {
-  const GridGeometry& g = volume.grid();
+namespace {
+
+// The sampled index box [lo, hi - 1] of the volume.
+Box IndexBox(const Volume& volume) {
   Box box;
   for (int a = 0; a < 3; ++a) {
-    box[0][a] = g.origin[a] + static_cast<double>(volume.lo()[a]) * g.spacing[a];
-    box[1][a] = g.origin[a] + static_cast<double>(volume.hi()[a] - 1) * g.spacing[a];
+    box[0][a] = static_cast<double>(volume.lo()[a]);
+    box[1][a] = static_cast<double>(volume.hi()[a] - 1);
   }
   return box;
+}
+
+Box BoundingBox(const std::vector<Vec3>& points) {
+  Box box = {points[0], points[0]};
+  for (const Vec3& p : points) {
+    for (int a = 0; a < 3; ++a) {
+      box[0][a] = std::min(box[0][a], p[a]);
+      box[1][a] = std::max(box[1][a], p[a]);
+    }
+  }
+  return box;
+}
+
+// Maps each point's coordinates linearly from box `from` onto box `to` (flipping axis a when
+// flip[a]); the extremes land exactly on the target box, whatever the rounding in between.
+void MapBox(const Box& from, const Box& to, const std::array<bool, 3>& flip,
+            std::vector<Vec3>* points) {
+  for (Vec3& p : *points) {
+    for (int a = 0; a < 3; ++a) {
+      double t = (p[a] - from[0][a]) / (from[1][a] - from[0][a]);
+      if (flip[a]) t = 1.0 - t;
+      p[a] = t <= 0.0 ? to[0][a] : t >= 1.0 ? to[1][a] : to[0][a] + t * (to[1][a] - to[0][a]);
+    }
+  }
+}
+
+}  // namespace
+
+Box VolumeWorldBox(const Volume& volume) {
+  const Box index = IndexBox(volume);
+  return WorldBounds(volume.grid(), index[0], index[1]);
 }
 
 std::string FormatBox(const Box& box) {
@@ -30,33 +63,37 @@ int64_t FirstVertexOutside(const Volume& volume, const Mesh& mesh) {
 
 absl::Status FitMeshToVolume(const Volume& volume, Mesh* mesh) {
   if (mesh->points.empty()) return absl::OkStatus();
-  Box from = {mesh->points[0], mesh->points[0]};
-  for (const Vec3& p : mesh->points) {
-    for (int a = 0; a < 3; ++a) {
-      from[0][a] = std::min(from[0][a], p[a]);
-      from[1][a] = std::max(from[1][a], p[a]);
-    }
-  }
-  Box to = VolumeWorldBox(volume);
-  const GridGeometry& g = volume.grid();
+  const Box from = BoundingBox(mesh->points);
   for (int a = 0; a < 3; ++a) {
-    const double extent = to[1][a] - to[0][a];
-    const double margin = std::min(g.spacing[a], 0.25 * extent);
-    to[0][a] += margin;
-    to[1][a] -= margin;
     if (!(from[1][a] > from[0][a])) {
       return absl::InvalidArgumentError(absl::StrCat("the mesh is flat along axis ",
                                                      std::string(1, "xyz"[a]),
                                                      ", so it cannot be fitted to the volume"));
     }
   }
-  for (Vec3& p : mesh->points) {
+  const GridGeometry& g = volume.grid();
+  if (volume.axis_aligned()) {
+    Box to = VolumeWorldBox(volume);
     for (int a = 0; a < 3; ++a) {
-      const double t = (p[a] - from[0][a]) / (from[1][a] - from[0][a]);
-      // The extremes map exactly onto the target box, whatever the rounding in between.
-      p[a] = t <= 0.0 ? to[0][a] : t >= 1.0 ? to[1][a] : to[0][a] + t * (to[1][a] - to[0][a]);
+      const double extent = to[1][a] - to[0][a];
+      const double margin = std::min(g.spacing[a], 0.25 * extent);
+      to[0][a] += margin;
+      to[1][a] -= margin;
     }
+    MapBox(from, to, {false, false, false}, &mesh->points);
+    return absl::OkStatus();
   }
+  // Oblique: fit into the index box (one sample of margin) and map through the grid's affine, so
+  // the mesh lies inside the rotated parallelepiped. A direction that mirrors (det < 0) would
+  // invert every tet; reversing index axis x as well keeps the orientation.
+  Box to = IndexBox(volume);
+  for (int a = 0; a < 3; ++a) {
+    const double margin = std::min(1.0, 0.25 * (to[1][a] - to[0][a]));
+    to[0][a] += margin;
+    to[1][a] -= margin;
+  }
+  MapBox(from, to, {Determinant(g.direction) < 0.0, false, false}, &mesh->points);
+  for (Vec3& p : mesh->points) p = WorldOfIndex(g, p);
   return absl::OkStatus();
 }
 

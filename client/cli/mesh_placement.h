@@ -12,7 +12,8 @@ namespace tetrefine::cli {
 
 using Box = std::array<Vec3, 2>;  // min and max corner, world units
 
-// The world box spanned by the volume's samples (the box refinement may sample in).
+// The world box spanned by the volume's samples (the box refinement may sample in); for an oblique
+// volume the axis-aligned bounding box of the rotated sampled region.
 Box VolumeWorldBox(const Volume& volume);
 
 // "[-32, 32] x [-40, 40] x [-16, 32]".
@@ -23,7 +24,10 @@ int64_t FirstVertexOutside(const Volume& volume, const Mesh& mesh);
 
 // --fit-mesh-to-volume: scales each axis and translates so that the mesh's bounding box becomes
 // the volume's world box shrunk by a margin of one voxel on every side (a quarter of the box when
-// the volume is thinner than four voxels). Positive scales, so orientation is kept. Meant for
+// the volume is thinner than four voxels). Positive scales, so orientation is kept. For an oblique
+// volume the box is the index box (one sample of margin) mapped through the grid's affine, with
+// index x reversed when the direction mirrors, so the mesh lies inside and keeps orientation.
+// Meant for
 // meshes in their own unit frame, like examples/unit_cube_1782tets.mesh. Error: a mesh that is
 // flat along an axis.
 absl::Status FitMeshToVolume(const Volume& volume, Mesh* mesh);

@@ -154,9 +154,14 @@ int RunSlice(const std::vector<std::string>& args) {
     meshes.push_back(*std::move(mesh));
   }
 
-  const GridGeometry& g = volume.grid();
+  // Default: the middle of the volume's world extent along the axis (for an axis-aligned grid
+  // exactly the middle sample plane, as before; for an oblique one the middle of its bounds).
+  const Box world = VolumeWorldBox(volume);
   const double position = s.position.value_or(
-      g.origin[s.axis] + 0.5 * static_cast<double>(g.dims[s.axis] - 1) * g.spacing[s.axis]);
+      volume.axis_aligned() ? volume.grid().origin[s.axis] +
+                                  0.5 * static_cast<double>(volume.grid().dims[s.axis] - 1) *
+                                      volume.grid().spacing[s.axis]
+                            : 0.5 * (world[0][s.axis] + world[1][s.axis]));
   absl::StatusOr<render::SlicePlane> plane =
       render::MakeSlicePlane(volume, s.axis, position, s.panel_size);
   if (!plane.ok()) {

@@ -5,7 +5,6 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
-#include "absl/strings/str_format.h"
 #include "client/io/io_error.h"
 
 namespace tetrefine::io {
@@ -86,16 +85,15 @@ absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& aff
     }
     if (flip[0] || flip[1] || flip[2]) data = Flip(data, dims, VoxelSize(type), flip);
   } else {
-    for (int a = 0; a < 3; ++a) {
-      grid.origin[a] = affine[a][3];
-      grid.spacing[a] = ColumnLength(affine, a);
+    // Oblique: the samples stay in storage order and the rotation/shear/permutation goes into
+    // the grid's direction, so volume.Sample(p) is the file's value at world point p.
+    for (int column = 0; column < 3; ++column) {
+      grid.spacing[column] = ColumnLength(affine, column);
+      for (int row = 0; row < 3; ++row) {
+        grid.direction[3 * row + column] = affine[row][column] / grid.spacing[column];
+      }
     }
-    result.warnings.push_back(absl::StrFormat(
-        "%s: index-to-world transform is oblique (rotated, sheared or axis-permuted); the volume "
-        "is placed axis-aligned at origin (%g, %g, %g) mm with spacing (%g, %g, %g) mm, ignoring "
-        "the rotation, so it is not in world RAS coordinates",
-        path, grid.origin[0], grid.origin[1], grid.origin[2], grid.spacing[0], grid.spacing[1],
-        grid.spacing[2]));
+    for (int row = 0; row < 3; ++row) grid.origin[row] = affine[row][3];
   }
   absl::StatusOr<Volume> volume = Volume::CreateWhole(grid, type, std::move(data));
   if (!volume.ok()) return WithPath(path, volume.status());

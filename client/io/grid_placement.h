@@ -18,8 +18,9 @@ inline constexpr double kObliqueTolerance = 1e-5;
 
 // Builds the VolumeFile for samples stored in index order (x fastest) with index-to-world (RAS
 // mm) transform `affine`, following the frame rules documented on VolumeFile: flips axes with a
-// negative scale when the affine is diagonal up to signs, otherwise keeps the samples and adds an
-// "oblique" warning. `data` holds dims.prod() little-endian samples of `type`.
+// negative scale when the affine is diagonal up to signs, otherwise keeps the samples and puts the
+// normalised columns into the grid's direction. `data` holds dims.prod() little-endian samples of
+// `type`. Errors (naming `path`): a non-finite entry, a zero column, a singular direction.
 absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& affine,
                                        const Index3& dims, VoxelType type,
                                        std::vector<std::byte> data);

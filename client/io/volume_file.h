@@ -18,14 +18,15 @@ using Affine = std::array<std::array<double, 4>, 4>;
 // mesh made in FSL/FreeSurfer/nibabel world coordinates lines up without conversion. Readers of
 // LPS formats (NRRD, MetaImage) negate x and y to land in the same frame.
 //
-// The core Volume is axis-aligned with positive spacing, so:
+// Frame rules:
 //  - When the file's index-to-world affine is diagonal up to axis signs, the samples are reordered
-//    (flipped along every axis with a negative scale) so that `volume` is exact in world RAS mm:
-//    volume.Sample(p) is the file's value at world point p.
+//    (flipped along every axis with a negative scale) so that `volume` is axis-aligned with
+//    positive spacing (identity direction) and exact in world RAS mm: volume.Sample(p) is the
+//    file's value at world point p. Such volumes give the same bits as before directions existed.
 //  - When the affine rotates, shears or permutes axes ("oblique"), `volume` keeps the file's
-//    sample order, its origin is the affine's translation and its spacing the affine's column
-//    lengths (pixdim for a consistent header): the scanner-aligned frame with the rotation
-//    dropped. A warning says so; map mesh points into that frame with `affine` when it matters.
+//    sample order; its origin is the affine's translation, its spacing the affine's column
+//    lengths and its direction the normalised columns. It is exact in world RAS mm too: a mesh
+//    in scanner coordinates lines up with it.
 struct VolumeFile {
   Volume volume;
   // Human-readable notes about approximations made while reading (each names the file).

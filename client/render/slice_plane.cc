@@ -33,12 +33,16 @@ absl::StatusOr<SlicePlane> MakeSlicePlane(const Volume& volume, int axis, double
     return absl::InvalidArgumentError(
         absl::StrCat("--panel-size: must be at least 8 pixels, got ", panel_size));
   }
-  const GridGeometry& g = volume.grid();
-  std::array<double, 3> lo{}, hi{};
+  // The world bounding box of the sampled region: for an oblique grid the plane spans the whole
+  // rotated parallelepiped, and pixels outside it are the renderer's background.
+  Vec3 index_lo, index_hi;
   for (int a = 0; a < 3; ++a) {
-    lo[a] = g.origin[a] + static_cast<double>(volume.lo()[a]) * g.spacing[a];
-    hi[a] = g.origin[a] + static_cast<double>(volume.hi()[a] - 1) * g.spacing[a];
+    index_lo[a] = static_cast<double>(volume.lo()[a]);
+    index_hi[a] = static_cast<double>(volume.hi()[a] - 1);
   }
+  const std::array<Vec3, 2> box = WorldBounds(volume.grid(), index_lo, index_hi);
+  const Vec3& lo = box[0];
+  const Vec3& hi = box[1];
   if (!(position >= lo[axis] && position <= hi[axis])) {
     return absl::InvalidArgumentError(absl::StrCat("--position: ", position,
                                                    " mm is outside the volume's ", kAxisNames[axis],

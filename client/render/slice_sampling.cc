@@ -33,13 +33,19 @@ SliceSamples SampleSlice(const Volume& volume, const Mesh& mesh, const SlicePlan
       const size_t i = static_cast<size_t>(row) * plane.width + column;
       const Vec3 p = plane.PixelCentre(column, row);
       // Pixel centres lie inside the sampled box; clamping only absorbs the last bit of rounding.
-      s.trilinear[i] = volume.SampleIndex(volume.ClampToGrid(volume.ContinuousIndex(p)));
+      // An oblique grid's plane spans its world bounds, whose corners lie outside the rotated
+      // grid: those pixels stay NaN (drawn as background) instead of repeating the boundary.
+      const Vec3 u = volume.ContinuousIndex(p);
+      if (volume.axis_aligned() || volume.Contains(u)) {
+        s.trilinear[i] = volume.SampleIndex(volume.ClampToGrid(u));
+      }
       const std::optional<PlaneTetLocator::Hit> hit = locator.Locate(p);
       if (!hit.has_value()) continue;
       const Tet& tet = mesh.tets[static_cast<size_t>(hit->tet)];
       double linear = 0.0;
       for (int c = 0; c < 4; ++c) linear += hit->weights[c] * mesh.values[tet[c]];
       s.linear[i] = linear;
+      if (std::isnan(s.trilinear[i])) continue;  // a --clamp mesh outside an oblique grid
       s.discrepancy[i] = std::abs(s.trilinear[i] - linear) / norm_coeff;
       s.max_discrepancy = std::max(s.max_discrepancy, s.discrepancy[i]);
       sum += s.discrepancy[i];

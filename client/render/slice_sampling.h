@@ -12,10 +12,11 @@ namespace tetrefine::render {
 
 // What a figure shows of one mesh on one plane, per pixel of plane.width x plane.height, row 0
 // at the top, index row * width + column, sampled at the pixel centres:
-//   trilinear:   the volume's trilinear value (paper eq. 1), volume value units;
+//   trilinear:   the volume's trilinear value (paper eq. 1), volume value units; NaN outside an
+//                oblique grid (its plane spans the rotated grid's world bounds);
 //   linear:      the mesh's linear interpolation of its vertex values, NaN where no tet
 //                contains the pixel centre;
-//   discrepancy: |trilinear - linear| / norm_coeff (paper eq. 3), NaN where linear is.
+//   discrepancy: |trilinear - linear| / norm_coeff (paper eq. 3), NaN where either is.
 // sections: the tet-plane intersection polygons, whose sides are the mesh's edges on the plane.
 struct SliceSamples {
   SlicePlane plane;
@@ -23,7 +24,7 @@ struct SliceSamples {
   std::vector<double> linear;
   std::vector<double> discrepancy;
   std::vector<TetSection> sections;
-  int64_t covered_pixels = 0;     // pixels with a linear value
+  int64_t covered_pixels = 0;     // pixels with a discrepancy (both values)
   double max_discrepancy = 0.0;   // over covered pixels
   double mean_discrepancy = 0.0;  // over covered pixels
 };

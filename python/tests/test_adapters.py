@@ -81,17 +81,37 @@ def test_an_oblique_affine_becomes_a_direction(server):
     assert volume.origin == [4.0, 5.0, 6.0]
     np.testing.assert_array_equal(volume.data, data)
 
-    from tetrefine._protocol import Protocol
-    from tetrefine.v1 import tetrefine_pb2
-    if Protocol(tetrefine_pb2).direction_field is not None:
-        return  # the protocol carries it: test_protocol covers what is sent
+    # The server places the volume in its rotated frame: refining the rotated mesh gives the
+    # rotated refinement of the axis-aligned run (same tets, points up to rounding). The mesh is
+    # jittered so that no two edges tie exactly (ties break by world coordinates).
+    points, tets = box_mesh((1, 2, 3), (10, 16, 18), (2, 2, 2))
+    points = points + np.random.default_rng(5).uniform(-0.2, 0.2, points.shape)
+    origin = np.array(volume.origin)
     with tetrefine.Client(server.target) as client:
-        with pytest.raises(tetrefine.TetrefineError, match="direction: .*VolumeHeader.direction"
-                           ) as error:
-            client.refine(volume.data, volume.spacing, volume.origin,
-                          *box_mesh((5, 6, 7), (8, 9, 10), (1, 1, 1)), 0.1,
-                          direction=volume.direction)
-        assert error.value.code == grpc.StatusCode.UNIMPLEMENTED
+        aligned = client.refine(volume.data, volume.spacing, (0, 0, 0), points, tets, 0.02,
+                                max_iterations=3)
+        oblique = client.refine(volume.data, volume.spacing, volume.origin,
+                                points @ volume.direction.T + origin, tets, 0.02,
+                                max_iterations=3, direction=volume.direction)
+    assert len(aligned.tets) > len(tets)
+    np.testing.assert_array_equal(oblique.tets, aligned.tets)
+    np.testing.assert_allclose(oblique.points, aligned.points @ volume.direction.T + origin,
+                               atol=1e-9)
+    np.testing.assert_allclose(oblique.values, aligned.values, atol=1e-9)
+
+
+def test_fit_to_an_oblique_volume_lands_inside_and_keeps_orientation():
+    mirror = np.array([[0.8, -0.6, 0.0], [0.6, 0.8, 0.0], [0.0, 0.0, -1.0]])  # det -1
+    grid = tetrefine.VolumeGrid(np.zeros((12, 10, 8)), [1.0, 2.0, 3.0], [4.0, 5.0, 6.0], mirror)
+    points, tets = box_mesh((0, 0, 0), (1, 1, 1), (2, 2, 2))
+    fitted = tetrefine.fit_to_volume(points, grid)
+    u = np.linalg.solve(mirror @ np.diag(grid.spacing), (fitted - grid.origin).T).T
+    assert u.min() >= 1.0 - 1e-9
+    assert (u.max(axis=0) <= np.array([10, 8, 6]) + 1e-9).all()
+    p = fitted[tets]
+    volume6 = np.einsum("ij,ij->i", p[:, 1] - p[:, 0],
+                        np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]))
+    assert (volume6 > 0).all()
 
 
 def test_a_meshio_mesh_in():

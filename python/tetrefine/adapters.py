@@ -112,26 +112,35 @@ def volume_from_nibabel(image):
 def fit_to_volume(points, grid):
     """Points scaled per axis and moved so their bounding box becomes the volume's sampled box
     less one voxel on every side (at most a quarter of the box): what `tetrefine refine
-    --fit-mesh-to-volume` does (client/cli/mesh_placement.cc), to the bit. For meshes made in
-    their own unit frame. `grid` is a VolumeGrid with direction None; returns (n, 3) float64.
+    --fit-mesh-to-volume` does (client/cli/mesh_placement.cc), to the bit for an axis-aligned
+    grid. For an oblique grid (direction set) the box is the index box less one sample, mapped
+    through the grid's affine (index x reversed when the direction mirrors, so tets keep their
+    orientation). For meshes made in their own unit frame. Returns (n, 3) float64.
     """
-    if grid.direction is not None:
-        raise invalid("grid", "fit_to_volume needs an axis-aligned volume (direction None)")
     points = np.asarray(points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
         raise invalid("points", f"expected shape (n, 3) with n > 0, got {points.shape}")
-    lo, hi = grid.world_box()
-    spacing = np.asarray(grid.spacing, dtype=np.float64)
-    margin = np.minimum(spacing, 0.25 * (hi - lo))
-    to_lo, to_hi = lo + margin, hi - margin
     p_lo, p_hi = points.min(axis=0), points.max(axis=0)
     flat = ~(p_hi > p_lo)
     if flat.any():
         raise invalid("points", f"the mesh is flat along axis {'xyz'[int(np.argmax(flat))]}, "
                       "so it cannot be fitted to the volume")
     t = (points - p_lo) / (p_hi - p_lo)
-    # The extremes map exactly onto the target box, whatever the rounding in between.
-    return np.where(t <= 0.0, to_lo, np.where(t >= 1.0, to_hi, to_lo + t * (to_hi - to_lo)))
+    spacing = np.asarray(grid.spacing, dtype=np.float64)
+    if grid.direction is None:
+        lo, hi = grid.world_box()
+        margin = np.minimum(spacing, 0.25 * (hi - lo))
+        to_lo, to_hi = lo + margin, hi - margin
+        # The extremes map exactly onto the target box, whatever the rounding in between.
+        return np.where(t <= 0.0, to_lo, np.where(t >= 1.0, to_hi, to_lo + t * (to_hi - to_lo)))
+    direction = np.asarray(grid.direction, dtype=np.float64).reshape(3, 3)
+    extent = np.asarray(grid.data.shape[:3], dtype=np.float64) - 1
+    margin = np.minimum(1.0, 0.25 * extent)
+    to_lo, to_hi = margin, extent - margin
+    if np.linalg.det(direction) < 0:
+        t[:, 0] = 1.0 - t[:, 0]
+    u = np.where(t <= 0.0, to_lo, np.where(t >= 1.0, to_hi, to_lo + t * (to_hi - to_lo)))
+    return np.asarray(grid.origin, dtype=np.float64) + (u * spacing) @ direction.T
 
 
 class TetMesh:

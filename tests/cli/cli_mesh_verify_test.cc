@@ -184,6 +184,51 @@ TEST_F(CliMeshVerify, InfoOnAVolume) {
   }
 }
 
+// An oblique volume (rotated about z and mirrored in k, det -1, as radiological MRI often is):
+// info shows the direction without a warning, `mesh` builds the grid mesh in its world frame
+// (inside, positively oriented), `refine --fit-mesh-to-volume` fits a mesh into the rotated box,
+// and `slice` cuts it.
+TEST_F(CliMeshVerify, ObliqueVolumeMeshesRefinesAndSlicesInItsFrame) {
+  const Volume bump = BumpVolume({11, 9, 7}, {-5.0, 0.0, 10.0}, {1.0, 1.5, 2.0});
+  GridGeometry g = bump.grid();
+  g.direction = {0.8, -0.6, 0.0, 0.6, 0.8, 0.0, 0.0, 0.0, -1.0};
+  absl::StatusOr<Volume> oblique = Volume::CreateWhole(g, bump.type(), bump.data());
+  ASSERT_TRUE(oblique.ok()) << oblique.status();
+  volume_ = dir_.File("oblique.nii");
+  WriteVolume(volume_, *oblique);
+
+  const ProcessResult info = RunTetrefine({"info", volume_});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_EQ(info.err, "");
+  for (const char* text : {"direction", "oblique", "0.8", "-0.6"}) {
+    EXPECT_TRUE(absl::StrContains(info.out, text)) << text << " missing from\n" << info.out;
+  }
+
+  const io::MeshFile mesh = MakeMesh("grid.vtu", {"--block", "3"});
+  EXPECT_EQ(mesh.mesh.tets.size(), 5u * 4 * 3 * 2);
+  EXPECT_TRUE(CheckFaces(mesh.mesh.points, mesh.mesh.tets).ok());
+  // Its corner (0, 0, 0) is the volume's origin and (10, 0, 0) lies along the first column.
+  EXPECT_EQ(mesh.mesh.points[0], (Vec3{-5.0, 0.0, 10.0}));
+  const ProcessResult verified = Verify(dir_.File("grid.vtu"), {"--epsilon", "0.05"});
+  EXPECT_EQ(verified.exit_code, 0) << verified.err << verified.out;
+  // Same total volume as the axis-aligned grid (1440 mm^3): a rotation keeps volumes (up to the
+  // float32 sform's rounding).
+  EXPECT_TRUE(absl::StrContains(verified.out, "total volume          1440.0")) << verified.out;
+
+  const std::string source = TETREFINE_SOURCE_DIR;
+  const ProcessResult refine = RunTetrefine(
+      {"refine", "--volume", volume_, "--mesh", source + "/examples/unit_cube_1782tets.mesh",
+       "--fit-mesh-to-volume", "--epsilon", "0.1", "--max-iterations", "2", "--output",
+       dir_.File("cube.vtu"), "--quiet"});
+  ASSERT_EQ(refine.exit_code, 0) << refine.err;
+  EXPECT_EQ(Verify(dir_.File("cube.vtu")).exit_code, 0);
+
+  const ProcessResult slice = RunTetrefine({"slice", "--volume", volume_, "--mesh",
+                                            dir_.File("grid.vtu"), "--output", dir_.File("s.png")});
+  EXPECT_EQ(slice.exit_code, 0) << slice.err;
+  EXPECT_TRUE(FileExists(dir_.File("s.png")));
+}
+
 TEST_F(CliMeshVerify, InfoOnAMesh) {
   MakeMesh("grid.vtu", {"--block", "3"});
   const ProcessResult run = RunTetrefine({"info", dir_.File("grid.vtu")});

@@ -84,7 +84,23 @@ TEST_P(RealData, StructuredAndUnstructuredMeshesRefineConformally) {
   const Vec3 block_hi = {g.origin[0] + blocks[0] * c.block * g.spacing[0],
                          g.origin[1] + blocks[1] * c.block * g.spacing[1],
                          g.origin[2] + blocks[2] * c.block * g.spacing[2]};
-  const Mesh structured = testing::FiveTetMesh(g.origin, block_hi, blocks);
+  // The meshes are laid out in the grid's axis-aligned frame and, for an oblique volume (the EPI
+  // and T1 files), rotated into its world frame: p -> origin + direction * (p - origin).
+  auto to_volume_frame = [&](Mesh& mesh) {
+    if (volume.axis_aligned()) return;
+    const Mat3& d = g.direction;
+    for (Vec3& p : mesh.points) {
+      const Vec3 r{p[0] - g.origin[0], p[1] - g.origin[1], p[2] - g.origin[2]};
+      for (int row = 0; row < 3; ++row) {
+        p[row] = g.origin[row] + d[3 * row] * r[0] + d[3 * row + 1] * r[1] + d[3 * row + 2] * r[2];
+      }
+    }
+    if (Determinant(d) < 0.0) {
+      for (Tet& t : mesh.tets) std::swap(t[2], t[3]);
+    }
+  };
+  Mesh structured = testing::FiveTetMesh(g.origin, block_hi, blocks);
+  to_volume_frame(structured);
   Mesh cube = testing::ReadMeditForTest(DataPath("unit_cube_1782tets.mesh"));
   for (auto& p : cube.points) {
     for (int a = 0; a < 3; ++a) {
@@ -92,6 +108,7 @@ TEST_P(RealData, StructuredAndUnstructuredMeshesRefineConformally) {
       p[a] = g.origin[a] + margin + (p[a] + 0.5) * (hi[a] - g.origin[a] - 2 * margin);
     }
   }
+  to_volume_frame(cube);
   for (auto& t : cube.tets) {
     if (SignedVolume6(cube.points[t[0]], cube.points[t[1]], cube.points[t[2]], cube.points[t[3]]) <
         0) {

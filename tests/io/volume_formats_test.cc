@@ -140,6 +140,63 @@ TEST(IoMetaImageTest, ErrorsNameTheFile) {
               HasSubstr("nowhere.raw"));
 }
 
+// An oblique LPS frame: axis i along 2 * (0.6, 0.8, 0), j along 3 * (-0.8, 0.6, 0), k along
+// 4 * (0, 0, 1) (exact in decimal text). The reader keeps the storage order, puts the unit columns
+// (converted to RAS) in the direction and the column lengths in the spacing, without a warning,
+// and every voxel samples its own value at its RAS position.
+constexpr double kObliqueAxes[3][3] = {{1.2, 1.6, 0.0}, {-2.4, 1.8, 0.0}, {0.0, 0.0, 4.0}};
+
+void ExpectObliqueLpsVoxelsAtRasPoints(const VolumeFile& file, const Vec3& lps_origin) {
+  EXPECT_TRUE(file.warnings.empty());
+  const GridGeometry& g = file.volume.grid();
+  EXPECT_FALSE(file.volume.axis_aligned());
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(g.spacing[a], 2.0 + a, 1e-12) << a;
+  // RAS: rows x and y negated.
+  const Mat3 expected{-0.6, 0.8, 0.0, -0.8, -0.6, 0.0, 0.0, 0.0, 1.0};
+  for (int i = 0; i < 9; ++i) EXPECT_NEAR(g.direction[i], expected[i], 1e-12) << i;
+  const std::vector<int16_t> values = Ramp();
+  for (int k = 0; k < kNz; ++k) {
+    for (int j = 0; j < kNy; ++j) {
+      for (int i = 0; i < kNx; ++i) {
+        Vec3 lps = lps_origin;
+        for (int w = 0; w < 3; ++w) {
+          lps[w] += i * kObliqueAxes[0][w] + j * kObliqueAxes[1][w] + k * kObliqueAxes[2][w];
+        }
+        EXPECT_NEAR(file.volume.Sample({-lps[0], -lps[1], lps[2]}), values[(k * kNy + j) * kNx + i],
+                    1e-9)
+            << i << " " << j << " " << k;
+      }
+    }
+  }
+}
+
+TEST(IoNrrdTest, ObliqueSpaceDirectionsBecomeTheDirection) {
+  ScratchDir dir;
+  const std::string path = dir.File("oblique.nrrd");
+  const std::string header = absl::StrCat(
+      "NRRD0004\ntype: short\ndimension: 3\nsizes: ", kNx, " ", kNy, " ", kNz,
+      "\nspace: left-posterior-superior\n", "space directions: (1.2,1.6,0) (-2.4,1.8,0) (0,0,4)\n",
+      "space origin: (10,-20,30)\nkinds: domain domain domain\nendian: little\n",
+      "encoding: raw\n\n");
+  WriteBytes(path, header + Int16Samples(Ramp(), false));
+  absl::StatusOr<VolumeFile> file = ReadVolume(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  ExpectObliqueLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+}
+
+TEST(IoMetaImageTest, ObliqueTransformMatrixBecomesTheDirection) {
+  ScratchDir dir;
+  const std::string header = absl::StrCat(
+      "ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\n",
+      "TransformMatrix = 0.6 0.8 0 -0.8 0.6 0 0 0 1\nOffset = 10 -20 30\n",
+      "ElementSpacing = 2 3 4\nDimSize = ", kNx, " ", kNy, " ", kNz,
+      "\nElementType = MET_SHORT\nElementDataFile = LOCAL\n");
+  WriteBytes(dir.File("oblique.mha"), header + Int16Samples(Ramp(), false));
+  absl::StatusOr<VolumeFile> file = ReadVolume(dir.File("oblique.mha"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  ExpectObliqueLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+}
+
 TEST(IoReadVolumeTest, UnknownExtensionNamesTheFile) {
   for (const char* name : {"scan.dcm", "volume.tif", "noextension"}) {
     const absl::Status status = ReadVolume(name).status();

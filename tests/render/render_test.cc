@@ -188,6 +188,46 @@ TEST(SampleSlice, ALinearFieldHasNoDiscrepancyAnywhere) {
   }
 }
 
+// An oblique grid (rotated 30 degrees about z): the plane spans the rotated grid's world bounds,
+// pixels inside the grid sample the field, pixels outside are NaN (background), and a mesh in the
+// grid's frame interpolates the linear field exactly where it covers the plane.
+TEST(SampleSlice, AnObliqueGridIsCutInItsWorldBoundsAndBlankOutside) {
+  GridGeometry g = Grid({11, 11, 11}, {3, -2, 1}, {1, 1, 1});
+  const double c = std::cos(M_PI / 6), s = std::sin(M_PI / 6);
+  g.direction = {c, -s, 0, s, c, 0, 0, 0, 1};
+  const Volume volume = AnalyticVolume(g, Linear);
+  Mesh mesh = FiveTetMesh({0, 0, 0}, {10, 10, 10}, {2, 3, 2});
+  for (Vec3& p : mesh.points) p = WorldOfIndex(g, p);
+  mesh.values = VertexValues(volume, mesh);
+  absl::StatusOr<SlicePlane> plane = MakeSlicePlane(volume, 2, 5.3, 60);
+  ASSERT_TRUE(plane.ok()) << plane.status();
+  // World bounds of the rotated square: x in [3 - 10 s, 3 + 10 c], y in [-2, -2 + 10 (s + c)].
+  EXPECT_NEAR(plane->u_lo, 3 - 10 * s, 1e-12);
+  EXPECT_NEAR(plane->u_hi, 3 + 10 * c, 1e-12);
+  EXPECT_NEAR(plane->v_hi, -2 + 10 * (s + c), 1e-12);
+  const SliceSamples samples = SampleSlice(volume, mesh, *plane, 100.0);
+  int inside = 0, outside = 0;
+  for (size_t i = 0; i < samples.trilinear.size(); ++i) {
+    const Vec3 p =
+        plane->PixelCentre(static_cast<int>(i % plane->width), static_cast<int>(i / plane->width));
+    if (volume.Contains(volume.ContinuousIndex(p))) {
+      ++inside;
+      EXPECT_NEAR(samples.trilinear[i], Linear(p), 1e-9) << i;
+    } else {
+      ++outside;
+      EXPECT_TRUE(std::isnan(samples.trilinear[i])) << i;
+      EXPECT_TRUE(std::isnan(samples.discrepancy[i])) << i;
+    }
+    if (!std::isnan(samples.linear[i])) {
+      EXPECT_NEAR(samples.linear[i], Linear(p), 1e-9) << i;
+    }
+  }
+  EXPECT_GT(inside, 0);
+  EXPECT_GT(outside, 0);
+  EXPECT_GT(samples.covered_pixels, 0);
+  EXPECT_LT(samples.max_discrepancy, 1e-12);
+}
+
 // A step between x = 5 and x = 6 and a mesh with vertices every 2 mm along x: the mesh ramps
 // over [4, 6] where the volume ramps over [5, 6]. Expected discrepancy at x (normCoeff 1):
 // |trilinear(x) - linear(x)|, zero outside [4, 6], 0.5 at x = 5.

@@ -24,6 +24,7 @@
 #include "tests/support/geometry.h"
 #include "tests/support/mesh_checks.h"
 #include "tools/reproduce/case_meshes.h"
+#include "tools/reproduce/cases.h"
 #include "tools/reproduce/mesh_scores.h"
 #include "tools/reproduce/plaza_peer.h"
 #include "tools/reproduce/subprocess.h"
@@ -93,6 +94,75 @@ TEST(MaskedBlockMeshTest, KeepsBlocksWhoseCornersAllExceedTheThreshold) {
   EXPECT_EQ(m.tets.size(), 5u * 2 * 4 * 2);  // 2 of 4 blocks in x, 4 in y, 2 in z
   for (const Vec3& p : m.points) EXPECT_LE(p[0], 4.0);
   EXPECT_TRUE(CheckFaces(m.points, m.tets).ok());
+}
+
+// With an oblique grid (a rotation, then a mirrored one) the case meshes are built in the grid's
+// frame: every vertex lies inside the rotated volume, every tet is positively oriented, and the
+// block mesh covers the same volume as on the axis-aligned grid.
+TEST(MaskedBlockMeshTest, ObliqueGridMeshesLieInsideItsFrame) {
+  const double c = std::cos(0.7), s = std::sin(0.7);
+  for (bool mirror : {false, true}) {
+    SCOPED_TRACE(mirror ? "mirrored" : "rotated");
+    GridGeometry g;
+    g.dims = {9, 7, 5};
+    g.spacing = {1.5, 2.0, 3.0};
+    g.origin = {-20.0, 4.0, 9.0};
+    g.direction = {c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c};  // about y
+    if (mirror) {
+      for (int row = 0; row < 3; ++row) g.direction[3 * row + 1] *= -1.0;
+    }
+    const Volume volume =
+        bench::SampleField(g, VoxelType::kFloat64, [](const Vec3& p) { return p[0]; });
+    ASSERT_FALSE(volume.axis_aligned());
+    auto check = [&](const Mesh& m, const char* what) {
+      SCOPED_TRACE(what);
+      for (size_t i = 0; i < m.points.size(); ++i) {
+        EXPECT_TRUE(volume.Contains(volume.ContinuousIndex(m.points[i]))) << "point " << i;
+      }
+      double total = 0.0;
+      for (const Tet& t : m.tets) {
+        const double v6 =
+            SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]);
+        EXPECT_GT(v6, 0.0);
+        total += v6 / 6.0;
+      }
+      EXPECT_TRUE(CheckFaces(m.points, m.tets).ok());
+      return total;
+    };
+    const Mesh blocks = MaskedBlockMesh(volume, -1e300, 2);
+    EXPECT_EQ(blocks.tets.size(), 5u * 4 * 3 * 2);
+    EXPECT_NEAR(check(blocks, "blocks"), (8 * 1.5) * (6 * 2.0) * (4 * 3.0), 1e-9);
+    check(
+        FitMeshInBox(testing::FiveTetMesh({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}, {2, 2, 2}), g, 0.05),
+        "fitted cube");
+  }
+}
+
+// Every case and study mesh of the full reproduction lies inside its volume, in the volume's
+// frame: the real EPI and T1 volumes are oblique, so a mesh built from an axis-aligned world box
+// would leave them.
+TEST(ReproduceInputsTest, EveryCaseMeshLiesInsideItsVolume) {
+  const Inputs in = BuildInputs({.data_dir = TETREFINE_SHARED_DATA_DIR, .quick = false});
+  int oblique = 0;
+  auto check = [](const std::string& what, const Volume& volume, const Mesh& mesh) {
+    ASSERT_FALSE(mesh.tets.empty()) << what;
+    int64_t outside = 0;
+    for (const Vec3& p : mesh.points) outside += !volume.Contains(volume.ContinuousIndex(p));
+    EXPECT_EQ(outside, 0) << what;
+    int64_t inverted = 0;
+    for (const Tet& t : mesh.tets) {
+      const auto& q = mesh.points;
+      inverted += SignedVolume6(q[t[0]], q[t[1]], q[t[2]], q[t[3]]) <= 0.0;
+    }
+    EXPECT_EQ(inverted, 0) << what;
+  };
+  for (const CaseInput& c : in.cases) {
+    oblique += !c.volume->axis_aligned();
+    check(c.name, *c.volume, c.mesh);
+  }
+  for (const StudyInput& s : in.study) check(s.label, *s.volume, s.mesh);
+  for (const std::string& note : in.notes) std::printf("note: %s\n", note.c_str());
+  EXPECT_GE(oblique, 4) << "the EPI and T1 cases (blocks and cube each) are oblique";
 }
 
 // The Plaza driver is a separate implementation (numpy) of core's sampling and of the

@@ -165,6 +165,23 @@ TEST_F(ShardedRefineTest, StructuredMeshEqualsUnsharded) {
   ExpectShardedEqualsUnsharded(c.volume, c.mesh, Options(0.004, 5), {1, 2, 3, 4});
 }
 
+// An oblique volume (rotated about two axes, the mesh in its world frame): the parts' slabs are
+// chosen in index space and sent with the same direction, so sharding still gives the bits of the
+// unsharded run.
+TEST_F(ShardedRefineTest, ObliqueVolumeEqualsUnsharded) {
+  const StructuredCase c;
+  GridGeometry g = c.volume.grid();
+  const double ca = std::cos(0.5), sa = std::sin(0.5), cb = std::cos(0.3), sb = std::sin(0.3);
+  g.direction = {ca, -sa * cb, sa * sb, sa, ca * cb, -ca * sb, 0.0, sb, cb};  // Rz(0.5) Rx(0.3)
+  g.origin = {-40.0, 12.5, 3.0};
+  absl::StatusOr<Volume> volume = Volume::CreateWhole(g, c.volume.type(), c.volume.data());
+  ASSERT_TRUE(volume.ok()) << volume.status();
+  Mesh mesh = c.mesh;
+  // TestVolume has origin 0 and spacing 1: mesh coordinates are grid indices.
+  for (Vec3& p : mesh.points) p = WorldOfIndex(g, p);
+  ExpectShardedEqualsUnsharded(*volume, mesh, Options(0.004, 5), {1, 3});
+}
+
 TEST_F(ShardedRefineTest, UnitCubeInAnalyticVolumeEqualsUnsharded) {
   const UnitCubeCase c;
   ASSERT_EQ(c.mesh.tets.size(), 1782u);

@@ -21,16 +21,16 @@ std::vector<uint64_t> Seeds(int count);
 // A random tet with positive orientation and quality above min_quality.
 std::array<Vec3, 4> RandomTet(std::mt19937_64& rng, double min_quality = 0.05);
 
-// A grid-aligned volume from a function of world position.
+// A volume from a function of world position, sampled where the grid's affine puts each sample
+// (for the identity direction exactly origin + index * spacing).
 template <typename F>
 Volume AnalyticVolume(const GridGeometry& g, F f) {
   std::vector<double> v(g.dims[0] * g.dims[1] * g.dims[2]);
   for (int64_t k = 0; k < g.dims[2]; ++k)
     for (int64_t j = 0; j < g.dims[1]; ++j)
       for (int64_t i = 0; i < g.dims[0]; ++i)
-        v[i + g.dims[0] * (j + g.dims[1] * k)] =
-            f(Vec3{g.origin[0] + i * g.spacing[0], g.origin[1] + j * g.spacing[1],
-                   g.origin[2] + k * g.spacing[2]});
+        v[i + g.dims[0] * (j + g.dims[1] * k)] = f(WorldOfIndex(
+            g, {static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)}));
   return *Volume::FromDoubles(g, v);
 }
 

@@ -287,6 +287,26 @@ std::vector<MalformedRequest> MalformedRequests() {
          VolumeHeader(r).mutable_origin()->set_y(std::numeric_limits<double>::infinity());
        },
        {"volume_header.origin.y", "inf"}},
+      {"DirectionWrongCount",
+       [](Requests& r) {
+         for (double d : {1.0, 0.0, 0.0, 1.0}) VolumeHeader(r).add_direction(d);
+       },
+       {"volume_header.direction", "0 (identity) or 9 values", "got 4"}},
+      {"DirectionSingular",
+       [](Requests& r) {
+         // Columns 0 and 1 both along world x.
+         for (double d : {1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0}) {
+           VolumeHeader(r).add_direction(d);
+         }
+       },
+       {"volume_header.direction", "singular"}},
+      {"DirectionNaN",
+       [](Requests& r) {
+         for (double d : {1.0, 0.0, 0.0, 0.0, kNaN, 0.0, 0.0, 0.0, 1.0}) {
+           VolumeHeader(r).add_direction(d);
+         }
+       },
+       {"volume_header.direction[4]", "nan"}},
       {"VoxelTypeUnknown",
        [](Requests& r) { VolumeHeader(r).set_voxel_type(static_cast<v1::VoxelType>(42)); },
        {"volume_header.voxel_type", "42"}},

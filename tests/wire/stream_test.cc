@@ -106,6 +106,37 @@ size_t Find(const std::vector<v1::RefineRequest>& requests, v1::RefineRequest::K
   return 0;
 }
 
+// An oblique direction travels as 9 doubles and comes back to the bit; the identity travels as
+// nothing, so axis-aligned requests are the bytes they always were.
+TEST(WireRequestStream, DirectionRoundTripsAndTheIdentityIsNotSent) {
+  const Volume aligned = TestSlab({10, 9, 8}, {0, 1, 0}, {10, 9, 7});
+  const Mesh mesh = TestMesh(false);
+  std::vector<v1::RefineRequest> requests = Requests(RequestOptions{}, aligned, mesh, 100);
+  EXPECT_EQ(
+      requests[Find(requests, v1::RefineRequest::kVolumeHeader)].volume_header().direction_size(),
+      0);
+  GridGeometry g = aligned.grid();
+  const double c = std::cos(0.4), s = std::sin(0.4);
+  g.direction = {c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c};
+  g.origin = {3.0, -2.0, 1.0};
+  absl::StatusOr<Volume> oblique =
+      Volume::Create(g, aligned.lo(), aligned.hi(), aligned.type(), aligned.data());
+  ASSERT_TRUE(oblique.ok()) << oblique.status();
+  requests = Requests(RequestOptions{}, *oblique, mesh, 100);
+  const v1::VolumeHeader& header =
+      requests[Find(requests, v1::RefineRequest::kVolumeHeader)].volume_header();
+  ASSERT_EQ(header.direction_size(), 9);
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(header.direction(i), g.direction[i]) << i;
+  RequestReader reader(ServiceLimits{});
+  ASSERT_TRUE(Read(requests, reader).ok());
+  const RefineInput input = reader.Take();
+  EXPECT_EQ(input.volume.grid().direction, g.direction);
+  EXPECT_EQ(input.volume.grid().origin, g.origin);
+  EXPECT_FALSE(input.volume.axis_aligned());
+  const Vec3 p = WorldOfIndex(g, {2.5, 3.25, 4.0});
+  EXPECT_EQ(input.volume.Sample(p), oblique->Sample(p));
+}
+
 TEST(WireRequestStream, TetIndexOutOfRangeNamesTetAndCorner) {
   const absl::Status s = ReadEdited([](std::vector<v1::RefineRequest>& r) {
     // The second tet chunk starts at tet 4 (64 bytes = 4 tets); its tet 5 corner 2.

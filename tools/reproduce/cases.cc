@@ -134,13 +134,20 @@ void AddMarschnerLobb(int n, int block, const Mesh* cube, Inputs& in) {
   AddCubeCase(name, name, volume, cube, in);
 }
 
-// The box both heart grids cover.
+// The box both heart grids cover: the intersection of their world bounds. Exact for the
+// axis-aligned phantom grids; for an oblique grid the bounds enclose more than the grid samples,
+// so a shell built there could leave it (the phantoms never are oblique).
 std::pair<Vec3, Vec3> CommonBox(const GridGeometry& a, const GridGeometry& b) {
+  auto bounds = [](const GridGeometry& g) {
+    return WorldBounds(g, {0.0, 0.0, 0.0},
+                       {static_cast<double>(g.dims[0] - 1), static_cast<double>(g.dims[1] - 1),
+                        static_cast<double>(g.dims[2] - 1)});
+  };
+  const std::array<Vec3, 2> ba = bounds(a), bb = bounds(b);
   Vec3 lo, hi;
   for (int i = 0; i < 3; ++i) {
-    lo[i] = std::max(a.origin[i], b.origin[i]);
-    hi[i] = std::min(a.origin[i] + static_cast<double>(a.dims[i] - 1) * a.spacing[i],
-                     b.origin[i] + static_cast<double>(b.dims[i] - 1) * b.spacing[i]);
+    lo[i] = std::max(ba[0][i], bb[0][i]);
+    hi[i] = std::min(ba[1][i], bb[1][i]);
   }
   return {lo, hi};
 }
