@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "bench/support/field_volume.h"
@@ -27,6 +28,7 @@
 #include "tools/reproduce/cases.h"
 #include "tools/reproduce/mesh_scores.h"
 #include "tools/reproduce/plaza_peer.h"
+#include "tools/reproduce/report_markdown.h"
 #include "tools/reproduce/subprocess.h"
 #include "tools/reproduce/uniform_refine.h"
 
@@ -259,6 +261,45 @@ TEST(RunProcessTest, ReturnsTheExitStatusAndNamesAProgramThatCannotStart) {
   const absl::StatusOr<int> missing = RunProcess({"/nonexistent/program"});
   ASSERT_FALSE(missing.ok());
   EXPECT_NE(missing.status().message().find("/nonexistent/program"), std::string::npos);
+}
+
+// The findings give, for every method, how uniform 1:8 did at that method's lattice max error:
+// counted over the rows that ran, misses apart, whatever the method.
+TEST(ReportMarkdownTest, EveryMethodIsComparedWithUniformRefinement) {
+  ReportData d;
+  d.max_iterations = 4;
+  CaseRecord c;
+  c.name = "case";
+  auto row = [](const std::string& method, int64_t tets, bool reached, int64_t uniform_tets) {
+    MethodRow m;
+    m.method = method;
+    m.epsilon = 0.1;
+    m.tets = tets;
+    m.stop_reason = "converged";
+    m.uniform_at_max = {reached, reached ? 1 : -1, uniform_tets};
+    return m;
+  };
+  for (const auto& [tets, reached, uniform] : std::vector<std::tuple<int64_t, bool, int64_t>>{
+           {100, true, 800}, {100, true, 400}, {100, true, 50}, {100, false, 0}}) {
+    c.methods.push_back(row("tetrefine longest-edge", tets, reached, uniform));
+    c.methods.push_back(row("tetrefine paper", tets, true, 10 * tets));
+  }
+  MethodRow skipped = row("tetrefine paper", 7, true, 1);
+  skipped.not_run = "not asked";
+  c.methods.push_back(skipped);
+  d.cases.push_back(c);
+  const std::string report = ReportMarkdown(d);
+  EXPECT_NE(report.find("- **tetrefine longest-edge**: 4 runs; stopped: 4 converged"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("uniform 1:8 needed more tets in 2 runs, as many or fewer in 1, and did "
+                        "not get there within the cap in 1 (uniform / its tets: 0.5 / 4 / 8)"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("uniform 1:8 needed more tets in 4 runs, as many or fewer in 0, and did "
+                        "not get there within the cap in 0 (uniform / its tets: 10 / 10 / 10)"),
+            std::string::npos)
+      << report;
 }
 
 }  // namespace
