@@ -99,6 +99,12 @@ class Volume {
   // True when the grid's direction is the identity.
   bool axis_aligned() const { return axis_aligned_; }
 
+  // The row-major 3x3 matrix ContinuousIndex applies to p - origin when the grid is oblique:
+  // (direction * diag(spacing))^-1, computed once in Create. The identity when axis_aligned()
+  // (then ContinuousIndex divides by the spacing instead). For peers that must repeat
+  // ContinuousIndex to the bit (bench/peers/plaza_refine.py).
+  const Mat3& world_to_index() const { return world_to_index_; }
+
   // A point this far (in voxels) outside the grid's own box still counts as inside it: meshes
   // built to span a volume land there by rounding (origin + 11 * 5.74 gives index 11 + 2e-15).
   static constexpr double kGridBoundaryTolerance = 1e-6;

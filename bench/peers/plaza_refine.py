@@ -21,7 +21,9 @@ values are the same bits as core's.
 Input: a case directory as tetrefine_reproduce --peer_dir writes it:
   volume.npy  float64, shape (nz, ny, nx): the samples, x fastest (the Volume's own layout; the
               reproduction's volumes are axis-aligned in tetrefine's world frame)
-  case.json   {"origin": [x, y, z], "spacing": [x, y, z], "norm_coeff": max - min}
+  case.json   {"origin": [x, y, z], "spacing": [x, y, z], "norm_coeff": max - min} and, for an
+              oblique grid, "world_to_index": 9 values, row-major (core's
+              Volume::world_to_index(): continuous index = M (p - origin), summed left to right)
   mesh.vtu    the input tets in world coordinates (as tetrefine writes .vtu: inline binary or ascii
               arrays, uncompressed)
 Output (--output, else stdout): one JSON object, see plaza_refine() and score_mesh(); with
@@ -64,15 +66,18 @@ class CaseError(Exception):
 
 
 class Case:
-    """A volume on an axis-aligned grid and a tet mesh immersed in it."""
+    """A volume on a grid (axis-aligned, or oblique with world_to_index) and a tet mesh in it."""
 
-    def __init__(self, volume, origin, spacing, norm_coeff, points, tets):
+    def __init__(self, volume, origin, spacing, norm_coeff, points, tets, world_to_index=None):
         self.volume = np.ascontiguousarray(volume, dtype=np.float64)  # (nz, ny, nx)
         self.origin = np.asarray(origin, dtype=np.float64)  # (3,)
         self.spacing = np.asarray(spacing, dtype=np.float64)  # (3,)
         self.norm_coeff = float(norm_coeff)
         self.points = np.ascontiguousarray(points, dtype=np.float64)  # (V, 3)
         self.tets = np.ascontiguousarray(tets, dtype=np.int64)  # (T, 4)
+        # (3, 3) or None for an axis-aligned grid (then the index is (p - origin) / spacing).
+        self.world_to_index = (None if world_to_index is None else
+                               np.asarray(world_to_index, dtype=np.float64).reshape(3, 3))
 
     @property
     def dims(self):
@@ -194,7 +199,11 @@ def load_case(directory):
     points, tets = read_vtu(os.path.join(directory, "mesh.vtu"))
     if len(tets) == 0:
         raise CaseError(f"{directory}/mesh.vtu: no tetrahedra")
-    return Case(volume, origin, spacing, norm, points, tets)
+    world_to_index = meta.get("world_to_index")
+    if world_to_index is not None and (len(world_to_index) != 9 or
+                                       not all(np.isfinite(world_to_index))):
+        raise CaseError(f"{meta_path}: world_to_index needs 9 finite values")
+    return Case(volume, origin, spacing, norm, points, tets, world_to_index)
 
 
 def orient_positively(points, tets):
@@ -208,7 +217,15 @@ def orient_positively(points, tets):
 
 def sample(case, p):
     """Trilinear value at world points p (..., 3), as core's Volume::Sample (clamped to the box)."""
-    u = (p - case.origin) / case.spacing  # Volume::ContinuousIndex
+    if case.world_to_index is None:
+        u = (p - case.origin) / case.spacing  # Volume::ContinuousIndex, axis-aligned
+    else:
+        # Volume::ContinuousIndex, oblique: m[r][0] d0 + m[r][1] d1 + m[r][2] d2, left to right
+        # (numpy neither fuses nor reorders elementwise operations, so the bits are core's).
+        d = p - case.origin
+        m = case.world_to_index
+        u = np.stack([m[r, 0] * d[..., 0] + m[r, 1] * d[..., 1] + m[r, 2] * d[..., 2]
+                      for r in range(3)], axis=-1)
     dims = case.dims
     cell = []
     t = []

@@ -171,7 +171,10 @@ TEST(ReproduceInputsTest, EveryCaseMeshLiesInsideItsVolume) {
 // reproduction's scores; a difference would make Plaza's marks or figures differ from what core
 // would compute. Scored on an exported case with rough data and off-grid vertices, including
 // vertices on the volume's boundary (the clamp), it must agree with core.
-TEST(PlazaExportTest, ScriptScoresTheExportedCaseAsCoreDoes) {
+// With `direction` not the identity the grid is oblique: the mesh is built in the axis-aligned
+// frame and carried through the grid's affine, and the script must map world to index with the
+// exported world_to_index exactly as core does.
+void ExpectScriptScoresAsCore(const Mat3& direction) {
   const std::string python = "/usr/bin/python3";
   const std::string script = TETREFINE_SOURCE_DIR "/bench/peers/plaza_refine.py";
   const absl::StatusOr<int> numpy = RunProcess({python, "-c", "import numpy"});
@@ -185,8 +188,10 @@ TEST(PlazaExportTest, ScriptScoresTheExportedCaseAsCoreDoes) {
   g.dims = {7, 6, 5};
   g.origin = {-3.0, 1.0, 2.0};
   g.spacing = {1.5, 2.0, 0.75};
+  GridGeometry field_grid = g;
+  field_grid.direction = direction;
   const Volume volume =
-      bench::SampleField(g, VoxelType::kInt16, [&](const Vec3&) { return value(rng); });
+      bench::SampleField(field_grid, VoxelType::kInt16, [&](const Vec3&) { return value(rng); });
   const auto [lo, hi] = volume.ValueRange();
   const double norm = hi - lo;
   bench::CellLattice lattice;  // spans the whole box: boundary vertices, cells across voxels
@@ -204,9 +209,17 @@ TEST(PlazaExportTest, ScriptScoresTheExportedCaseAsCoreDoes) {
       if (p[a] > g.origin[a] + 1e-9 && p[a] < box_hi - 1e-9) p[a] += jitter(rng) * lattice.size[a];
     }
   }
+  if (!volume.axis_aligned()) {
+    for (Vec3& p : mesh.points) {
+      const Vec3 u{(p[0] - g.origin[0]) / g.spacing[0], (p[1] - g.origin[1]) / g.spacing[1],
+                   (p[2] - g.origin[2]) / g.spacing[2]};
+      p = WorldOfIndex(volume.grid(), u);
+    }
+  }
 
   const std::filesystem::path dir =
-      std::filesystem::path(::testing::TempDir()) / "plaza_export_test";
+      std::filesystem::path(::testing::TempDir()) /
+      (volume.axis_aligned() ? "plaza_export_test" : "plaza_export_test_oblique");
   std::filesystem::remove_all(dir);
   ASSERT_TRUE(ExportPlazaCase(volume, mesh, norm, dir).ok());
   const std::string out = (dir / "scores.json").string();
@@ -252,6 +265,19 @@ TEST(PlazaExportTest, ScriptScoresTheExportedCaseAsCoreDoes) {
   const google::protobuf::Struct& quality = root.at("quality").struct_value();
   EXPECT_NEAR(number(quality, "min"), q.min, 1e-12);
   EXPECT_NEAR(number(quality, "mean"), q.mean, 1e-12);
+}
+
+TEST(PlazaExportTest, ScriptScoresTheExportedCaseAsCoreDoes) {
+  ExpectScriptScoresAsCore(kIdentityDirection);
+}
+
+// A rotation about a skew axis (det +1, so the tets keep their orientation): the reproduction's
+// EPI and T1 volumes are oblique like this.
+TEST(PlazaExportTest, ScriptScoresAnObliqueCaseAsCoreDoes) {
+  const double c = std::cos(0.3), s = std::sin(0.3), c2 = std::cos(-0.7), s2 = std::sin(-0.7);
+  // Rz(0.3) * Rx(-0.7), row-major.
+  const Mat3 direction{c, -s * c2, s * s2, s, c * c2, -c * s2, 0.0, s2, c2};
+  ExpectScriptScoresAsCore(direction);
 }
 
 TEST(RunProcessTest, ReturnsTheExitStatusAndNamesAProgramThatCannotStart) {

@@ -120,6 +120,14 @@ absl::Status ExportPlazaCase(const Volume& volume, const Mesh& mesh, double norm
   w.BeginArray();
   for (double x : g.spacing) w.Number(x);
   w.EndArray();
+  if (!volume.axis_aligned()) {
+    // An oblique grid: the script maps world to index with this matrix, operation by operation
+    // as Volume::ContinuousIndex does, so its samples are core's bits.
+    w.Key("world_to_index");
+    w.BeginArray();
+    for (double x : volume.world_to_index()) w.Number(x);
+    w.EndArray();
+  }
   w.Field("norm_coeff", norm_coeff);
   w.EndObject();
   if (absl::Status s = WriteBytes(dir / "case.json", w.Take()); !s.ok()) return s;
