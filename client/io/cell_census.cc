@@ -1,5 +1,6 @@
 #include "client/io/cell_census.h"
 
+#include <cstdint>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
@@ -9,23 +10,35 @@
 namespace tetrefine::io {
 namespace {
 
+// Counts come from the file's own headers (a .meshb keyword may declare any int64 count), so a
+// sum of them must not overflow: it saturates at the largest int64, which only a hostile or
+// corrupt file reaches and which the message then shows as is. (The meshb fuzzer found the
+// overflow: two keywords declaring counts near 2^63.)
+int64_t SaturatingAdd(int64_t a, int64_t b) {
+  int64_t sum = 0;
+  if (__builtin_add_overflow(a, b, &sum)) return b > 0 ? INT64_MAX : INT64_MIN;
+  return sum;
+}
+
 std::string Counted(int64_t n, const CellKind& kind) {
   return absl::StrCat(n, " ", n == 1 ? kind.singular : kind.plural);
 }
 
 }  // namespace
 
+void CellCensus::AddTets(int64_t n) { tets_ = SaturatingAdd(tets_, n); }
+
 void CellCensus::Add(const CellKind& kind, int64_t n) {
   if (n <= 0) return;
   Entry& entry = kinds_[kind.plural];
   entry.kind = kind;
-  entry.count += n;
+  entry.count = SaturatingAdd(entry.count, n);
 }
 
 int64_t CellCensus::skipped() const {
   int64_t n = 0;
   for (const auto& [name, entry] : kinds_) {
-    if (entry.kind.fate == CellFate::kSkip) n += entry.count;
+    if (entry.kind.fate == CellFate::kSkip) n = SaturatingAdd(n, entry.count);
   }
   return n;
 }

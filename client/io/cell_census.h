@@ -28,8 +28,10 @@ struct CellKind {
 // be used.
 class CellCensus {
  public:
-  void AddTets(int64_t n) { tets_ += n; }
-  // `n` cells of `kind`; kinds are told apart by their plural name.
+  // `n` tetrahedra, n >= 0. Counts saturate at INT64_MAX (they come from file headers).
+  void AddTets(int64_t n);
+  // `n` cells of `kind`; kinds are told apart by their plural name. n <= 0 is ignored; counts
+  // saturate at INT64_MAX.
   void Add(const CellKind& kind, int64_t n);
 
   // OK unless an unsupported cell was found, or nothing but skipped cells was. The error names
