@@ -82,6 +82,33 @@ double Determinant(const Mat3& m) {
          m[2] * (m[3] * m[7] - m[4] * m[6]);
 }
 
+DirectionDefect FindDirectionDefect(const Mat3& direction) {
+  DirectionDefect defect;
+  for (int i = 0; i < 9; ++i) {
+    if (!std::isfinite(direction[i])) {
+      defect.kind = DirectionDefect::Kind::kNotFinite;
+      defect.index = i;
+      return defect;
+    }
+  }
+  Mat3 unit = direction;
+  for (int column = 0; column < 3; ++column) {
+    const double length = std::hypot(unit[column], unit[3 + column], unit[6 + column]);
+    if (!(length > 0.0) || !std::isfinite(length)) {
+      defect.kind = DirectionDefect::Kind::kZeroColumn;
+      defect.index = column;
+      return defect;
+    }
+    for (int row = 0; row < 3; ++row) unit[3 * row + column] /= length;
+  }
+  const double det = std::abs(Determinant(unit));
+  if (!(det >= kMinDirectionDeterminant)) {
+    defect.kind = DirectionDefect::Kind::kSingular;
+    defect.det = det;
+  }
+  return defect;
+}
+
 Vec3 WorldOfIndex(const GridGeometry& grid, const Vec3& u) {
   if (IsIdentityDirection(grid.direction)) {
     return {grid.origin[0] + u[0] * grid.spacing[0], grid.origin[1] + u[1] * grid.spacing[1],
@@ -143,27 +170,21 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
           "): must lie in [0, ", grid.dims[a], ") and hold at least 2 samples"));
     }
   }
-  for (int i = 0; i < 9; ++i) {
-    if (!std::isfinite(grid.direction[i])) {
-      return absl::InvalidArgumentError(absl::StrCat("volume.direction[", i, "] (row ", i / 3,
-                                                     ", column ", i % 3, ") is not finite"));
-    }
-  }
-  // Scale-free test: the determinant of the direction with unit columns, so a direction given
-  // with lengths (e.g. a raw affine) is judged by its angles alone.
-  Mat3 unit = grid.direction;
-  for (int column = 0; column < 3; ++column) {
-    const double length = std::hypot(unit[column], unit[3 + column], unit[6 + column]);
-    if (!(length > 0.0)) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "volume.direction column ", column, " is zero: the index axis has no world direction"));
-    }
-    for (int row = 0; row < 3; ++row) unit[3 * row + column] /= length;
-  }
-  if (!(std::abs(Determinant(unit)) >= kMinDirectionDeterminant)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("volume.direction is singular: |det| of its normalised columns is ",
-                     std::abs(Determinant(unit)), ", must be >= ", kMinDirectionDeterminant));
+  switch (const DirectionDefect defect = FindDirectionDefect(grid.direction); defect.kind) {
+    case DirectionDefect::Kind::kNone:
+      break;
+    case DirectionDefect::Kind::kNotFinite:
+      return absl::InvalidArgumentError(absl::StrCat("volume.direction[", defect.index, "] (row ",
+                                                     defect.index / 3, ", column ",
+                                                     defect.index % 3, ") is not finite"));
+    case DirectionDefect::Kind::kZeroColumn:
+      return absl::InvalidArgumentError(
+          absl::StrCat("volume.direction column ", defect.index,
+                       " is zero (or overflows): the index axis has no world direction"));
+    case DirectionDefect::Kind::kSingular:
+      return absl::InvalidArgumentError(
+          absl::StrCat("volume.direction is singular: |det| of its normalised columns is ",
+                       defect.det, ", must be >= ", kMinDirectionDeterminant));
   }
   const int64_t count = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
   const uint64_t expected = static_cast<uint64_t>(count) * VoxelSize(type);

@@ -42,6 +42,25 @@ bool IsIdentityDirection(const Mat3& direction);
 // Determinant of a 3x3 row-major matrix.
 double Determinant(const Mat3& m);
 
+// What makes a direction matrix unusable, for callers that name their own field: the volume
+// (core) and the wire's volume header check the same rule and must not drift apart.
+struct DirectionDefect {
+  enum class Kind : uint8_t {
+    kNone,        // usable
+    kNotFinite,   // entry `index` (row-major) is NaN or infinite
+    kZeroColumn,  // column `index` has zero length, or its length overflows
+    kSingular,    // |det| of the unit-column matrix (`det`) is below kMinDirectionDeterminant
+  };
+  Kind kind = Kind::kNone;
+  int index = 0;
+  double det = 0.0;
+};
+
+// The first defect of `direction` in the order above. Scale-free: the determinant is taken of
+// the columns normalised to unit length, so a direction given with lengths (a raw affine) is
+// judged by its angles alone.
+DirectionDefect FindDirectionDefect(const Mat3& direction);
+
 // World position of continuous index u: origin + direction * (spacing * u). For the identity
 // direction exactly origin + spacing * u per axis (the axis-aligned formula).
 Vec3 WorldOfIndex(const GridGeometry& grid, const Vec3& u);

@@ -50,28 +50,21 @@ absl::Status DirectionFromWire(const v1::VolumeHeader& header, Mat3* direction) 
                      "(3x3 row-major), got ",
                      n));
   }
-  for (int i = 0; i < 9; ++i) {
-    if (!std::isfinite(header.direction(i))) {
-      return Invalid(absl::StrCat("volume_header.direction[", i, "]: must be finite, got ",
-                                  header.direction(i)));
-    }
-    (*direction)[i] = header.direction(i);
-  }
-  Mat3 unit = *direction;
-  for (int column = 0; column < 3; ++column) {
-    const double length = std::hypot(unit[column], unit[3 + column], unit[6 + column]);
-    if (!(length > 0.0) || !std::isfinite(length)) {
-      return Invalid(absl::StrCat("volume_header.direction: column ", column,
+  for (int i = 0; i < 9; ++i) (*direction)[i] = header.direction(i);
+  switch (const DirectionDefect defect = FindDirectionDefect(*direction); defect.kind) {
+    case DirectionDefect::Kind::kNone:
+      break;
+    case DirectionDefect::Kind::kNotFinite:
+      return Invalid(absl::StrCat("volume_header.direction[", defect.index,
+                                  "]: must be finite, got ", header.direction(defect.index)));
+    case DirectionDefect::Kind::kZeroColumn:
+      return Invalid(absl::StrCat("volume_header.direction: column ", defect.index,
                                   " is zero (or overflows), so the matrix is singular"));
-    }
-    for (int row = 0; row < 3; ++row) unit[3 * row + column] /= length;
-  }
-  const double det = std::abs(Determinant(unit));
-  if (!(det >= kMinDirectionDeterminant)) {
-    return Invalid(
-        absl::StrCat("volume_header.direction: singular (|det| of the normalised "
-                     "columns is ",
-                     det, ", must be >= ", kMinDirectionDeterminant, ")"));
+    case DirectionDefect::Kind::kSingular:
+      return Invalid(
+          absl::StrCat("volume_header.direction: singular (|det| of the normalised "
+                       "columns is ",
+                       defect.det, ", must be >= ", kMinDirectionDeterminant, ")"));
   }
   return absl::OkStatus();
 }

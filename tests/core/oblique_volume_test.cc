@@ -132,6 +132,47 @@ TEST(ObliqueVolume, CreateRefusesBadDirectionsNamingTheField) {
   EXPECT_TRUE(Volume::FromDoubles(g, values).ok());
 }
 
+// FindDirectionDefect is the one rule the volume and the wire's header share. Over many random
+// matrices: any rotation or mirror with columns scaled by arbitrary lengths is usable (the test
+// is scale-free); spoiling one entry, one column or the rank is reported as exactly that defect,
+// at the spoiled index.
+TEST(ObliqueVolume, DirectionDefectNamesWhatIsWrongAndWhere) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> log_length(-6.0, 6.0);
+  std::uniform_int_distribution<int> pick9(0, 8), pick3(0, 2);
+  for (int seed = 0; seed < 200; ++seed) {
+    Mat3 d = RandomDirection(rng, seed % 2 == 1);
+    for (int column = 0; column < 3; ++column) {
+      const double length = std::pow(10.0, log_length(rng));
+      for (int row = 0; row < 3; ++row) d[3 * row + column] *= length;
+    }
+    EXPECT_EQ(FindDirectionDefect(d).kind, DirectionDefect::Kind::kNone) << "seed " << seed;
+
+    Mat3 not_finite = d;
+    const int entry = pick9(rng);
+    not_finite[entry] = seed % 3 == 0 ? std::nan("") : (seed % 3 == 1 ? 1.0 : -1.0) / 0.0;
+    const DirectionDefect nf = FindDirectionDefect(not_finite);
+    EXPECT_EQ(nf.kind, DirectionDefect::Kind::kNotFinite) << "seed " << seed;
+    EXPECT_EQ(nf.index, entry) << "seed " << seed;
+
+    Mat3 zero = d;
+    const int column = pick3(rng);
+    // A zero column, or one whose length overflows (sqrt(3) * 1.5e308 > DBL_MAX).
+    const double fill = seed % 2 == 0 ? 0.0 : 1.5e308;
+    for (int row = 0; row < 3; ++row) zero[3 * row + column] = fill;
+    const DirectionDefect z = FindDirectionDefect(zero);
+    EXPECT_EQ(z.kind, DirectionDefect::Kind::kZeroColumn) << "seed " << seed;
+    EXPECT_EQ(z.index, column) << "seed " << seed;
+
+    Mat3 parallel = d;  // column (column + 1) % 3 made a multiple of `column`
+    const int other = (column + 1) % 3;
+    for (int row = 0; row < 3; ++row) parallel[3 * row + other] = -3.5 * d[3 * row + column];
+    const DirectionDefect s = FindDirectionDefect(parallel);
+    EXPECT_EQ(s.kind, DirectionDefect::Kind::kSingular) << "seed " << seed;
+    EXPECT_LT(s.det, kMinDirectionDeterminant) << "seed " << seed;
+  }
+}
+
 // Refining the rotated volume with the rotated mesh gives the rotated refinement: the same
 // topology and counts, points equal up to rounding.
 TEST(ObliqueVolume, RefiningInARotatedFrameGivesTheRotatedResult) {
