@@ -4,6 +4,7 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <memory>
 #include <string>
@@ -308,57 +309,186 @@ absl::Status CheckNoVertexOnFace(const std::vector<Vec3>& points, const std::vec
       "inside the mesh)"));
 }
 
-absl::Status CheckClosed(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                         const std::vector<BoundaryFace>& boundary) {
-  const int64_t num_points = static_cast<int64_t>(points.size());
-  // Each edge (u < v) of a boundary face, filed under u as v.
-  std::unique_ptr<uint32_t[]> ends;
-  const BucketLayout layout = CountingSort(
-      static_cast<int64_t>(boundary.size()), num_points,
-      [&](int64_t f, auto add) {
-        add(boundary[f][0], 2);
-        add(boundary[f][1], 1);
-      },
-      [&](uint64_t total) { ends.reset(new uint32_t[total]); },
-      [&](int64_t f, auto slot) {
-        const BoundaryFace& face = boundary[f];
-        uint32_t* out = ends.get() + slot(face[0], 2);
-        out[0] = face[1];
-        out[1] = face[2];
-        ends[slot(face[1], 1)] = face[2];
-      });
-  const auto& start = layout.start;
-  // The bucket's first edge used by an odd number of faces, as (other end, uses); the bucket is
-  // left sorted.
-  auto first_odd = [&](int64_t u) -> std::pair<uint32_t, int64_t> {
-    uint32_t* b = ends.get() + start[u];
-    uint32_t* e = ends.get() + start[u + 1];
+// Two boundary faces (u, v, c) and (u, v, d) folded onto each other: d lies in the plane of
+// (u, v, c), within the tolerance FaceGrid uses, on the same side of the edge as c. In a
+// conformal mesh a face is either shared whole or on the boundary, so two boundary faces that
+// overlap in their plane are two tets meeting over part of a face: a quadrilateral split by
+// different diagonals on its two sides (two triangulations of one planar region always
+// disagree on some edge of the region's outline, where their two triangles fold like this).
+// Real boundaries that fold back at an angle of zero are not valid meshes either.
+bool Folded(const Vec3& u, const Vec3& v, const Vec3& c, const Vec3& d) {
+  const Vec3 e = Sub(v, u), uc = Sub(c, u), ud = Sub(d, u);
+  const Vec3 n = {e[1] * uc[2] - e[2] * uc[1], e[2] * uc[0] - e[0] * uc[2],
+                  e[0] * uc[1] - e[1] * uc[0]};
+  const double longest =
+      std::sqrt(std::max({Norm2(e), Norm2(uc), Norm2(ud), Norm2(Sub(c, v)), Norm2(Sub(d, v))}));
+  double magnitude = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    magnitude =
+        std::max({magnitude, std::abs(u[i]), std::abs(v[i]), std::abs(c[i]), std::abs(d[i])});
+  }
+  const double tolerance = kRelativeTolerance * longest +
+                           kRoundings * std::numeric_limits<double>::epsilon() * magnitude;
+  const double n_norm = std::sqrt(Norm2(n));
+  if (!(std::abs(Dot(n, ud)) <= tolerance * n_norm)) return false;
+  const double ee = Norm2(e);
+  if (!(ee > 0.0)) return false;
+  const Vec3 c_off = Axpy(-Dot(uc, e) / ee, e, uc);  // c's offset from the edge's line
+  const Vec3 d_off = Axpy(-Dot(ud, e) / ee, e, ud);
+  return Dot(c_off, d_off) > 0.0;
+}
+
+// The boundary's edges, each with the third vertex of every boundary face on it: the closed
+// check and the fold check read the same lists.
+class BoundaryEdges {
+ public:
+  BoundaryEdges(int64_t num_points, const std::vector<BoundaryFace>& boundary) {
+    // Each edge (u < v) of a boundary face, filed under u as (v, third vertex) in one word, so
+    // that sorting a bucket groups an edge's faces.
+    auto key = [](uint32_t v, uint32_t w) { return uint64_t{v} << 32 | w; };
+    BucketLayout layout = CountingSort(
+        static_cast<int64_t>(boundary.size()), num_points,
+        [&](int64_t f, auto add) {
+          add(boundary[f][0], 2);
+          add(boundary[f][1], 1);
+        },
+        [&](uint64_t total) { ends_.reset(new uint64_t[total]); },
+        [&](int64_t f, auto slot) {
+          const BoundaryFace& face = boundary[f];
+          uint64_t* out = ends_.get() + slot(face[0], 2);
+          out[0] = key(face[1], face[2]);
+          out[1] = key(face[2], face[1]);
+          ends_[slot(face[1], 1)] = key(face[2], face[0]);
+        });
+    start_ = std::move(layout.start);
+  }
+
+  // Calls visit(v, thirds, count) for each edge (u, v), v ascending, with the third vertices of
+  // its `count` faces; stops at the first visit that returns true and returns that. Sorts u's
+  // bucket, which is safe from one thread per u.
+  template <typename Visit>
+  bool ForEachEdgeOf(int64_t u, Visit visit) {
+    uint64_t* b = ends_.get() + start_[u];
+    uint64_t* e = ends_.get() + start_[u + 1];
     SortSmall(b, e);
-    for (uint32_t* p = b; p < e;) {
-      uint32_t* q = p;
-      while (q < e && *q == *p) ++q;
-      if ((q - p) % 2 == 1) return {*p, q - p};
+    uint32_t thirds[64];
+    for (uint64_t* p = b; p < e;) {
+      uint64_t* q = p;
+      while (q < e && (*q >> 32) == (*p >> 32)) ++q;
+      const int64_t count = q - p;
+      // More than 64 faces on one edge only happens in a broken mesh; the fold check looks at
+      // the first 64 of them, the count is exact.
+      const int64_t kept = std::min<int64_t>(count, 64);
+      for (int64_t i = 0; i < kept; ++i) thirds[i] = static_cast<uint32_t>(p[i]);
+      if (visit(static_cast<uint32_t>(*p >> 32), thirds, kept, count)) return true;
       p = q;
     }
-    return {0, 0};
+    return false;
+  }
+
+ private:
+  std::unique_ptr<uint64_t[]> ends_;
+  FillLater<uint64_t> start_;  // bucket u holds ends_[start_[u], start_[u + 1])
+};
+
+// The smallest boundary face, in id order, with all of `ids`.
+const BoundaryFace* SmallestFaceWith(const std::vector<BoundaryFace>& boundary,
+                                     std::initializer_list<uint32_t> ids) {
+  const BoundaryFace* face = nullptr;
+  for (const BoundaryFace& f : boundary) {
+    const bool all = std::all_of(ids.begin(), ids.end(), [&](uint32_t id) {
+      return f[0] == id || f[1] == id || f[2] == id;
+    });
+    if (all && (face == nullptr || f < *face)) face = &f;
+  }
+  return face;
+}
+
+BoundaryFace SortedFace(uint32_t a, uint32_t b, uint32_t c) {
+  BoundaryFace f = {a, b, c};
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+absl::Status CheckClosed(const std::vector<Tet>& tets, const std::vector<BoundaryFace>& boundary,
+                         BoundaryEdges& edges, int64_t num_points) {
+  // The bucket's first edge used by an odd number of faces, as (other end, uses).
+  auto first_odd = [&](int64_t u) -> std::pair<uint32_t, int64_t> {
+    std::pair<uint32_t, int64_t> odd{0, 0};
+    edges.ForEachEdgeOf(u, [&](uint32_t v, const uint32_t*, int64_t, int64_t count) {
+      if (count % 2 == 0) return false;
+      odd = {v, count};
+      return true;
+    });
+    return odd;
   };
-  // Each bucket is sorted by the one thread that reaches it; the first bad one is sorted again
-  // below, which changes nothing.
   const int64_t u =
       FirstIndexWhere(num_points, [&](int64_t u) { return first_odd(u).second != 0; });
   if (u == num_points) return absl::OkStatus();
   const auto [v, uses] = first_odd(u);
-  const BoundaryFace* face = nullptr;
-  for (const BoundaryFace& f : boundary) {
-    const bool has_u = f[0] == u || f[1] == u || f[2] == u;
-    const bool has_v = f[0] == v || f[1] == v || f[2] == v;
-    if (has_u && has_v && (face == nullptr || f < *face)) face = &f;
-  }
+  const BoundaryFace* face = SmallestFaceWith(boundary, {static_cast<uint32_t>(u), v});
   return absl::InvalidArgumentError(
       absl::StrCat("mesh is not conformal: edge (", u, ", ", v, ") lies on ", uses,
                    " boundary faces, an odd number (one is face ", FaceName(*face),
                    " of mesh.tets[", TetOnFace(tets, *face),
                    "]), so the boundary is not closed: a hanging node on the edge, or a crack"));
+}
+
+absl::Status CheckNoFold(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                         BoundaryEdges& edges) {
+  // A folded pair: edge (u, v), third vertices c < d.
+  using Fold = std::array<uint32_t, 4>;
+  const int64_t num_points = static_cast<int64_t>(points.size());
+  std::vector<std::vector<Fold>> found(BlockCount(num_points));
+  ForEachBlock(num_points, [&](int64_t block, int64_t begin, int64_t end) {
+    for (int64_t u = begin; u < end; ++u) {
+      edges.ForEachEdgeOf(u, [&](uint32_t v, const uint32_t* thirds, int64_t kept, int64_t) {
+        for (int64_t i = 0; i < kept; ++i) {
+          for (int64_t j = i + 1; j < kept; ++j) {
+            const uint32_t c = std::min(thirds[i], thirds[j]), d = std::max(thirds[i], thirds[j]);
+            if (c != d && Folded(points[u], points[v], points[c], points[d])) {
+              found[block].push_back({static_cast<uint32_t>(u), v, c, d});
+            }
+          }
+        }
+        return false;
+      });
+    }
+  });
+  std::vector<Fold> folds;
+  for (const std::vector<Fold>& f : found) folds.insert(folds.end(), f.begin(), f.end());
+  if (folds.empty()) return absl::OkStatus();
+  // Two faces of one tet fold onto each other when the tet is a sliver flat within the
+  // tolerance; that tet is valid (ValidateMesh judges its volume). Folds are rare, so one pass
+  // over the tets to drop those, as CheckNoVertexOnFace does.
+  std::vector<std::pair<std::array<uint32_t, 4>, int64_t>> quads(folds.size());
+  for (size_t i = 0; i < folds.size(); ++i) {
+    std::array<uint32_t, 4> q = folds[i];
+    std::sort(q.begin(), q.end());
+    quads[i] = {q, static_cast<int64_t>(i)};
+  }
+  std::sort(quads.begin(), quads.end());
+  std::vector<uint8_t> own(folds.size(), 0);
+  ForEachBlock(static_cast<int64_t>(tets.size()), [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t t = begin; t < end; ++t) {
+      const std::array<uint32_t, 4> q = SortTet(tets[t]).v;
+      auto it = std::lower_bound(quads.begin(), quads.end(), std::make_pair(q, int64_t{-1}));
+      for (; it != quads.end() && it->first == q; ++it) own[it->second] = 1;
+    }
+  });
+  const Fold* first = nullptr;
+  for (size_t i = 0; i < folds.size(); ++i) {
+    if (!own[i] && (first == nullptr || folds[i] < *first)) first = &folds[i];
+  }
+  if (first == nullptr) return absl::OkStatus();
+  const auto [u, v, c, d] = *first;
+  const BoundaryFace a = SortedFace(u, v, c), b = SortedFace(u, v, d);
+  return absl::InvalidArgumentError(absl::StrCat(
+      "mesh is not conformal: boundary faces ", FaceName(a), " of mesh.tets[", TetOnFace(tets, a),
+      "] and ", FaceName(b), " of mesh.tets[", TetOnFace(tets, b),
+      "] lie in one plane on the same side of their common edge (", u, ", ", v,
+      "), so two tets meet over part of a face (crossing diagonals: a quadrilateral split "
+      "differently on its two sides, or a boundary folded onto itself)"));
 }
 
 }  // namespace
@@ -367,7 +497,12 @@ absl::Status CheckBoundaryConformity(const std::vector<Vec3>& points, const std:
                                      const std::vector<BoundaryFace>& boundary) {
   if (boundary.empty()) return absl::OkStatus();
   if (absl::Status s = CheckNoVertexOnFace(points, tets, boundary); !s.ok()) return s;
-  return CheckClosed(points, tets, boundary);
+  BoundaryEdges edges(static_cast<int64_t>(points.size()), boundary);
+  if (absl::Status s = CheckClosed(tets, boundary, edges, static_cast<int64_t>(points.size()));
+      !s.ok()) {
+    return s;
+  }
+  return CheckNoFold(points, tets, edges);
 }
 
 }  // namespace tetrefine

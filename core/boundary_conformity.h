@@ -27,6 +27,14 @@ using BoundaryFace = std::array<uint32_t, 3>;
 //   2. The boundary is closed: every edge of the boundary faces is used by an even number of
 //      them (a hanging node on an edge leaves that edge in one face on the unsplit side).
 //      Reports the smallest such edge.
+//   3. No two boundary faces on a common edge fold onto each other: lie in one plane (the
+//      fourth vertex within the tolerance of 1. of the other face's plane) on the same side of
+//      the edge. Two triangulations of one planar region disagree on some edge of its outline
+//      exactly like this, so it finds a square face split by crossing diagonals on its two
+//      sides, which leaves no hanging vertex and an even count on every edge. Pairs that are
+//      two faces of one (sliver) tet do not count. Reports the smallest (edge, third vertices).
+//      Not found: crossing diagonals of a quadrilateral that is not planar (the tets then
+//      overlap or leave a gap in volume, which would need a surface self-intersection test).
 // Cost: O(T) to name a tet in a message, otherwise about linear in the boundary's size (a hash
 // grid with one level per power of two of face size), parallel, and the verdict and message do
 // not depend on the thread count. `points` must be finite (ValidateMesh checks that first).

@@ -7,12 +7,14 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <random>
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "core/five_tet_cell.h"
 #include "core/mesh_validation.h"
 #include "core/refine.h"
 #include "tests/support/geometry.h"
@@ -292,6 +294,85 @@ TEST(BoundaryConformity, HugeCoordinatesDoNotBreakIt) {
     const absl::Status s = Check(m);
     EXPECT_TRUE(s.ok() || s.code() == absl::StatusCode::kInvalidArgument) << s;
   }
+}
+
+// A uniformly random rotation, scaled and moved: coplanar faces stay coplanar only up to
+// rounding, as in real files.
+Mesh RandomlyPlaced(std::mt19937_64& rng, Mesh m) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  double q[4] = {n(rng), n(rng), n(rng), n(rng)};
+  const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  for (double& x : q) x /= len;
+  const double a = q[0], b = q[1], c = q[2], d = q[3];
+  const double r[9] = {
+      a * a + b * b - c * c - d * d, 2 * (b * c - a * d),           2 * (b * d + a * c),
+      2 * (b * c + a * d),           a * a + c * c - b * b - d * d, 2 * (c * d - a * b),
+      2 * (b * d - a * c),           2 * (c * d + a * b),           a * a + d * d - b * b - c * c};
+  std::uniform_real_distribution<double> log_scale(-3.0, 3.0), shift(-1e3, 1e3);
+  const double scale = std::pow(10.0, log_scale(rng));
+  const Vec3 t = {shift(rng), shift(rng), shift(rng)};
+  for (Vec3& p : m.points) {
+    const Vec3 o = p;
+    for (int i = 0; i < 3; ++i) {
+      p[i] = t[i] + scale * (r[3 * i] * o[0] + r[3 * i + 1] * o[1] + r[3 * i + 2] * o[2]);
+    }
+  }
+  return m;
+}
+
+// The paper's five-tet split of an n^3 grid with one interior-adjacent cell split the other way:
+// each square face it shares with a neighbour is cut by crossing diagonals on its two sides. No
+// vertex hangs and every boundary edge is used twice, so only the fold check can see it; the
+// same mesh without the flip, placed the same way, passes.
+TEST(BoundaryConformity, CrossingDiagonalsAreRefused) {
+  for (uint64_t seed : testing::Seeds(20)) {
+    std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+    std::mt19937_64 rng(seed);
+    const int n = 2 + static_cast<int>(seed % 3);
+    Mesh m = testing::FiveTetMesh({0, 0, 0}, {double(n), double(n), double(n)}, {n, n, n});
+    const int i = static_cast<int>(rng() % n), j = static_cast<int>(rng() % n),
+              k = static_cast<int>(rng() % n);
+    const uint32_t np = static_cast<uint32_t>(n + 1);
+    auto id = [&](int x, int y, int z) { return static_cast<uint32_t>(x + np * (y + np * z)); };
+    std::array<uint32_t, 8> corner;
+    for (int b = 0; b < 8; ++b) corner[b] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+    std::vector<Tet> flipped;
+    AppendFiveTetCell(corner, (i + j + k) % 2 != 0, m.points, &flipped);
+    const size_t first = 5 * static_cast<size_t>(i + n * (j + n * k));
+    const uint64_t placement = rng();
+    std::mt19937_64 place_rng(placement);
+    const Mesh conformal = RandomlyPlaced(place_rng, m);
+    EXPECT_TRUE(Check(conformal).ok()) << Check(conformal);
+    std::copy(flipped.begin(), flipped.end(), m.tets.begin() + static_cast<std::ptrdiff_t>(first));
+    place_rng.seed(placement);
+    const Mesh crossed = RandomlyPlaced(place_rng, m);
+    ASSERT_TRUE(CheckFaces(crossed.points, crossed.tets).ok()) << "the face check cannot see it";
+    ExpectNamed(Check(crossed), "lie in one plane on the same side of their common edge");
+  }
+}
+
+// Two cubes side by side, each split alone, so the square face between them has different
+// diagonals on its two sides; ValidateMesh (what refine and verify run) names both faces.
+TEST(BoundaryConformity, CrossingDiagonalsNameBothFaces) {
+  Mesh m = testing::FiveTetMesh({0, 0, 0}, {1, 1, 1}, {1, 1, 1});
+  const Mesh right = testing::FiveTetMesh({1, 0, 0}, {2, 1, 1}, {1, 1, 1});
+  std::map<std::array<double, 3>, uint32_t> ids;
+  for (uint32_t v = 0; v < m.points.size(); ++v) ids[m.points[v]] = v;
+  std::vector<uint32_t> remap;
+  for (const Vec3& p : right.points) {
+    auto [it, added] = ids.emplace(p, static_cast<uint32_t>(m.points.size()));
+    if (added) m.points.push_back(p);
+    remap.push_back(it->second);
+  }
+  for (Tet t : right.tets) {
+    for (uint32_t& v : t) v = remap[v];
+    m.tets.push_back(t);
+  }
+  ASSERT_EQ(m.points.size(), 12u);
+  ASSERT_TRUE(CheckFaces(m.points, m.tets).ok());
+  const absl::Status s = Check(m);
+  ExpectNamed(s, "boundary faces (");
+  ExpectNamed(s, "crossing");
 }
 
 // The verdict and the message do not depend on the thread count.
