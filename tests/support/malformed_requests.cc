@@ -7,7 +7,9 @@
 #include <limits>
 #include <map>
 #include <utility>
+#include <vector>
 
+#include "core/five_tet_cell.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
 #include "wire/request_writer.h"
@@ -148,6 +150,22 @@ Mesh HangingNodeMesh() {
   mesh.points.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
   mesh.tets[t] = {mid, tet[1], tet[2], tet[3]};
   mesh.tets.push_back({tet[0], mid, tet[2], tet[3]});
+  return mesh;
+}
+
+// SmallMesh with its first cell split the other way: the three square faces that cell shares
+// with its neighbours are cut by crossing diagonals. No vertex hangs and every boundary edge is
+// used twice; only the fold check sees it.
+Mesh CrossingDiagonalsMesh() {
+  Mesh mesh = SmallMesh();
+  // Cell (0, 0, 0) of the 3 x 3 x 3 points, x fastest, as FiveTetMesh numbers them.
+  std::array<uint32_t, 8> corner;
+  for (int b = 0; b < 8; ++b) {
+    corner[b] = static_cast<uint32_t>((b & 1) + 3 * ((b >> 1) & 1) + 9 * ((b >> 2) & 1));
+  }
+  std::vector<Tet> odd;
+  AppendFiveTetCell(corner, /*even=*/false, mesh.points, &odd);
+  std::copy(odd.begin(), odd.end(), mesh.tets.begin());
   return mesh;
 }
 
@@ -691,6 +709,9 @@ std::vector<MalformedRequest> MalformedRequests() {
       {"HangingNode",
        [] { return Write(SmallVolume(), HangingNodeMesh()); },
        {"mesh is not conformal: vertex 27 at", "a hanging node"}},
+      {"CrossingDiagonals",
+       [] { return Write(SmallVolume(), CrossingDiagonalsMesh()); },
+       {"mesh is not conformal: boundary faces (", "crossing diagonals"}},
       // A slab and a mesh that reaches beyond it.
       {"MeshOutsideItsSlab",
        [] {
