@@ -39,7 +39,7 @@ void BM_Sample(benchmark::State& state, VoxelType type) {
 BENCHMARK_CAPTURE(BM_Sample, int16, VoxelType::kInt16);
 BENCHMARK_CAPTURE(BM_Sample, float64, VoxelType::kFloat64);
 
-// points_per_s: lattice points (165 per tet) per second.
+// points_per_s: lattice points (165 per tet) per second. clamp: OutsidePolicy::kClamp's flag.
 void BM_Lattice(benchmark::State& state, VoxelType type) {
   RippleWorkload w = MakeRippleWorkload(58, type);
   w.mesh.values.resize(w.mesh.points.size());
@@ -60,8 +60,16 @@ void BM_Lattice(benchmark::State& state, VoxelType type) {
   state.counters["points_per_s"] = benchmark::Counter(
       static_cast<double>(points), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK_CAPTURE(BM_Lattice, int16, VoxelType::kInt16)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Lattice, float64, VoxelType::kFloat64)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Lattice, int16, VoxelType::kInt16)
+    ->ArgName("clamp")
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Lattice, float64, VoxelType::kFloat64)
+    ->ArgName("clamp")
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace tetrefine::bench
