@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "core/lattice_kernel.h"
 #include "core/parallel.h"
 #include "core/quality.h"
 #include "core/segment_error.h"
@@ -36,35 +37,6 @@ int64_t CountChanged(const FillLater<uint8_t>& before, const FillLater<uint8_t>&
   int64_t total = 0;
   for (int64_t c : changed) total += c;
   return total;
-}
-
-// Largest lattice discrepancy of one tet (order n), stopping early once above epsilon: the
-// caller only needs to know whether it passes.
-double TetLatticeMax(const Volume& volume, const std::array<Vec3, 4>& p,
-                     const std::array<double, 4>& v, int n, double norm, double epsilon,
-                     bool clamp) {
-  const double inv_n = 1.0 / n;
-  double worst = 0.0;
-  for (int i = 0; i <= n; ++i) {
-    for (int j = 0; i + j <= n; ++j) {
-      for (int k = 0; i + j + k <= n; ++k) {
-        const int l = n - i - j - k;
-        // Corners are exact samples (their error is 0 by construction).
-        if (i == n || j == n || k == n || l == n) continue;
-        const double b[4] = {i * inv_n, j * inv_n, k * inv_n, l * inv_n};
-        Vec3 x{0, 0, 0};
-        double approx = 0.0;
-        for (int c = 0; c < 4; ++c) {
-          for (int a = 0; a < 3; ++a) x[a] += b[c] * p[c][a];
-          approx += b[c] * v[c];
-        }
-        const double error = std::abs(SampleInside(volume, x, clamp) - approx) / norm;
-        worst = std::max(worst, error);
-        if (worst > epsilon) return worst;
-      }
-    }
-  }
-  return worst;
 }
 
 }  // namespace
@@ -251,6 +223,7 @@ int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edg
   const int64_t nt = static_cast<int64_t>(tets.size());
   const int64_t blocks = BlockCount(nt);
   std::vector<int64_t> failing(blocks, 0);
+  const lattice_internal::LatticePoints lattice(n, /*with_corners=*/false);
   ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
     if (cancel.Check()) return;
     int64_t f = 0;
@@ -259,9 +232,9 @@ int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edg
       const Tet& tet = tets[t];
       const std::array<Vec3, 4> p = {points[tet[0]], points[tet[1]], points[tet[2]],
                                      points[tet[3]]};
-      const double max_error =
-          TetLatticeMax(volume, p, {values[tet[0]], values[tet[1]], values[tet[2]], values[tet[3]]},
-                        n, params.norm, params.epsilon, params.clamp);
+      const double max_error = lattice_internal::LatticeMaxUntil(
+          volume, lattice, p, {values[tet[0]], values[tet[1]], values[tet[2]], values[tet[3]]},
+          params.norm, params.epsilon);
       state.tet_lattice_error[t] = max_error;
       if (max_error <= params.epsilon) continue;
       ++f;

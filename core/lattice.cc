@@ -5,58 +5,36 @@
 #include <random>
 #include <vector>
 
+#include "core/lattice_kernel.h"
 #include "core/parallel.h"
 
 namespace tetrefine {
 
-TetLattice SampleTetLattice(const Volume& volume, const Mesh& mesh, int64_t t, int n,
-                            double norm_coeff, double epsilon, bool clamp) {
+namespace {
+
+TetLattice OneTet(const Volume& volume, const Mesh& mesh, int64_t t,
+                  const lattice_internal::LatticePoints& points, double norm_coeff,
+                  double epsilon) {
   const Tet& tet = mesh.tets[t];
-  const Vec3* p[4] = {&mesh.points[tet[0]], &mesh.points[tet[1]], &mesh.points[tet[2]],
-                      &mesh.points[tet[3]]};
-  const double v[4] = {mesh.values[tet[0]], mesh.values[tet[1]], mesh.values[tet[2]],
-                       mesh.values[tet[3]]};
-  TetLattice out;
-  const double inv_n = 1.0 / n;
-  for (int i = 0; i <= n; ++i) {
-    for (int j = 0; i + j <= n; ++j) {
-      for (int k = 0; i + j + k <= n; ++k) {
-        const int l = n - i - j - k;
-        const double b[4] = {i * inv_n, j * inv_n, k * inv_n, l * inv_n};
-        Vec3 x{0, 0, 0};
-        double approx = 0.0;
-        for (int c = 0; c < 4; ++c) {
-          for (int a = 0; a < 3; ++a) x[a] += b[c] * (*p[c])[a];
-          approx += b[c] * v[c];
-        }
-        Vec3 u = volume.ContinuousIndex(x);
-        if (clamp) u = volume.ClampToGrid(u);
-        const double error = std::abs(volume.SampleIndex(u) - approx) / norm_coeff;
-        out.sum_error += error;
-        ++out.points;
-        if (error > epsilon) ++out.above_epsilon;
-        if (error > out.max_error || out.points == 1) {
-          out.max_error = error;
-          const int zeros = (i == 0) + (j == 0) + (k == 0) + (l == 0);
-          const int halves = (2 * i == n) + (2 * j == n) + (2 * k == n) + (2 * l == n);
-          if (zeros == 3) {
-            out.max_location = MaxLocation::kVertex;
-          } else if (zeros == 2) {
-            out.max_location = halves == 2 ? MaxLocation::kEdgeMidpoint : MaxLocation::kEdge;
-          } else if (zeros == 1) {
-            out.max_location = MaxLocation::kFace;
-          } else {
-            out.max_location = MaxLocation::kInterior;
-          }
-        }
-      }
-    }
-  }
-  return out;
+  return lattice_internal::ScanTetLattice(
+      volume, points,
+      {mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]], mesh.points[tet[3]]},
+      {mesh.values[tet[0]], mesh.values[tet[1]], mesh.values[tet[2]], mesh.values[tet[3]]},
+      norm_coeff, epsilon);
+}
+
+}  // namespace
+
+// `clamp` changes nothing here or in SampleLattice (sampling clamps to the grid's box anyway, see
+// LatticeErrors) but stays in the signatures: it says what the caller's refinement did.
+TetLattice SampleTetLattice(const Volume& volume, const Mesh& mesh, int64_t t, int n,
+                            double norm_coeff, double epsilon, bool /*clamp*/) {
+  return OneTet(volume, mesh, t, lattice_internal::LatticePoints(n, /*with_corners=*/true),
+                norm_coeff, epsilon);
 }
 
 LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_t max_tets,
-                           uint64_t seed, double norm_coeff, double epsilon, bool clamp,
+                           uint64_t seed, double norm_coeff, double epsilon, bool /*clamp*/,
                            const std::function<bool()>& should_stop) {
   LatticeStats stats;
   stats.n = n;
@@ -78,14 +56,15 @@ LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_
     double volume = 0.0, weighted_mean = 0.0, weighted_above = 0.0;
   };
   std::vector<Partial> partial(blocks);
-  const int64_t points_per_tet = int64_t{n + 1} * (n + 2) * (n + 3) / 6;
+  const lattice_internal::LatticePoints points(n, /*with_corners=*/true);
+  const int64_t points_per_tet = points.size();
   const int64_t poll_every = std::max<int64_t>(1, 16384 / points_per_tet);
   ForEachBlock(count, [&](int64_t block, int64_t begin, int64_t end) {
     Partial acc;
     for (int64_t i = begin; i < end; ++i) {
       if (should_stop && (i - begin) % poll_every == 0 && should_stop()) break;
       const int64_t t = sample ? chosen[i] : i;
-      const TetLattice r = SampleTetLattice(volume, mesh, t, n, norm_coeff, epsilon, clamp);
+      const TetLattice r = OneTet(volume, mesh, t, points, norm_coeff, epsilon);
       acc.sums.max_error = std::max(acc.sums.max_error, r.max_error);
       acc.sums.sum_error += r.sum_error;
       acc.sums.points += r.points;

@@ -18,12 +18,7 @@ constexpr char kAxis[3] = {'x', 'y', 'z'};
 // Voxel data is little-endian on the wire and in files; this build targets little-endian hosts.
 static_assert(std::endian::native == std::endian::little, "tetrefine assumes a little-endian host");
 
-template <typename T>
-double Load(const std::byte* base, int64_t index) {
-  T value;
-  std::memcpy(&value, base + index * static_cast<int64_t>(sizeof(T)), sizeof(T));
-  return static_cast<double>(value);
-}
+using volume_internal::Load;
 
 double LoadAs(VoxelType type, const std::byte* base, int64_t index) {
   switch (type) {
@@ -41,20 +36,6 @@ double LoadAs(VoxelType type, const std::byte* base, int64_t index) {
       return Load<double>(base, index);
   }
   return 0.0;
-}
-
-double Lerp(double a, double b, double t) { return a * (1.0 - t) + b * t; }
-
-// The 8 corners of a cell, read as T, interpolated along x, then y, then z.
-template <typename T>
-double Trilerp(const std::byte* d, int64_t base, int64_t dy, int64_t dz, const double t[3]) {
-  const double c000 = Load<T>(d, base), c100 = Load<T>(d, base + 1);
-  const double c010 = Load<T>(d, base + dy), c110 = Load<T>(d, base + dy + 1);
-  const double c001 = Load<T>(d, base + dz), c101 = Load<T>(d, base + dz + 1);
-  const double c011 = Load<T>(d, base + dz + dy), c111 = Load<T>(d, base + dz + dy + 1);
-  const double c00 = Lerp(c000, c100, t[0]), c10 = Lerp(c010, c110, t[0]);
-  const double c01 = Lerp(c001, c101, t[0]), c11 = Lerp(c011, c111, t[0]);
-  return Lerp(Lerp(c00, c10, t[1]), Lerp(c01, c11, t[1]), t[2]);
 }
 
 // Inverse of a 3x3 matrix with a nonzero determinant, by the adjugate.
@@ -260,35 +241,35 @@ Vec3 Volume::ClampToGrid(const Vec3& u) const {
   return c;
 }
 
-double Volume::SampleIndex(const Vec3& u) const {
-  int64_t cell[3];
-  double t[3];
-  for (int a = 0; a < 3; ++a) {
-    // Clamped to the grid first (a vertex within tolerance outside samples the boundary), then
-    // the cell clamped into the slab: on a cell face either neighbour gives the same bits.
-    const double x = std::clamp(u[a], 0.0, static_cast<double>(grid_.dims[a] - 1));
-    // x >= 0 here, so truncation is floor (and needs no libm call on baseline x86-64).
-    const int64_t c = static_cast<int64_t>(x);
-    cell[a] = std::clamp(c, lo_[a], hi_[a] - 2);
-    t[a] = x - static_cast<double>(cell[a]);
-  }
+TrilinearSampler Volume::sampler() const {
   const int64_t nx = hi_[0] - lo_[0], ny = hi_[1] - lo_[1];
-  const int64_t base = (cell[0] - lo_[0]) + nx * ((cell[1] - lo_[1]) + ny * (cell[2] - lo_[2]));
-  const int64_t dy = nx, dz = nx * ny;
-  const std::byte* d = data_.data();
+  TrilinearSampler s;
+  s.data = data_.data();
+  for (int a = 0; a < 3; ++a) {
+    s.max_index[a] = static_cast<double>(grid_.dims[a] - 1);
+    s.lo[a] = lo_[a];
+    s.max_cell[a] = hi_[a] - 2;
+  }
+  s.dy = nx;
+  s.dz = nx * ny;
+  return s;
+}
+
+double Volume::SampleIndex(const Vec3& u) const {
+  const TrilinearSampler s = sampler();
   switch (type_) {
     case VoxelType::kUint8:
-      return Trilerp<uint8_t>(d, base, dy, dz, t);
+      return s.Sample<uint8_t>(u);
     case VoxelType::kInt16:
-      return Trilerp<int16_t>(d, base, dy, dz, t);
+      return s.Sample<int16_t>(u);
     case VoxelType::kUint16:
-      return Trilerp<uint16_t>(d, base, dy, dz, t);
+      return s.Sample<uint16_t>(u);
     case VoxelType::kInt32:
-      return Trilerp<int32_t>(d, base, dy, dz, t);
+      return s.Sample<int32_t>(u);
     case VoxelType::kFloat32:
-      return Trilerp<float>(d, base, dy, dz, t);
+      return s.Sample<float>(u);
     case VoxelType::kFloat64:
-      return Trilerp<double>(d, base, dy, dz, t);
+      return s.Sample<double>(u);
   }
   return 0.0;
 }

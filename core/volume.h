@@ -1,8 +1,10 @@
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "absl/status/statusor.h"
@@ -72,6 +74,84 @@ std::array<Vec3, 8> WorldCorners(const GridGeometry& grid, const Vec3& lo, const
 // The axis-aligned world bounding box [min, max] of the index box [lo, hi].
 std::array<Vec3, 2> WorldBounds(const GridGeometry& grid, const Vec3& lo, const Vec3& hi);
 
+// World point to continuous grid index (Volume::ContinuousIndex), by value so that a loop over
+// many points keeps it in registers: a Volume's doubles could alias the loop's output arrays.
+struct IndexMap {
+  Vec3 origin;          // the grid's origin
+  Vec3 spacing;         // the grid's spacing
+  Mat3 world_to_index;  // (direction * diag(spacing))^-1; unused when kAxisAligned
+  // kAxisAligned must be Volume::axis_aligned(): (p - origin) / spacing per axis for the
+  // identity direction (kept verbatim so axis-aligned results stay bit-identical), otherwise
+  // world_to_index * (p - origin), each row summed left to right.
+  template <bool kAxisAligned>
+  Vec3 Apply(const Vec3& p) const {
+    if constexpr (kAxisAligned) {
+      return {(p[0] - origin[0]) / spacing[0], (p[1] - origin[1]) / spacing[1],
+              (p[2] - origin[2]) / spacing[2]};
+    } else {
+      const double d[3] = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
+      const Mat3& m = world_to_index;
+      return {m[0] * d[0] + m[1] * d[1] + m[2] * d[2], m[3] * d[0] + m[4] * d[1] + m[5] * d[2],
+              m[6] * d[0] + m[7] * d[1] + m[8] * d[2]};
+    }
+  }
+};
+
+namespace volume_internal {
+
+// The voxel at `index` of little-endian `base`, read as T.
+template <typename T>
+double Load(const std::byte* base, int64_t index) {
+  T value;
+  std::memcpy(&value, base + index * static_cast<int64_t>(sizeof(T)), sizeof(T));
+  return static_cast<double>(value);
+}
+
+inline double Lerp(double a, double b, double t) { return a * (1.0 - t) + b * t; }
+
+}  // namespace volume_internal
+
+// Trilinear sampling of a volume (Volume::SampleIndex) with the voxel type as a template
+// argument and everything it reads by value: a loop over many points then switches on the type
+// once and keeps the slab's bounds in registers. Volume::SampleIndex is this, so both give the
+// same bits by construction.
+struct TrilinearSampler {
+  const std::byte* data;  // the slab's samples, x fastest
+  Vec3 max_index;         // grid dims - 1 per axis: the grid's box is [0, max_index]
+  Index3 lo;              // the slab's first sample per axis
+  Index3 max_cell;        // hi - 2 per axis: the slab's last cell
+  int64_t dy, dz;         // samples between y and z neighbours in data
+
+  // The trilinear value at continuous index u (see Volume::SampleIndex). T must be the C++ type
+  // of the volume's VoxelType (uint8_t, int16_t, uint16_t, int32_t, float, double).
+  template <typename T>
+  double Sample(const Vec3& u) const {
+    using volume_internal::Lerp;
+    using volume_internal::Load;
+    int64_t cell[3];
+    double t[3];
+    for (int a = 0; a < 3; ++a) {
+      // Clamped to the grid first (a vertex within tolerance outside samples the boundary), then
+      // the cell clamped into the slab: on a cell face either neighbour gives the same bits.
+      const double x = std::clamp(u[a], 0.0, max_index[a]);
+      // x >= 0 here, so truncation is floor (and needs no libm call on baseline x86-64).
+      const int64_t c = static_cast<int64_t>(x);
+      cell[a] = std::clamp(c, lo[a], max_cell[a]);
+      t[a] = x - static_cast<double>(cell[a]);
+    }
+    const int64_t base = (cell[0] - lo[0]) + dy * (cell[1] - lo[1]) + dz * (cell[2] - lo[2]);
+    // The 8 corners, interpolated along x, then y, then z.
+    const std::byte* d = data;
+    const double c000 = Load<T>(d, base), c100 = Load<T>(d, base + 1);
+    const double c010 = Load<T>(d, base + dy), c110 = Load<T>(d, base + dy + 1);
+    const double c001 = Load<T>(d, base + dz), c101 = Load<T>(d, base + dz + 1);
+    const double c011 = Load<T>(d, base + dz + dy), c111 = Load<T>(d, base + dz + dy + 1);
+    const double c00 = Lerp(c000, c100, t[0]), c10 = Lerp(c010, c110, t[0]);
+    const double c01 = Lerp(c001, c101, t[0]), c11 = Lerp(c011, c111, t[0]);
+    return Lerp(Lerp(c00, c10, t[1]), Lerp(c01, c11, t[1]), t[2]);
+  }
+};
+
 // A scalar voxel volume, or a slab of one: the samples with indices in [lo, hi) of a larger grid.
 // Sampling uses the whole grid's geometry, so a point gives the same bits whether the volume is
 // whole or a slab that contains the point's cell.
@@ -104,16 +184,11 @@ class Volume {
   // direction (kept verbatim so axis-aligned results stay bit-identical), otherwise
   // (direction * diag(spacing))^-1 * (p - origin) with the inverse computed once in Create.
   Vec3 ContinuousIndex(const Vec3& p) const {
-    if (axis_aligned_) {
-      return {(p[0] - grid_.origin[0]) / grid_.spacing[0],
-              (p[1] - grid_.origin[1]) / grid_.spacing[1],
-              (p[2] - grid_.origin[2]) / grid_.spacing[2]};
-    }
-    const double d[3] = {p[0] - grid_.origin[0], p[1] - grid_.origin[1], p[2] - grid_.origin[2]};
-    const Mat3& m = world_to_index_;
-    return {m[0] * d[0] + m[1] * d[1] + m[2] * d[2], m[3] * d[0] + m[4] * d[1] + m[5] * d[2],
-            m[6] * d[0] + m[7] * d[1] + m[8] * d[2]};
+    return axis_aligned_ ? index_map().Apply<true>(p) : index_map().Apply<false>(p);
   }
+
+  // The world-to-index map ContinuousIndex applies, by value.
+  IndexMap index_map() const { return {grid_.origin, grid_.spacing, world_to_index_}; }
 
   // True when the grid's direction is the identity.
   bool axis_aligned() const { return axis_aligned_; }
@@ -141,6 +216,9 @@ class Volume {
   // far corners is exactly zero, so the neighbouring cell gives the same bits. That is what makes
   // a slab and the whole volume agree to the bit.
   double SampleIndex(const Vec3& u) const;
+
+  // What SampleIndex reads, by value. The caller picks T = the voxel type of type().
+  TrilinearSampler sampler() const;
 
   // The 8 samples at the corners of cell `cell` (its lowest corner; each axis in [lo, hi - 2]),
   // ordered c000, c100, c010, c110, c001, c101, c011, c111 (x fastest). For code that needs the
