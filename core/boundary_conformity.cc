@@ -218,12 +218,6 @@ struct Hit {
   uint32_t face;  // index into the boundary list
 };
 
-std::array<uint32_t, 4> SortedQuad(const BoundaryFace& f, uint32_t v) {
-  std::array<uint32_t, 4> q = {f[0], f[1], f[2], v};
-  std::sort(q.begin(), q.end());
-  return q;
-}
-
 // The first tet, in index order, that has all of face's vertices.
 int64_t TetOnFace(const std::vector<Tet>& tets, const BoundaryFace& face) {
   return FirstIndexWhere(static_cast<int64_t>(tets.size()), [&](int64_t t) {
@@ -232,6 +226,28 @@ int64_t TetOnFace(const std::vector<Tet>& tets, const BoundaryFace& face) {
       return std::find(tet.begin(), tet.end(), v) != tet.end();
     });
   });
+}
+
+// For each of `quads` (four vertex ids, any order), whether some tet has exactly those vertices.
+// The checks' candidates are rare, so this one pass over the tets runs only when there are any.
+// Each flag has one writer: two tets with the same vertices failed the face check.
+std::vector<uint8_t> AreTets(const std::vector<Tet>& tets,
+                             const std::vector<std::array<uint32_t, 4>>& quads) {
+  std::vector<std::pair<std::array<uint32_t, 4>, int64_t>> sorted(quads.size());
+  for (size_t i = 0; i < quads.size(); ++i) {
+    sorted[i] = {quads[i], static_cast<int64_t>(i)};
+    std::sort(sorted[i].first.begin(), sorted[i].first.end());
+  }
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<uint8_t> is_tet(quads.size(), 0);
+  ForEachBlock(static_cast<int64_t>(tets.size()), [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t t = begin; t < end; ++t) {
+      const std::array<uint32_t, 4> q = SortTet(tets[t]).v;
+      auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(q, int64_t{-1}));
+      for (; it != sorted.end() && it->first == q; ++it) is_tet[it->second] = 1;
+    }
+  });
+  return is_tet;
 }
 
 std::string FaceName(const BoundaryFace& f) {
@@ -272,23 +288,13 @@ absl::Status CheckNoVertexOnFace(const std::vector<Vec3>& points, const std::vec
   for (const std::vector<Hit>& h : found) hits.insert(hits.end(), h.begin(), h.end());
   if (hits.empty()) return absl::OkStatus();
   // A face's own tet's fourth vertex may come within tolerance of it (a sliver), and that is no
-  // hanging node: drop the hits whose vertex and face make up a tet. Hits are rare, so one pass
-  // over the tets, only when there are any.
-  std::vector<std::pair<std::array<uint32_t, 4>, int64_t>> quads(hits.size());
+  // hanging node: drop the hits whose vertex and face make up a tet (a boundary face has one).
+  std::vector<std::array<uint32_t, 4>> quads(hits.size());
   for (size_t i = 0; i < hits.size(); ++i) {
-    quads[i] = {SortedQuad(boundary[hits[i].face], hits[i].vertex), static_cast<int64_t>(i)};
+    const BoundaryFace& f = boundary[hits[i].face];
+    quads[i] = {f[0], f[1], f[2], hits[i].vertex};
   }
-  std::sort(quads.begin(), quads.end());
-  // The tet with a hit's four vertices is its face's own tet (a boundary face has one), and two
-  // tets with the same vertices failed the face check: each flag has one writer.
-  std::vector<uint8_t> own(hits.size(), 0);
-  ForEachBlock(static_cast<int64_t>(tets.size()), [&](int64_t, int64_t begin, int64_t end) {
-    for (int64_t t = begin; t < end; ++t) {
-      const std::array<uint32_t, 4> q = SortTet(tets[t]).v;
-      auto it = std::lower_bound(quads.begin(), quads.end(), std::make_pair(q, int64_t{-1}));
-      for (; it != quads.end() && it->first == q; ++it) own[it->second] = 1;
-    }
-  });
+  const std::vector<uint8_t> own = AreTets(tets, quads);
   const Hit* first = nullptr;
   for (size_t i = 0; i < hits.size(); ++i) {
     if (own[i]) continue;
@@ -459,23 +465,8 @@ absl::Status CheckNoFold(const std::vector<Vec3>& points, const std::vector<Tet>
   for (const std::vector<Fold>& f : found) folds.insert(folds.end(), f.begin(), f.end());
   if (folds.empty()) return absl::OkStatus();
   // Two faces of one tet fold onto each other when the tet is a sliver flat within the
-  // tolerance; that tet is valid (ValidateMesh judges its volume). Folds are rare, so one pass
-  // over the tets to drop those, as CheckNoVertexOnFace does.
-  std::vector<std::pair<std::array<uint32_t, 4>, int64_t>> quads(folds.size());
-  for (size_t i = 0; i < folds.size(); ++i) {
-    std::array<uint32_t, 4> q = folds[i];
-    std::sort(q.begin(), q.end());
-    quads[i] = {q, static_cast<int64_t>(i)};
-  }
-  std::sort(quads.begin(), quads.end());
-  std::vector<uint8_t> own(folds.size(), 0);
-  ForEachBlock(static_cast<int64_t>(tets.size()), [&](int64_t, int64_t begin, int64_t end) {
-    for (int64_t t = begin; t < end; ++t) {
-      const std::array<uint32_t, 4> q = SortTet(tets[t]).v;
-      auto it = std::lower_bound(quads.begin(), quads.end(), std::make_pair(q, int64_t{-1}));
-      for (; it != quads.end() && it->first == q; ++it) own[it->second] = 1;
-    }
-  });
+  // tolerance; that tet is valid (ValidateMesh judges its volume): drop those.
+  const std::vector<uint8_t> own = AreTets(tets, folds);
   const Fold* first = nullptr;
   for (size_t i = 0; i < folds.size(); ++i) {
     if (!own[i] && (first == nullptr || folds[i] < *first)) first = &folds[i];

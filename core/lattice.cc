@@ -10,6 +10,18 @@
 
 namespace tetrefine {
 
+MaxLocation LatticeLocation(int n, const std::array<int, 4>& ijkl) {
+  int zeros = 0, halves = 0;
+  for (int c : ijkl) {
+    zeros += c == 0;
+    halves += 2 * c == n;
+  }
+  if (zeros == 3) return MaxLocation::kVertex;
+  if (zeros == 2) return halves == 2 ? MaxLocation::kEdgeMidpoint : MaxLocation::kEdge;
+  if (zeros == 1) return MaxLocation::kFace;
+  return MaxLocation::kInterior;
+}
+
 namespace {
 
 TetLattice OneTet(const Volume& volume, const Mesh& mesh, int64_t t,

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 
@@ -11,6 +12,9 @@ namespace tetrefine {
 
 // Where in a tet the largest lattice discrepancy lies (paper section 5.1).
 enum class MaxLocation : uint8_t { kVertex, kEdgeMidpoint, kEdge, kFace, kInterior };
+
+// Where the lattice point (i, j, k, l) / n (ijkl, i + j + k + l = n) lies in its tet.
+MaxLocation LatticeLocation(int n, const std::array<int, 4>& ijkl);
 
 // Discrepancy of eq. 3 at the barycentric lattice points (i, j, k, l) / n, i + j + k + l = n,
 // of tet t of `mesh` (values per vertex): realValue by trilinear sampling of `volume` (clamped

@@ -6,18 +6,6 @@
 namespace tetrefine::lattice_internal {
 namespace {
 
-MaxLocation Classify(int n, const int (&ijkl)[4]) {
-  int zeros = 0, halves = 0;
-  for (int c : ijkl) {
-    zeros += c == 0;
-    halves += 2 * c == n;
-  }
-  if (zeros == 3) return MaxLocation::kVertex;
-  if (zeros == 2) return halves == 2 ? MaxLocation::kEdgeMidpoint : MaxLocation::kEdge;
-  if (zeros == 1) return MaxLocation::kFace;
-  return MaxLocation::kInterior;
-}
-
 // LatticeErrors for voxel type T and a known direction branch. Two passes over the chunk: the
 // positions and linear values (pure arithmetic on arrays, which the compiler vectorises), then
 // the samples (gathers). The scratch is local so that the compiler knows `errors` cannot alias
@@ -99,9 +87,9 @@ LatticePoints::LatticePoints(int n, bool with_corners) : n_(n) {
       for (int k = 0; i + j + k <= n; ++k) {
         const int l = n - i - j - k;
         if (!with_corners && (i == n || j == n || k == n || l == n)) continue;
-        const int ijkl[4] = {i, j, k, l};
+        const std::array<int, 4> ijkl = {i, j, k, l};
         for (int c = 0; c < 4; ++c) b_[c].push_back(ijkl[c] * inv_n);
-        location_.push_back(Classify(n, ijkl));
+        location_.push_back(LatticeLocation(n, ijkl));
       }
     }
   }

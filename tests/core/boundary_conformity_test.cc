@@ -299,15 +299,7 @@ TEST(BoundaryConformity, HugeCoordinatesDoNotBreakIt) {
 // A uniformly random rotation, scaled and moved: coplanar faces stay coplanar only up to
 // rounding, as in real files.
 Mesh RandomlyPlaced(std::mt19937_64& rng, Mesh m) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  double q[4] = {n(rng), n(rng), n(rng), n(rng)};
-  const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  for (double& x : q) x /= len;
-  const double a = q[0], b = q[1], c = q[2], d = q[3];
-  const double r[9] = {
-      a * a + b * b - c * c - d * d, 2 * (b * c - a * d),           2 * (b * d + a * c),
-      2 * (b * c + a * d),           a * a + c * c - b * b - d * d, 2 * (c * d - a * b),
-      2 * (b * d - a * c),           2 * (c * d + a * b),           a * a + d * d - b * b - c * c};
+  const Mat3 r = testing::RandomRotation(rng);
   std::uniform_real_distribution<double> log_scale(-3.0, 3.0), shift(-1e3, 1e3);
   const double scale = std::pow(10.0, log_scale(rng));
   const Vec3 t = {shift(rng), shift(rng), shift(rng)};

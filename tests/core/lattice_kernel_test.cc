@@ -101,19 +101,6 @@ uint64_t Bits(double x) { return std::bit_cast<uint64_t>(x); }
 constexpr VoxelType kTypes[] = {VoxelType::kUint8, VoxelType::kInt16,   VoxelType::kUint16,
                                 VoxelType::kInt32, VoxelType::kFloat32, VoxelType::kFloat64};
 
-// A uniformly random rotation, from a random unit quaternion.
-Mat3 RandomRotation(std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  double q[4] = {g(rng), g(rng), g(rng), g(rng)};
-  const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  for (double& x : q) x /= len;
-  const double a = q[0], b = q[1], c = q[2], d = q[3];
-  return {
-      a * a + b * b - c * c - d * d, 2 * (b * c - a * d),           2 * (b * d + a * c),
-      2 * (b * c + a * d),           a * a + c * c - b * b - d * d, 2 * (c * d - a * b),
-      2 * (b * d - a * c),           2 * (c * d + a * b),           a * a + d * d - b * b - c * c};
-}
-
 template <typename T>
 void AppendRandom(std::mt19937_64& rng, std::vector<std::byte>& data) {
   T value;
@@ -137,7 +124,7 @@ Volume RandomVolume(std::mt19937_64& rng, VoxelType type, bool oblique, bool sla
   g.spacing = {spacing(rng), spacing(rng), spacing(rng)};
   g.origin = {origin(rng), origin(rng), origin(rng)};
   if (oblique) {
-    g.direction = RandomRotation(rng);
+    g.direction = testing::RandomRotation(rng);
     if (rng() % 2 == 1) {
       for (int row = 0; row < 3; ++row) g.direction[3 * row] = -g.direction[3 * row];
     }

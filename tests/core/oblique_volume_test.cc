@@ -16,24 +16,6 @@
 namespace tetrefine {
 namespace {
 
-// A uniformly random rotation (from a random unit quaternion); with `mirror` the first column is
-// negated as well (det -1, as in radiological storage order).
-Mat3 RandomDirection(std::mt19937_64& rng, bool mirror) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  double q[4] = {n(rng), n(rng), n(rng), n(rng)};
-  const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  for (double& x : q) x /= len;
-  const double a = q[0], b = q[1], c = q[2], d = q[3];
-  Mat3 r{
-      a * a + b * b - c * c - d * d, 2 * (b * c - a * d),           2 * (b * d + a * c),
-      2 * (b * c + a * d),           a * a + c * c - b * b - d * d, 2 * (c * d - a * b),
-      2 * (b * d - a * c),           2 * (c * d + a * b),           a * a + d * d - b * b - c * c};
-  if (mirror) {
-    for (int row = 0; row < 3; ++row) r[3 * row] = -r[3 * row];
-  }
-  return r;
-}
-
 Vec3 Apply(const Mat3& m, const Vec3& v) {
   return {m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
           m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
@@ -57,7 +39,7 @@ TEST(ObliqueVolume, SamplesTheAxisAlignedValueAtTheSameIndex) {
     aligned.spacing = {spacing(rng), spacing(rng), spacing(rng)};
     GridGeometry oblique = aligned;
     oblique.origin = {origin(rng), origin(rng), origin(rng)};
-    oblique.direction = RandomDirection(rng, seed % 2 == 1);
+    oblique.direction = testing::RandomRotation(rng, seed % 2 == 1);
     const std::vector<double> values = RandomValues(rng, aligned.dims);
     const absl::StatusOr<Volume> a = Volume::FromDoubles(aligned, values);
     const absl::StatusOr<Volume> b = Volume::FromDoubles(oblique, values);
@@ -141,7 +123,7 @@ TEST(ObliqueVolume, DirectionDefectNamesWhatIsWrongAndWhere) {
   std::uniform_real_distribution<double> log_length(-6.0, 6.0);
   std::uniform_int_distribution<int> pick9(0, 8), pick3(0, 2);
   for (int seed = 0; seed < 200; ++seed) {
-    Mat3 d = RandomDirection(rng, seed % 2 == 1);
+    Mat3 d = testing::RandomRotation(rng, seed % 2 == 1);
     for (int column = 0; column < 3; ++column) {
       const double length = std::pow(10.0, log_length(rng));
       for (int row = 0; row < 3; ++row) d[3 * row + column] *= length;
@@ -186,7 +168,7 @@ TEST(ObliqueVolume, RefiningInARotatedFrameGivesTheRotatedResult) {
     const Volume a = testing::AnalyticVolume(aligned, testing::TestField);
     GridGeometry oblique = aligned;
     oblique.origin = {12.0, -30.0, 7.5};
-    oblique.direction = RandomDirection(rng, /*mirror=*/false);
+    oblique.direction = testing::RandomRotation(rng, /*mirror=*/false);
     const absl::StatusOr<Volume> b = Volume::CreateWhole(oblique, VoxelType::kFloat64, a.data());
     ASSERT_TRUE(b.ok()) << b.status();
 

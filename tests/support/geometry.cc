@@ -70,6 +70,22 @@ std::set<std::pair<uint32_t, uint32_t>> UniqueEdges(const std::vector<Tet>& tets
   return edges;
 }
 
+Mat3 RandomRotation(std::mt19937_64& rng, bool mirror) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  double q[4] = {n(rng), n(rng), n(rng), n(rng)};
+  const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  for (double& x : q) x /= len;
+  const double a = q[0], b = q[1], c = q[2], d = q[3];
+  Mat3 r{
+      a * a + b * b - c * c - d * d, 2 * (b * c - a * d),           2 * (b * d + a * c),
+      2 * (b * c + a * d),           a * a + c * c - b * b - d * d, 2 * (c * d - a * b),
+      2 * (b * d - a * c),           2 * (c * d + a * b),           a * a + d * d - b * b - c * c};
+  if (mirror) {
+    for (int row = 0; row < 3; ++row) r[3 * row] = -r[3 * row];
+  }
+  return r;
+}
+
 Mesh FiveTetMesh(const Vec3& lo, const Vec3& hi, const std::array<int, 3>& cells) {
   Mesh m;
   const int nx = cells[0] + 1, ny = cells[1] + 1, nz = cells[2] + 1;

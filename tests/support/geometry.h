@@ -21,6 +21,10 @@ std::vector<uint64_t> Seeds(int count);
 // A random tet with positive orientation and quality above min_quality.
 std::array<Vec3, 4> RandomTet(std::mt19937_64& rng, double min_quality = 0.05);
 
+// A uniformly random rotation (from a random unit quaternion), row-major; with `mirror` its first
+// column is negated as well (det -1, as in radiological storage order).
+Mat3 RandomRotation(std::mt19937_64& rng, bool mirror = false);
+
 // A volume from a function of world position, sampled where the grid's affine puts each sample
 // (for the identity direction exactly origin + index * spacing).
 template <typename F>

@@ -49,18 +49,6 @@ Argmax ScanTet(const Volume& volume, const Mesh& mesh, int64_t t, double norm) {
   return best;
 }
 
-MaxLocation Classify(const std::array<int, 4>& b) {
-  int zeros = 0, halves = 0;
-  for (int v : b) {
-    zeros += v == 0;
-    halves += 2 * v == kN;
-  }
-  if (zeros == 3) return MaxLocation::kVertex;
-  if (zeros == 2) return halves == 2 ? MaxLocation::kEdgeMidpoint : MaxLocation::kEdge;
-  if (zeros == 1) return MaxLocation::kFace;
-  return MaxLocation::kInterior;
-}
-
 bool NearEdgeMidpoint(const std::array<int, 4>& b) {
   for (int u = 0; u < 4; ++u) {
     for (int v = u + 1; v < 4; ++v) {
@@ -106,7 +94,7 @@ LocationStudy StudyMaxLocation(const Volume& volume, Mesh mesh, double norm_coef
           const TetLattice core =
               SampleTetLattice(volume, mesh, t, kN, norm_coeff, /*epsilon=*/1.0, /*clamp=*/true);
           const Argmax own = ScanTet(volume, mesh, t, norm_coeff);
-          if (Classify(own.at) != core.max_location) ++acc.mismatches;
+          if (LatticeLocation(kN, own.at) != core.max_location) ++acc.mismatches;
           for (LocationCounts& c : acc.counts) {
             if (!(core.max_error > c.threshold)) continue;
             ++c.counted;
