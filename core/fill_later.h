@@ -28,7 +28,10 @@ class DefaultInitAllocator : public Base {
   // Refine call; with huge pages the face check went from 117 to 18 ms, all of ValidateMesh from
   // 153 to 47 ms, and a whole one-iteration call without the lattice from 514 to 217 ms (paper)
   // and 646 to 337 ms (longest-edge). Below the threshold the rounding would waste more than it
-  // saves. At most one huge page of slack per array; the bits computed do not change.
+  // saves. The bits computed do not change. The cost is memory: each array has up to one huge
+  // page of slack, and resident memory is counted in 2 MiB pages, so the reproduction's peak
+  // added memory (runs above 10 MB, docs/results, 2026-11-23) grew by 1.19x at the median and
+  // 1.57x at most.
   static constexpr std::size_t kHugePage = std::size_t{2} << 20;
   static constexpr std::size_t kHugeThreshold = std::size_t{4} << 20;
 
