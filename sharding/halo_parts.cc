@@ -14,8 +14,6 @@
 namespace tetrefine::sharding {
 namespace {
 
-constexpr uint32_t kUnset = std::numeric_limits<uint32_t>::max();
-
 // Tets around each vertex, as offsets into one array (compressed rows).
 struct VertexTets {
   std::vector<uint32_t> first;  // vertex v's tets are tets[first[v], first[v + 1])
@@ -172,9 +170,9 @@ absl::StatusOr<MergedIteration> MergeOwnedChildren(const WholeMesh& before,
                        ": the result lacks per-vertex values or per-tet parents, qualities, "
                        "iterations or labels"));
     }
-    to_whole.assign(refined.points.size(), kUnset);
+    to_whole.assign(refined.points.size(), kUnsetIndex);
     auto vertex = [&](uint32_t j) -> absl::StatusOr<uint32_t> {
-      if (to_whole[j] != kUnset) return to_whole[j];
+      if (to_whole[j] != kUnsetIndex) return to_whole[j];
       if (j < num_own) {
         if (KeyOf(refined.points[j]) != KeyOf(part.mesh.points[j])) {
           return absl::InternalError(

@@ -12,8 +12,6 @@
 namespace tetrefine::sharding {
 namespace {
 
-constexpr uint32_t kUnset = std::numeric_limits<uint32_t>::max();
-
 bool InAnotherBox(const Vec3& p, const std::vector<MeshPart>& parts, size_t self) {
   for (size_t q = 0; q < parts.size(); ++q) {
     if (q != self && InBox(p, parts[q].box_lo, parts[q].box_hi)) return true;
@@ -52,7 +50,7 @@ absl::StatusOr<MergedMesh> MergeParts(const Mesh& input, const Volume& volume,
                                               refined.points.size(), ") than the part sent (",
                                               num_own, ") or no value per vertex"));
     }
-    to_merged.assign(refined.points.size(), kUnset);
+    to_merged.assign(refined.points.size(), kUnsetIndex);
     for (size_t j = 0; j < num_own; ++j) {
       if (KeyOf(refined.points[j]) != KeyOf(part.mesh.points[j])) {
         return absl::InternalError(absl::StrCat("part ", p, ": refined vertex ", j,

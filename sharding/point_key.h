@@ -12,6 +12,9 @@
 
 namespace tetrefine::sharding {
 
+// A part's vertex not yet given an index in the stitched-together whole.
+inline constexpr uint32_t kUnsetIndex = UINT32_MAX;
+
 using PointKey = std::array<uint64_t, 3>;  // the bits of x, y, z
 
 inline PointKey KeyOf(const Vec3& p) {

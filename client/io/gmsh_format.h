@@ -22,6 +22,9 @@ namespace tetrefine::io {
 // "quality" the per-tet arrays; other sections are skipped. Node and element tags may be sparse
 // and unordered; vertices are returned in node-tag order and tets in element-tag order (what
 // meshio and Gmsh's API return), whatever order the blocks had.
+// Gmsh's element type number of a linear tetrahedron.
+inline constexpr int kGmshTet = 4;
+
 struct GmshReadInfo {
   int64_t ignored_elements = 0;  // point, line and surface elements skipped
 };

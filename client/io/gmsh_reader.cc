@@ -20,7 +20,6 @@
 namespace tetrefine::io {
 namespace {
 
-constexpr int kGmshTet = 4;
 constexpr int64_t kMaxCount = int64_t{1} << 40;
 
 // Nodes per element of the Gmsh element types this reader knows; 0 for unknown.

@@ -13,8 +13,6 @@
 namespace tetrefine::io {
 namespace {
 
-constexpr int kGmshTet = 4;
-
 // Appends values in the machine's byte order: binary .msh is native, and its endianness word
 // tells readers which order that was.
 template <typename T>

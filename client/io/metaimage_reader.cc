@@ -23,8 +23,6 @@
 namespace tetrefine::io {
 namespace {
 
-constexpr int64_t kMaxAxis = int64_t{1} << 20;
-
 std::optional<VoxelType> MetaType(absl::string_view name) {
   if (name == "MET_UCHAR") return VoxelType::kUint8;
   if (name == "MET_SHORT") return VoxelType::kInt16;
@@ -42,7 +40,7 @@ struct MetaHeader {
   size_t data_offset = 0;                     // first byte after the ElementDataFile line
 };
 
-absl::StatusOr<MetaHeader> ParseHeader(absl::string_view bytes, const std::string& path) {
+absl::StatusOr<MetaHeader> ParseMetaHeader(absl::string_view bytes, const std::string& path) {
   HeaderLines lines(bytes);
   absl::string_view line;
   MetaHeader header;
@@ -106,7 +104,7 @@ absl::string_view FirstPresent(const MetaHeader& header,
 absl::StatusOr<VolumeFile> ReadMetaImage(const std::string& path) {
   absl::StatusOr<std::string> file = ReadFileBytes(path);
   if (!file.ok()) return file.status();
-  absl::StatusOr<MetaHeader> header = ParseHeader(*file, path);
+  absl::StatusOr<MetaHeader> header = ParseMetaHeader(*file, path);
   if (!header.ok()) return header.status();
 
   if (const absl::string_view object = Value(*header, "objecttype");
@@ -141,7 +139,7 @@ absl::StatusOr<VolumeFile> ReadMetaImage(const std::string& path) {
   Index3 dims;
   for (int a = 0; a < 3; ++a) {
     const double s = (*sizes)[a];
-    if (s != std::floor(s) || s < 1 || s > static_cast<double>(kMaxAxis)) {
+    if (s != std::floor(s) || s < 1 || s > static_cast<double>(kMaxVolumeAxis)) {
       return FileError(path, absl::StrCat("DimSize ", s, " must be an integer in [1, 2^20]"));
     }
     dims[a] = static_cast<int64_t>(s);

@@ -14,8 +14,6 @@
 namespace tetrefine::io {
 namespace {
 
-constexpr int64_t kMaxAxis = int64_t{1} << 20;
-
 std::optional<VoxelType> VoxelTypeOfDatatype(int datatype) {
   switch (datatype) {
     case 2:
@@ -80,7 +78,7 @@ absl::StatusOr<Index3> SpatialDims(const NiftiHeader& header, absl::string_view 
   Index3 dims{1, 1, 1};
   for (int a = 1; a <= rank; ++a) {
     const int64_t size = header.dim[a];
-    if (size < 1 || size > kMaxAxis) {
+    if (size < 1 || size > kMaxVolumeAxis) {
       return FileError(path, absl::StrCat("dim[", a, "] = ", size, ": must be in [1, 2^20]"));
     }
     if (a <= 3) {

@@ -26,8 +26,6 @@
 namespace tetrefine::io {
 namespace {
 
-constexpr int64_t kMaxAxis = int64_t{1} << 20;
-
 std::optional<VoxelType> NrrdType(absl::string_view name) {
   static const auto* const kTypes = new std::map<absl::string_view, VoxelType>{
       {"uchar", VoxelType::kUint8},
@@ -91,7 +89,7 @@ struct NrrdFields {
   size_t data_offset = 0;                     // first byte after the header's blank line
 };
 
-absl::StatusOr<NrrdFields> ParseHeader(absl::string_view bytes, const std::string& path) {
+absl::StatusOr<NrrdFields> ParseNrrdHeader(absl::string_view bytes, const std::string& path) {
   HeaderLines lines(bytes);
   absl::string_view line;
   if (!lines.Next(line) || !absl::StartsWith(line, "NRRD000")) {
@@ -191,7 +189,7 @@ absl::StatusOr<std::string> DecodeAscii(absl::string_view text, VoxelType type, 
 absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
   absl::StatusOr<std::string> file = ReadFileBytes(path);
   if (!file.ok()) return file.status();
-  absl::StatusOr<NrrdFields> fields = ParseHeader(*file, path);
+  absl::StatusOr<NrrdFields> fields = ParseNrrdHeader(*file, path);
   if (!fields.ok()) return fields.status();
 
   const absl::string_view type_name = Field(*fields, "type");
@@ -210,7 +208,7 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
   if (sizes.size() != 3) return FileError(path, "\"sizes\" must give 3 sizes");
   Index3 dims;
   for (int a = 0; a < 3; ++a) {
-    if (!ParseInt64(sizes[a], dims[a]) || dims[a] < 1 || dims[a] > kMaxAxis) {
+    if (!ParseInt64(sizes[a], dims[a]) || dims[a] < 1 || dims[a] > kMaxVolumeAxis) {
       return FileError(path, absl::StrCat("size \"", sizes[a], "\" must be in [1, 2^20]"));
     }
   }

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,10 @@ namespace tetrefine::io {
 
 // A 4x4 homogeneous transform, row-major: world = affine * (i, j, k, 1).
 using Affine = std::array<std::array<double, 4>, 4>;
+
+// The largest size of one volume axis any reader accepts: a header claiming more is corrupt,
+// and refusing it early keeps a hostile header from sizing a huge allocation.
+inline constexpr int64_t kMaxVolumeAxis = int64_t{1} << 20;
 
 // A volume read from a file.
 //

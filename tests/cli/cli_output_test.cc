@@ -29,10 +29,9 @@ using cli::CutIntoPieces;
 using cli::FormatBytes;
 using cli::FormatCount;
 using cli::FormatSeconds;
+using io::iotest::kPython;
 using io::iotest::ReadBytes;
 using io::iotest::ScratchDir;
-
-constexpr char kPython[] = "/usr/bin/python3";
 
 // An encoding to try: the flags, the extension, and a piece of the file's text that shows the
 // flag took effect (so a flag that is parsed but ignored fails).

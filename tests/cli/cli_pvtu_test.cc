@@ -24,10 +24,9 @@
 namespace tetrefine::clitest {
 namespace {
 
+using io::iotest::kPython;
 using io::iotest::ReadBytes;
 using io::iotest::ScratchDir;
-
-constexpr char kPython[] = "/usr/bin/python3";
 
 // A tet by its corners' coordinates with what it carries, so that tets compare across vertex
 // numberings.

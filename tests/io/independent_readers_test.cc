@@ -18,11 +18,11 @@
 namespace tetrefine::io {
 namespace {
 
+using iotest::kPython;
 using iotest::RandomMesh;
 using iotest::RandomMeshOptions;
 using iotest::ScratchDir;
 
-constexpr char kPython[] = "/usr/bin/python3";
 constexpr char kGmsh[] = "/usr/bin/gmsh";
 
 // Runs `argv` to completion (tests/support's RunProcess): exit code and stdout followed by stderr.

@@ -7,6 +7,9 @@
 
 namespace tetrefine::io::iotest {
 
+// The system interpreter, which has Debian's meshio, VTK and numpy (a venv's python may not).
+inline constexpr char kPython[] = "/usr/bin/python3";
+
 // A fresh directory under the test temp dir, removed (with its contents) on destruction.
 class ScratchDir {
  public:

@@ -13,11 +13,10 @@
 namespace tetrefine::io {
 namespace {
 
+using iotest::kPython;
 using iotest::RandomMesh;
 using iotest::RandomMeshOptions;
 using iotest::ScratchDir;
-
-constexpr char kPython[] = "/usr/bin/python3";
 
 // Runs `command` and returns its stdout and exit status.
 std::pair<std::string, int> RunCommand(const std::string& command) {
