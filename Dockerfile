@@ -15,7 +15,7 @@ COPY scripts/install-deps.sh scripts/install-deps.sh
 RUN TETREFINE_WITH_TEST_TOOLS=0 bash scripts/install-deps.sh && rm -rf /var/lib/apt/lists/*
 COPY . .
 RUN cmake -S . -B /build -G Ninja -DCMAKE_BUILD_TYPE=Release \
-      -DTETREFINE_BUILD_TESTS=OFF -DTETREFINE_BUILD_BENCH=OFF \
+      -DTETREFINE_BUILD_TESTS=OFF -DTETREFINE_BUILD_BENCH=OFF -DCMAKE_UNITY_BUILD=ON \
  && cmake --build /build --target tetrefine_server tetrefine \
  && mkdir -p /out \
  && cp /build/server/tetrefine_server /build/client/tetrefine /out/ \

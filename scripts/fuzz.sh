@@ -17,6 +17,8 @@ seconds="${1:-20}"
 shift || true
 build=build-fuzz
 export CC=clang-14 CXX=clang++-14
+# Not a unity build, unlike the test and sanitizer builds: compiling each library source alone
+# keeps a missing #include from hiding behind a batch neighbour's.
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DTETREFINE_BUILD_FUZZ=ON -DTETREFINE_BUILD_TESTS=OFF -DTETREFINE_BUILD_BENCH=OFF \
   -DTETREFINE_SANITIZE=fuzzer-no-link,address,undefined \

@@ -14,6 +14,7 @@ build=build-asan
 # inside libstdc++'s <regex>); the normal build (scripts/test.sh) is the one that polices warnings.
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTETREFINE_WERROR=OFF \
   -DTETREFINE_BUILD_BENCH=OFF -DTETREFINE_SANITIZE=address,undefined,float-cast-overflow \
+  -DCMAKE_UNITY_BUILD=ON \
   -DCMAKE_CXX_FLAGS="-fno-sanitize-recover=all" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
   >/dev/null
 cmake --build "$build" -j "$(nproc)"
