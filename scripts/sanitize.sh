@@ -24,7 +24,18 @@ cmake --build "$build" -j "$(nproc)"
 export ASAN_OPTIONS="halt_on_error=1:abort_on_error=1:detect_leaks=1:detect_stack_use_after_return=0"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp:print_suppressions=0"
-# DockerRuntimePackages checks which shared libraries the production binaries load; here they
-# also load libasan and libubsan, which no runtime image has.
+# Left out, as they run no C++ of ours that the rest of this suite does not run too:
+#  - DockerRuntimePackages checks which shared libraries the production binaries load; here they
+#    also load libasan and libubsan, which no runtime image has;
+#  - the Python package's tests (PythonClient, PythonClientVenvInstall, PythonStubsCurrent,
+#    ServicePythonExample) and the Plaza script (PlazaRefineScript) run Python against a server
+#    whose handling of the same requests the C++ service tests cover;
+#  - CliOutput.IndependentReadersSeeTheSameTetsAndLabels makes the same CLI runs and files as
+#    CliOutput.EveryEncodingFlagReadsBackTheSameTetsAndLabels, then reads them with meshio and VTK;
+#  - FormatCheck compiles nothing.
+# Together they took 113 s of the 857 s this suite ran under the sanitizers (2026-11-24, 2 cores).
+excluded='DockerRuntimePackages|PythonClient|PythonClientVenvInstall|PythonStubsCurrent'
+excluded+='|ServicePythonExample|PlazaRefineScript|FormatCheck'
+excluded+='|CliOutput\.IndependentReadersSeeTheSameTetsAndLabels'
 ctest --test-dir "$build" --output-on-failure -j "$(nproc)" --timeout 1800 \
-  -E '^DockerRuntimePackages$' "$@"
+  -E "^($excluded)\$" "$@"
