@@ -47,6 +47,13 @@ constexpr milliseconds kPromptly{3000};
 #else
 constexpr milliseconds kPromptly{1000};
 #endif
+// How long after its deadline a client call may return, in wall time. The server's work is
+// measured in CPU time (ExpectIdleSoon), which load does not stretch; the client's return is
+// wall time, which it does: 1022 ms was seen once against a bound of kPromptly, with the
+// refining server and the rest of a CI run on both cores. A client that ignored its deadline
+// would wait for the whole refinement, which only cancellation ends early here (StartServer),
+// so twice kPromptly still tells.
+constexpr milliseconds kClientReturn = 2 * kPromptly;
 
 // A short drain unless a test is about draining: these tests keep connections open, and a
 // server with open connections takes the whole drain time to stop.
@@ -137,7 +144,7 @@ TEST(HardeningFaultTest, DeadlineExpiresDuringTheRefinement) {
       client::RefineViaService(server->NewChannel(), w.volume, w.mesh, w.options, callbacks, call);
   EXPECT_EQ(result.status().code(), absl::StatusCode::kDeadlineExceeded) << result.status();
   EXPECT_TRUE(iterated.load()) << "the deadline fell before the refinement got going";
-  EXPECT_LT(Clock::now() - deadline_steady, kPromptly) << "the client waited past its deadline";
+  EXPECT_LT(Clock::now() - deadline_steady, kClientReturn) << "the client waited past its deadline";
   ExpectIdleSoon(*server, "the deadline");
   // The client's timer fires first and cancels the stream before the server's copy of the
   // deadline (set when the request arrived, so a little later) has passed: the server's log may
