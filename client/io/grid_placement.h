@@ -16,11 +16,18 @@ namespace tetrefine::io {
 // larger (a 0.1 degree tilt is 1.7e-3).
 inline constexpr double kObliqueTolerance = 1e-5;
 
+// The voxel sizes (affine column lengths) a volume file may have, in mm: 1 pm to 1000 km, far
+// beyond any scanner or microscope, and far from the subnormal and overflowing products at which
+// the geometry stops round-tripping exactly.
+inline constexpr double kMinVoxelMm = 1e-9;
+inline constexpr double kMaxVoxelMm = 1e9;
+
 // Builds the VolumeFile for samples stored in index order (x fastest) with index-to-world (RAS
 // mm) transform `affine`, following the frame rules documented on VolumeFile: flips axes with a
 // negative scale when the affine is diagonal up to signs, otherwise keeps the samples and puts the
 // normalised columns into the grid's direction. `data` holds dims.prod() little-endian samples of
-// `type`. Errors (naming `path`): a non-finite entry, a zero column, a singular direction.
+// `type`. Errors (naming `path`): a non-finite entry, a zero column, a column length outside
+// [kMinVoxelMm, kMaxVoxelMm] (naming the axis), a singular direction.
 absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& affine,
                                        const Index3& dims, VoxelType type,
                                        std::vector<std::byte> data);
