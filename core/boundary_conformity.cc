@@ -374,12 +374,19 @@ class BoundaryEdges {
   // bucket, which is safe from one thread per u.
   template <typename Visit>
   bool ForEachEdgeOf(int64_t u, Visit visit) {
-    uint64_t* b = ends_.get() + start_[u];
-    uint64_t* e = ends_.get() + start_[u + 1];
-    SortSmall(b, e);
+    SortSmall(ends_.get() + start_[u], ends_.get() + start_[u + 1]);
+    return ForEachSortedEdgeOf(u, visit);
+  }
+
+  // The same, reading u's bucket only: valid once every bucket has been sorted (CheckClosed and
+  // CheckNoFold visit them all), and then safe from any number of threads.
+  template <typename Visit>
+  bool ForEachSortedEdgeOf(int64_t u, Visit visit) const {
+    const uint64_t* b = ends_.get() + start_[u];
+    const uint64_t* e = ends_.get() + start_[u + 1];
     uint32_t thirds[64];
-    for (uint64_t* p = b; p < e;) {
-      uint64_t* q = p;
+    for (const uint64_t* p = b; p < e;) {
+      const uint64_t* q = p;
       while (q < e && (*q >> 32) == (*p >> 32)) ++q;
       const int64_t count = q - p;
       // More than 64 faces on one edge only happens in a broken mesh; the fold check looks at
@@ -390,6 +397,13 @@ class BoundaryEdges {
       p = q;
     }
     return false;
+  }
+
+  // Whether (u, v, third) is a boundary face, u < v. Reads like ForEachSortedEdgeOf.
+  bool HasFace(uint32_t u, uint32_t v, uint32_t third) const {
+    const uint64_t* b = ends_.get() + start_[u];
+    const uint64_t* e = ends_.get() + start_[u + 1];
+    return std::binary_search(b, e, uint64_t{v} << 32 | third);
   }
 
  private:
@@ -482,6 +496,135 @@ absl::Status CheckNoFold(const std::vector<Vec3>& points, const std::vector<Tet>
       "differently on its two sides, or a boundary folded onto itself)"));
 }
 
+// The vertex opposite each of `faces` (ascending ids) in its tet, and that tet, for faces of
+// exactly one tet (boundary faces): one pass over the tets, run only for the rare candidates.
+struct Owner {
+  uint32_t opposite = 0;
+  int64_t tet = -1;
+};
+std::vector<Owner> OwnersOf(const std::vector<Tet>& tets, const std::vector<BoundaryFace>& faces) {
+  std::vector<std::pair<BoundaryFace, int64_t>> sorted(faces.size());
+  for (size_t i = 0; i < faces.size(); ++i) sorted[i] = {faces[i], static_cast<int64_t>(i)};
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<Owner> owners(faces.size());
+  ForEachBlock(static_cast<int64_t>(tets.size()), [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t t = begin; t < end; ++t) {
+      for (int skip = 0; skip < 4; ++skip) {
+        BoundaryFace f;
+        int k = 0;
+        for (int i = 0; i < 4; ++i) {
+          if (i != skip) f[k++] = tets[t][i];
+        }
+        std::sort(f.begin(), f.end());
+        auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(f, int64_t{-1}));
+        for (; it != sorted.end() && it->first == f; ++it) owners[it->second] = {tets[t][skip], t};
+      }
+    }
+  });
+  return owners;
+}
+
+// Four boundary faces that make up the surface of a tet (u, v, c, d) the mesh does not have
+// enclose either a cavity or tets of their own (a tet split at an inner point, alone), both
+// valid; or two tets that overlap: a quadrilateral that is not planar, split along one diagonal
+// on one side and the other diagonal on the other, where the two sides bulge into each other
+// (where they bulge apart they leave a tet-shaped cavity, which is a valid mesh). The overlap
+// shows in a face's own tet: on the shell's inner side of the face, yet with its fourth vertex
+// outside the shell, so it reaches through the shell's other faces. Check 3 finds the planar
+// case (the faces fold); this one the rest. Returns the offending shell's tet through the face,
+// or nothing.
+absl::Status CheckNoOverlappingShell(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                                     const BoundaryEdges& edges) {
+  using Shell = std::array<uint32_t, 4>;  // ascending
+  const int64_t num_points = static_cast<int64_t>(points.size());
+  std::vector<std::vector<Shell>> found(BlockCount(num_points));
+  ForEachBlock(num_points, [&](int64_t block, int64_t begin, int64_t end) {
+    for (int64_t u = begin; u < end; ++u) {
+      edges.ForEachSortedEdgeOf(u, [&](uint32_t v, const uint32_t* thirds, int64_t kept, int64_t) {
+        for (int64_t i = 0; i < kept; ++i) {
+          for (int64_t j = i + 1; j < kept; ++j) {
+            const uint32_t c = std::min(thirds[i], thirds[j]), d = std::max(thirds[i], thirds[j]);
+            // Each shell once: from the edge of its two smallest vertices.
+            if (c <= v || c == d) continue;
+            if (edges.HasFace(c, d, static_cast<uint32_t>(u)) && edges.HasFace(c, d, v)) {
+              found[block].push_back({static_cast<uint32_t>(u), v, c, d});
+            }
+          }
+        }
+        return false;
+      });
+    }
+  });
+  std::vector<Shell> shells;
+  for (const std::vector<Shell>& f : found) shells.insert(shells.end(), f.begin(), f.end());
+  if (shells.empty()) return absl::OkStatus();
+  // A single tet alone is its own shell.
+  const std::vector<uint8_t> is_tet = AreTets(tets, shells);
+  std::vector<Shell> open;
+  for (size_t i = 0; i < shells.size(); ++i) {
+    if (!is_tet[i]) open.push_back(shells[i]);
+  }
+  if (open.empty()) return absl::OkStatus();
+  std::sort(open.begin(), open.end());
+  std::vector<BoundaryFace> faces;
+  for (const Shell& s : open) {
+    for (int skip = 0; skip < 4; ++skip) {
+      BoundaryFace f;
+      int k = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != skip) f[k++] = s[i];
+      }
+      faces.push_back(f);
+    }
+  }
+  const std::vector<Owner> owners = OwnersOf(tets, faces);
+  for (size_t n = 0; n < open.size(); ++n) {
+    const Shell& s = open[n];
+    const Vec3* p[4] = {&points[s[0]], &points[s[1]], &points[s[2]], &points[s[3]]};
+    // Which side of face `skip` the shell's inside is: that of the vertex off the face.
+    auto side = [&](int skip, const Vec3& q) {
+      const Vec3* f[3];
+      int k = 0;
+      for (int i = 0; i < 4; ++i) {
+        if (i != skip) f[k++] = p[i];
+      }
+      return SignedVolume6(*f[0], *f[1], *f[2], q);
+    };
+    for (int skip = 0; skip < 4; ++skip) {
+      const Owner& owner = owners[4 * n + static_cast<size_t>(skip)];
+      const Vec3& o = points[owner.opposite];
+      double longest2 = 0.0;
+      for (int i = 0; i < 4; ++i) {
+        longest2 = std::max(longest2, Norm2(Sub(o, *p[i])));
+        for (int j = i + 1; j < 4; ++j) longest2 = std::max(longest2, Norm2(Sub(*p[i], *p[j])));
+      }
+      // The degenerate-tet bound ValidateMesh uses: |6V| <= 1e-12 L^3.
+      const double tolerance = 1e-12 * longest2 * std::sqrt(longest2);
+      auto strictly_same_side = [&](int face, double a) {
+        const double inside = side(face, *p[face]);
+        return inside > 0.0 ? a > tolerance : a < -tolerance;
+      };
+      if (!strictly_same_side(skip, side(skip, o))) continue;  // a cavity: the tet is outside
+      bool outside = false;
+      for (int other = 0; other < 4; ++other) {
+        const double a = side(other, o);
+        const double inside = side(other, *p[other]);
+        if (inside > 0.0 ? a < -tolerance : a > tolerance) outside = true;
+      }
+      if (!outside) continue;  // the shell holds its own tets
+      const BoundaryFace& face = faces[4 * n + static_cast<size_t>(skip)];
+      return absl::InvalidArgumentError(absl::StrCat(
+          "mesh is not conformal: boundary faces on vertices (", s[0], ", ", s[1], ", ", s[2], ", ",
+          s[3], ") close around a tet the mesh does not have, and mesh.tets[", owner.tet,
+          "], on the inside of face ", FaceName(face),
+          ", reaches out through the others, so "
+          "two tets overlap (crossing diagonals: a quadrilateral that is not planar split "
+          "differently on its two sides)"));
+    }
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::Status CheckBoundaryConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
@@ -493,7 +636,8 @@ absl::Status CheckBoundaryConformity(const std::vector<Vec3>& points, const std:
       !s.ok()) {
     return s;
   }
-  return CheckNoFold(points, tets, edges);
+  if (absl::Status s = CheckNoFold(points, tets, edges); !s.ok()) return s;
+  return CheckNoOverlappingShell(points, tets, edges);
 }
 
 }  // namespace tetrefine

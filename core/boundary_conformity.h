@@ -33,8 +33,16 @@ using BoundaryFace = std::array<uint32_t, 3>;
 //      exactly like this, so it finds a square face split by crossing diagonals on its two
 //      sides, which leaves no hanging vertex and an even count on every edge. Pairs that are
 //      two faces of one (sliver) tet do not count. Reports the smallest (edge, third vertices).
-//      Not found: crossing diagonals of a quadrilateral that is not planar (the tets then
-//      overlap or leave a gap in volume, which would need a surface self-intersection test).
+//   4. No two tets overlap across a quadrilateral that is not planar and is split differently
+//      on its two sides. Its four triangles are boundary faces that close around a tet the mesh
+//      does not have; where the two sides bulge into each other, a face's own tet lies on the
+//      inside of that shell with its fourth vertex outside it (beyond 1e-12 L^3 in 6 x volume,
+//      the degenerate-tet bound), reaching out through the shell. Where they bulge apart they
+//      leave a tet-shaped cavity, and a shell may also hold its own tets (a lone tet split at an
+//      inner point): both valid, both pass. Reports the smallest such shell.
+//      Not found: overlaps along larger non-planar regions triangulated differently on their
+//      two sides (more than one quadrilateral), which would need a surface self-intersection
+//      test.
 // Cost: O(T) to name a tet in a message, otherwise about linear in the boundary's size (a hash
 // grid with one level per power of two of face size), parallel, and the verdict and message do
 // not depend on the thread count. `points` must be finite (ValidateMesh checks that first).

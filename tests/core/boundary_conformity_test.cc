@@ -367,6 +367,59 @@ TEST(BoundaryConformity, CrossingDiagonalsNameBothFaces) {
   ExpectNamed(s, "crossing");
 }
 
+// Two bodies glued at a quadrilateral (a, b, c, d) that is not planar (c lifted by `lift`),
+// split along a-c below and b-d above: each body is two tets on an apex. Lifted up, the a-c
+// side bulges into the b-d side and the bodies overlap in the tet (a, b, c, d); lifted down they
+// bulge apart and leave that tet as a cavity. Placed by `rng`; tets positively oriented.
+Mesh GluedAtATwistedQuad(std::mt19937_64& rng, double lift) {
+  Mesh m;
+  m.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, lift}, {0, 1, 0}, {0.5, 0.5, -1}, {0.5, 0.5, 1}};
+  m.tets = {{0, 1, 2, 4}, {0, 2, 3, 4}, {0, 1, 3, 5}, {1, 2, 3, 5}};
+  m = RandomlyPlaced(rng, m);
+  for (Tet& t : m.tets) {
+    if (SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]) < 0.0) {
+      std::swap(t[2], t[3]);
+    }
+  }
+  return m;
+}
+
+// Crossing diagonals out of plane: the fold check cannot see them (the faces are not in one
+// plane), the shell check can when the bodies overlap. Where they leave a gap, the mesh is two
+// bodies with a tet-shaped cavity between them, which is valid.
+TEST(BoundaryConformity, TwistedCrossingDiagonalsThatOverlapAreRefused) {
+  for (uint64_t seed : testing::Seeds(20)) {
+    SCOPED_TRACE(::testing::Message() << "seed " << seed);
+    std::mt19937_64 rng(seed);
+    const double lift = std::uniform_real_distribution<double>(0.01, 0.5)(rng);
+    const uint64_t placement = rng();
+    std::mt19937_64 place(placement);
+    const Mesh overlap = GluedAtATwistedQuad(place, lift);
+    ASSERT_TRUE(CheckFaces(overlap.points, overlap.tets).ok()) << "the face check cannot see it";
+    ExpectNamed(Check(overlap), "reaches out through the others, so two tets overlap");
+    place.seed(placement);
+    const Mesh gap = GluedAtATwistedQuad(place, -lift);
+    EXPECT_TRUE(Check(gap).ok()) << Check(gap);
+  }
+}
+
+// A shell of four boundary faces may hold tets of its own: a lone tet split at an inner point.
+TEST(BoundaryConformity, ATetSplitAtAnInnerPointAlonePasses) {
+  for (uint64_t seed : testing::Seeds(10)) {
+    std::mt19937_64 rng(seed);
+    Mesh m;
+    m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.2, 0.3, 0.1}};
+    m.tets = {{4, 1, 2, 3}, {0, 4, 2, 3}, {0, 1, 4, 3}, {0, 1, 2, 4}};
+    m = RandomlyPlaced(rng, m);
+    for (Tet& t : m.tets) {
+      if (SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]) < 0.0) {
+        std::swap(t[2], t[3]);
+      }
+    }
+    EXPECT_TRUE(Check(m).ok()) << Check(m);
+  }
+}
+
 // The verdict and the message do not depend on the thread count.
 TEST(BoundaryConformity, SameMessageForAnyThreadCount) {
   for (uint64_t seed : testing::Seeds(5)) {
@@ -412,6 +465,25 @@ TEST(BoundaryConformity, RefineRefusesAHangingNode) {
   ASSERT_FALSE(expected.ok());
   GridGeometry g;
   g.dims = {4, 4, 4};
+  const Volume volume = testing::AnalyticVolume(g, [](const Vec3& p) { return p[0]; });
+  const absl::StatusOr<RefineResult> r = Refine(volume, m, RefineOptions{});
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status(), expected);
+}
+
+TEST(BoundaryConformity, RefineRefusesTetsOverlappingAcrossATwistedQuad) {
+  std::mt19937_64 rng(3);
+  Mesh m = GluedAtATwistedQuad(rng, 0.2);
+  const absl::Status expected = Check(m);
+  ASSERT_FALSE(expected.ok());
+  Vec3 lo = m.points[0], hi = m.points[0];
+  for (const Vec3& p : m.points) {
+    for (int i = 0; i < 3; ++i) lo[i] = std::min(lo[i], p[i]), hi[i] = std::max(hi[i], p[i]);
+  }
+  GridGeometry g;
+  g.dims = {4, 4, 4};
+  g.origin = lo;
+  for (int i = 0; i < 3; ++i) g.spacing[i] = (hi[i] - lo[i]) / 3.0;
   const Volume volume = testing::AnalyticVolume(g, [](const Vec3& p) { return p[0]; });
   const absl::StatusOr<RefineResult> r = Refine(volume, m, RefineOptions{});
   ASSERT_FALSE(r.ok());
