@@ -367,21 +367,18 @@ class BoundaryEdges {
           ends_[slot(face[1], 1)] = key(face[2], face[0]);
         });
     start_ = std::move(layout.start);
+    // Sorted once, here, so that every check after reads the buckets from any thread.
+    ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
+      for (int64_t u = begin; u < end; ++u) {
+        SortSmall(ends_.get() + start_[u], ends_.get() + start_[u + 1]);
+      }
+    });
   }
 
   // Calls visit(v, thirds, count) for each edge (u, v), v ascending, with the third vertices of
-  // its `count` faces; stops at the first visit that returns true and returns that. Sorts u's
-  // bucket, which is safe from one thread per u.
+  // its `count` faces; stops at the first visit that returns true and returns that.
   template <typename Visit>
-  bool ForEachEdgeOf(int64_t u, Visit visit) {
-    SortSmall(ends_.get() + start_[u], ends_.get() + start_[u + 1]);
-    return ForEachSortedEdgeOf(u, visit);
-  }
-
-  // The same, reading u's bucket only: valid once every bucket has been sorted (CheckClosed and
-  // CheckNoFold visit them all), and then safe from any number of threads.
-  template <typename Visit>
-  bool ForEachSortedEdgeOf(int64_t u, Visit visit) const {
+  bool ForEachEdgeOf(int64_t u, Visit visit) const {
     const uint64_t* b = ends_.get() + start_[u];
     const uint64_t* e = ends_.get() + start_[u + 1];
     uint32_t thirds[64];
@@ -399,7 +396,7 @@ class BoundaryEdges {
     return false;
   }
 
-  // Whether (u, v, third) is a boundary face, u < v. Reads like ForEachSortedEdgeOf.
+  // Whether (u, v, third) is a boundary face, u < v.
   bool HasFace(uint32_t u, uint32_t v, uint32_t third) const {
     const uint64_t* b = ends_.get() + start_[u];
     const uint64_t* e = ends_.get() + start_[u + 1];
@@ -431,7 +428,7 @@ BoundaryFace SortedFace(uint32_t a, uint32_t b, uint32_t c) {
 }
 
 absl::Status CheckClosed(const std::vector<Tet>& tets, const std::vector<BoundaryFace>& boundary,
-                         BoundaryEdges& edges, int64_t num_points) {
+                         const BoundaryEdges& edges, int64_t num_points) {
   // The bucket's first edge used by an odd number of faces, as (other end, uses).
   auto first_odd = [&](int64_t u) -> std::pair<uint32_t, int64_t> {
     std::pair<uint32_t, int64_t> odd{0, 0};
@@ -454,19 +451,19 @@ absl::Status CheckClosed(const std::vector<Tet>& tets, const std::vector<Boundar
                    "]), so the boundary is not closed: a hanging node on the edge, or a crack"));
 }
 
-absl::Status CheckNoFold(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                         BoundaryEdges& edges) {
-  // A folded pair: edge (u, v), third vertices c < d.
-  using Fold = std::array<uint32_t, 4>;
-  const int64_t num_points = static_cast<int64_t>(points.size());
-  std::vector<std::vector<Fold>> found(BlockCount(num_points));
+// Every (u, v, c, d) with u < v and c < d where (u, v, c) and (u, v, d) are boundary faces and
+// keep(u, v, c, d) holds, in an order that does not depend on the thread count.
+template <typename Keep>
+std::vector<std::array<uint32_t, 4>> FacePairsWhere(int64_t num_points, const BoundaryEdges& edges,
+                                                    Keep keep) {
+  std::vector<std::vector<std::array<uint32_t, 4>>> found(BlockCount(num_points));
   ForEachBlock(num_points, [&](int64_t block, int64_t begin, int64_t end) {
     for (int64_t u = begin; u < end; ++u) {
       edges.ForEachEdgeOf(u, [&](uint32_t v, const uint32_t* thirds, int64_t kept, int64_t) {
         for (int64_t i = 0; i < kept; ++i) {
           for (int64_t j = i + 1; j < kept; ++j) {
             const uint32_t c = std::min(thirds[i], thirds[j]), d = std::max(thirds[i], thirds[j]);
-            if (c != d && Folded(points[u], points[v], points[c], points[d])) {
+            if (c != d && keep(static_cast<uint32_t>(u), v, c, d)) {
               found[block].push_back({static_cast<uint32_t>(u), v, c, d});
             }
           }
@@ -475,8 +472,20 @@ absl::Status CheckNoFold(const std::vector<Vec3>& points, const std::vector<Tet>
       });
     }
   });
-  std::vector<Fold> folds;
-  for (const std::vector<Fold>& f : found) folds.insert(folds.end(), f.begin(), f.end());
+  std::vector<std::array<uint32_t, 4>> all;
+  for (const auto& f : found) all.insert(all.end(), f.begin(), f.end());
+  return all;
+}
+
+absl::Status CheckNoFold(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                         const BoundaryEdges& edges) {
+  // A folded pair: edge (u, v), third vertices c < d.
+  using Fold = std::array<uint32_t, 4>;
+  const std::vector<Fold> folds =
+      FacePairsWhere(static_cast<int64_t>(points.size()), edges,
+                     [&](uint32_t u, uint32_t v, uint32_t c, uint32_t d) {
+                       return Folded(points[u], points[v], points[c], points[d]);
+                     });
   if (folds.empty()) return absl::OkStatus();
   // Two faces of one tet fold onto each other when the tet is a sliver flat within the
   // tolerance; that tet is valid (ValidateMesh judges its volume): drop those.
@@ -536,27 +545,12 @@ std::vector<Owner> OwnersOf(const std::vector<Tet>& tets, const std::vector<Boun
 absl::Status CheckNoOverlappingShell(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                                      const BoundaryEdges& edges) {
   using Shell = std::array<uint32_t, 4>;  // ascending
-  const int64_t num_points = static_cast<int64_t>(points.size());
-  std::vector<std::vector<Shell>> found(BlockCount(num_points));
-  ForEachBlock(num_points, [&](int64_t block, int64_t begin, int64_t end) {
-    for (int64_t u = begin; u < end; ++u) {
-      edges.ForEachSortedEdgeOf(u, [&](uint32_t v, const uint32_t* thirds, int64_t kept, int64_t) {
-        for (int64_t i = 0; i < kept; ++i) {
-          for (int64_t j = i + 1; j < kept; ++j) {
-            const uint32_t c = std::min(thirds[i], thirds[j]), d = std::max(thirds[i], thirds[j]);
-            // Each shell once: from the edge of its two smallest vertices.
-            if (c <= v || c == d) continue;
-            if (edges.HasFace(c, d, static_cast<uint32_t>(u)) && edges.HasFace(c, d, v)) {
-              found[block].push_back({static_cast<uint32_t>(u), v, c, d});
-            }
-          }
-        }
-        return false;
-      });
-    }
-  });
-  std::vector<Shell> shells;
-  for (const std::vector<Shell>& f : found) shells.insert(shells.end(), f.begin(), f.end());
+  // Each shell once: from the edge of its two smallest vertices.
+  const std::vector<Shell> shells =
+      FacePairsWhere(static_cast<int64_t>(points.size()), edges,
+                     [&](uint32_t u, uint32_t v, uint32_t c, uint32_t d) {
+                       return v < c && edges.HasFace(c, d, u) && edges.HasFace(c, d, v);
+                     });
   if (shells.empty()) return absl::OkStatus();
   // A single tet alone is its own shell.
   const std::vector<uint8_t> is_tet = AreTets(tets, shells);
