@@ -169,6 +169,16 @@ Mesh CrossingDiagonalsMesh() {
   return mesh;
 }
 
+// CrossingDiagonalsMesh with the grid's centre vertex (13), a corner of the three crossed
+// squares, moved off their planes: the squares twist, and the two sides of one bulge into each
+// other, which only the shell check sees (the faces no longer fold in one plane).
+Mesh TwistedCrossingDiagonalsMesh() {
+  Mesh mesh = CrossingDiagonalsMesh();
+  Vec3& centre = mesh.points[13];
+  centre = {centre[0] + 0.4, centre[1] + 0.3, centre[2] + 0.2};
+  return mesh;
+}
+
 // A case built by editing the good stream.
 MalformedRequest Edit(std::string name, std::function<void(Requests&)> edit,
                       std::vector<std::string> parts,
@@ -712,6 +722,9 @@ std::vector<MalformedRequest> MalformedRequests() {
       {"CrossingDiagonals",
        [] { return Write(SmallVolume(), CrossingDiagonalsMesh()); },
        {"mesh is not conformal: boundary faces (", "crossing diagonals"}},
+      {"TwistedCrossingDiagonals",
+       [] { return Write(SmallVolume(), TwistedCrossingDiagonalsMesh()); },
+       {"mesh is not conformal: boundary faces on vertices (", "so two tets overlap"}},
       // A slab and a mesh that reaches beyond it.
       {"MeshOutsideItsSlab",
        [] {
