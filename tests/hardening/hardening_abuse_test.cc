@@ -60,17 +60,8 @@ std::vector<v1::RefineRequest> RequestsOf(const Workload& w) {
   return requests;
 }
 
-// One iteration splitting every edge of 135k tets: a result of 1.08M tets, tens of MB, far more
-// than the connection's flow-control window holds for a client that never reads.
 const Workload& BigResult() {
-  static const Workload* w = [] {
-    auto* out = new Workload(HeavyWorkload());
-    out->name = "big-result";
-    out->options.refine.max_iterations = 1;
-    out->options.refine.lattice_n = 0;
-    out->options.skip_final_mesh = false;
-    return out;
-  }();
+  static const Workload* w = new Workload(BigResultWorkload());
   return *w;
 }
 

@@ -21,15 +21,6 @@ using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 using ::tetrefine::testing::ServerProcess;
 
-// Under AddressSanitizer freed memory sits in a quarantine of up to 256 MB, so VmRSS grows with
-// churn whatever leaks; there LeakSanitizer checks the server at exit instead (Stop() then
-// returns its failure).
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kMemoryIsMeaningful = false;
-#else
-constexpr bool kMemoryIsMeaningful = true;
-#endif
-
 const std::vector<RefineResult>& ExpectedResults() {
   static const auto* const expected = [] {
     auto* out = new std::vector<RefineResult>();

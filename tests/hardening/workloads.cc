@@ -74,6 +74,15 @@ const Workload& HeavyWorkload() {
   return *heavy;
 }
 
+Workload BigResultWorkload() {
+  Workload w = HeavyWorkload();
+  w.name = "big-result";
+  w.options.refine.max_iterations = 1;
+  w.options.refine.lattice_n = 0;
+  w.options.skip_final_mesh = false;
+  return w;
+}
+
 RefineResult CoreResult(const Workload& w, const wire::ServiceLimits& limits) {
   absl::StatusOr<RefineResult> result =
       Refine(w.volume, w.mesh, wire::ToCoreOptions(w.options, limits));

@@ -28,6 +28,20 @@ const std::vector<Workload>& SmallWorkloads();
 // work that only cancellation ends early. The final mesh is not sent.
 const Workload& HeavyWorkload();
 
+// HeavyWorkload for one iteration that splits every edge, with the final mesh sent: a result of
+// 1.08M tets, tens of MB, far more than a connection's flow-control window holds for a client
+// that never reads.
+Workload BigResultWorkload();
+
+// Under AddressSanitizer freed memory sits in a quarantine of up to 256 MB and the shadow counts
+// too, so a process's VmRSS grows with churn whatever leaks: the memory bounds are checked only
+// without it (there LeakSanitizer checks the server at exit instead).
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kMemoryIsMeaningful = false;
+#else
+inline constexpr bool kMemoryIsMeaningful = true;
+#endif
+
 // Core Refine of `w` with the options the server would use under `limits`.
 RefineResult CoreResult(const Workload& w, const wire::ServiceLimits& limits = {});
 

@@ -17,6 +17,7 @@
 #include "gmock/gmock.h"
 #include "grpcpp/generic/generic_stub.h"
 #include "gtest/gtest.h"
+#include "tests/server/heavy_case.h"
 #include "tests/support/geometry.h"
 #include "tests/support/loopback_server.h"
 #include "tests/support/result_compare.h"
@@ -52,25 +53,6 @@ const RefineResult& SmallExpected() {
   static const RefineResult* r = new RefineResult(
       *Refine(Small().volume, Small().mesh, wire::ToCoreOptions(Small().options, {})));
   return *r;
-}
-
-// 135k tets with a tolerance no edge meets: seconds of refinement unless stopped.
-struct HeavyCase {
-  Volume volume = TestVolume({64, 64, 64});
-  Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {61.0, 61.0, 61.0}, {30, 30, 30});
-  client::RefineRequestOptions options = [] {
-    client::RefineRequestOptions o;
-    o.refine.epsilon = 1e-6;
-    o.refine.max_iterations = 4;
-    o.SetMaxTets(20'000'000);
-    o.refine.lattice_n = 0;
-    o.skip_final_mesh = true;
-    return o;
-  }();
-};
-const HeavyCase& Heavy() {
-  static const HeavyCase* c = new HeavyCase();
-  return *c;
 }
 
 Requests RequestsOf(const Volume& volume, const Mesh& mesh,

@@ -6,6 +6,7 @@
 
 #include "client/refine_client.h"
 #include "gtest/gtest.h"
+#include "tests/server/heavy_case.h"
 #include "tests/support/geometry.h"
 #include "tests/support/loopback_server.h"
 
@@ -14,27 +15,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-
-// 135k input tets with a tolerance no edge meets: uncancelled, this refines for seconds towards
-// a 20-million-tet budget.
-struct HeavyCase {
-  Volume volume = TestVolume({64, 64, 64});
-  Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {61.0, 61.0, 61.0}, {30, 30, 30});
-  client::RefineRequestOptions options = [] {
-    client::RefineRequestOptions o;
-    o.refine.epsilon = 1e-6;
-    o.refine.max_iterations = 4;
-    o.SetMaxTets(20'000'000);
-    o.refine.lattice_n = 0;
-    o.skip_final_mesh = true;
-    return o;
-  }();
-};
-
-const HeavyCase& Heavy() {
-  static const HeavyCase* heavy = new HeavyCase();
-  return *heavy;
-}
 
 // "Promptly": the core polls cancellation every few thousand tets and between iterations, and the
 // longest stretch without a poll is well under a second in a release build. AddressSanitizer makes
