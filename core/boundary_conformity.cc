@@ -15,6 +15,7 @@
 #include "core/fill_later.h"
 #include "core/parallel.h"
 #include "core/sorted_tet.h"
+#include "core/tet_topology.h"
 
 namespace tetrefine {
 namespace {
@@ -519,12 +520,8 @@ std::vector<Owner> OwnersOf(const std::vector<Tet>& tets, const std::vector<Boun
   ForEachBlock(static_cast<int64_t>(tets.size()), [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t t = begin; t < end; ++t) {
       for (int skip = 0; skip < 4; ++skip) {
-        BoundaryFace f;
-        int k = 0;
-        for (int i = 0; i < 4; ++i) {
-          if (i != skip) f[k++] = tets[t][i];
-        }
-        std::sort(f.begin(), f.end());
+        const auto [a, b, c] = kTetFaces[skip];
+        const BoundaryFace f = SortedFace(tets[t][a], tets[t][b], tets[t][c]);
         auto it = std::lower_bound(sorted.begin(), sorted.end(), std::make_pair(f, int64_t{-1}));
         for (; it != sorted.end() && it->first == f; ++it) owners[it->second] = {tets[t][skip], t};
       }
@@ -560,30 +557,23 @@ absl::Status CheckNoOverlappingShell(const std::vector<Vec3>& points, const std:
   }
   if (open.empty()) return absl::OkStatus();
   std::sort(open.begin(), open.end());
+  // Face f of a shell is the one opposite its vertex f (ascending, as the shell is).
   std::vector<BoundaryFace> faces;
   for (const Shell& s : open) {
-    for (int skip = 0; skip < 4; ++skip) {
-      BoundaryFace f;
-      int k = 0;
-      for (int i = 0; i < 4; ++i) {
-        if (i != skip) f[k++] = s[i];
-      }
-      faces.push_back(f);
-    }
+    for (const auto& [a, b, c] : kTetFaces) faces.push_back({s[a], s[b], s[c]});
   }
   const std::vector<Owner> owners = OwnersOf(tets, faces);
   for (size_t n = 0; n < open.size(); ++n) {
     const Shell& s = open[n];
     const Vec3* p[4] = {&points[s[0]], &points[s[1]], &points[s[2]], &points[s[3]]};
-    // Which side of face `skip` the shell's inside is: that of the vertex off the face.
-    auto side = [&](int skip, const Vec3& q) {
-      const Vec3* f[3];
-      int k = 0;
-      for (int i = 0; i < 4; ++i) {
-        if (i != skip) f[k++] = p[i];
-      }
-      return SignedVolume6(*f[0], *f[1], *f[2], q);
+    // 6 x the volume of (face f, q): its sign says which side of face f q is on.
+    auto side = [&](int f, const Vec3& q) {
+      const auto [a, b, c] = kTetFaces[f];
+      return SignedVolume6(*p[a], *p[b], *p[c], q);
     };
+    // The shell's inside is on the side of the vertex off each face.
+    std::array<double, 4> inside;
+    for (int f = 0; f < 4; ++f) inside[f] = side(f, *p[f]);
     for (int skip = 0; skip < 4; ++skip) {
       const Owner& owner = owners[4 * n + static_cast<size_t>(skip)];
       const Vec3& o = points[owner.opposite];
@@ -594,16 +584,13 @@ absl::Status CheckNoOverlappingShell(const std::vector<Vec3>& points, const std:
       }
       // The degenerate-tet bound ValidateMesh uses: |6V| <= 1e-12 L^3.
       const double tolerance = 1e-12 * longest2 * std::sqrt(longest2);
-      auto strictly_same_side = [&](int face, double a) {
-        const double inside = side(face, *p[face]);
-        return inside > 0.0 ? a > tolerance : a < -tolerance;
-      };
-      if (!strictly_same_side(skip, side(skip, o))) continue;  // a cavity: the tet is outside
+      const double a = side(skip, o);
+      // On the outer side of its face: a cavity, the tet is outside the shell.
+      if (!(inside[skip] > 0.0 ? a > tolerance : a < -tolerance)) continue;
       bool outside = false;
       for (int other = 0; other < 4; ++other) {
-        const double a = side(other, o);
-        const double inside = side(other, *p[other]);
-        if (inside > 0.0 ? a < -tolerance : a > tolerance) outside = true;
+        const double b = side(other, o);
+        if (inside[other] > 0.0 ? b < -tolerance : b > tolerance) outside = true;
       }
       if (!outside) continue;  // the shell holds its own tets
       const BoundaryFace& face = faces[4 * n + static_cast<size_t>(skip)];
