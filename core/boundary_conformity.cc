@@ -15,6 +15,7 @@
 #include "core/fill_later.h"
 #include "core/parallel.h"
 #include "core/sorted_tet.h"
+#include "core/tet_overlap.h"
 #include "core/tet_topology.h"
 
 namespace tetrefine {
@@ -606,6 +607,39 @@ absl::Status CheckNoOverlappingShell(const std::vector<Vec3>& points, const std:
   return absl::OkStatus();
 }
 
+// Every boundary face with its tet, by tet then face. Only faces whose three corners are all on
+// the boundary can be boundary faces: most tets are passed over on those flags.
+std::vector<OwnedFace> OwnedFaces(int64_t num_points, const std::vector<Tet>& tets,
+                                  const std::vector<BoundaryFace>& boundary,
+                                  const BoundaryEdges& edges) {
+  std::vector<uint8_t> on_boundary(num_points, 0);
+  for (const BoundaryFace& f : boundary) {
+    for (uint32_t v : f) on_boundary[v] = 1;
+  }
+  const int64_t n = static_cast<int64_t>(tets.size());
+  std::vector<std::vector<OwnedFace>> found(BlockCount(n));
+  ForEachBlock(n, [&](int64_t block, int64_t begin, int64_t end) {
+    for (int64_t t = begin; t < end; ++t) {
+      const Tet& tet = tets[t];
+      if (on_boundary[tet[0]] + on_boundary[tet[1]] + on_boundary[tet[2]] + on_boundary[tet[3]] <
+          3) {
+        continue;
+      }
+      for (const auto& [a, b, c] : kTetFaces) {
+        const BoundaryFace f = SortedFace(tet[a], tet[b], tet[c]);
+        if (on_boundary[f[0]] && on_boundary[f[1]] && on_boundary[f[2]] &&
+            edges.HasFace(f[0], f[1], f[2])) {
+          found[block].push_back({f, t});
+        }
+      }
+    }
+  });
+  std::vector<OwnedFace> faces;
+  faces.reserve(boundary.size());
+  for (const std::vector<OwnedFace>& f : found) faces.insert(faces.end(), f.begin(), f.end());
+  return faces;
+}
+
 }  // namespace
 
 absl::Status CheckBoundaryConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
@@ -618,7 +652,9 @@ absl::Status CheckBoundaryConformity(const std::vector<Vec3>& points, const std:
     return s;
   }
   if (absl::Status s = CheckNoFold(points, tets, edges); !s.ok()) return s;
-  return CheckNoOverlappingShell(points, tets, edges);
+  if (absl::Status s = CheckNoOverlappingShell(points, tets, edges); !s.ok()) return s;
+  return CheckNoOverlappingTets(
+      points, tets, OwnedFaces(static_cast<int64_t>(points.size()), tets, boundary, edges));
 }
 
 }  // namespace tetrefine

@@ -15,7 +15,8 @@ using BoundaryFace = std::array<uint32_t, 3>;
 // The checks that a face check cannot make, on a mesh that passed it (CheckFaces, which also
 // lists `boundary`: every face of exactly one of `tets`, each once). A hanging node (a vertex
 // inside another tet's edge or face) leaves faces of exactly one tet inside the mesh, which the
-// face check takes for boundary. Two checks find them, and report the first problem found:
+// face check takes for boundary, and tets may overlap. In this order, reporting the first
+// problem found:
 //   1. No boundary vertex lies on a boundary face it is not a vertex of, within
 //      1e-13 L + 8 eps M of the closed triangle (L the face's longest edge, M the largest
 //      coordinate magnitude of its vertices, eps the double epsilon: how far rounding puts a
@@ -40,12 +41,16 @@ using BoundaryFace = std::array<uint32_t, 3>;
 //      the degenerate-tet bound), reaching out through the shell. Where they bulge apart they
 //      leave a tet-shaped cavity, and a shell may also hold its own tets (a lone tet split at an
 //      inner point): both valid, both pass. Reports the smallest such shell.
-//      Not found: overlaps along larger non-planar regions triangulated differently on their
-//      two sides (more than one quadrilateral), which would need a surface self-intersection
-//      test.
+//   5. No tet that owns a boundary face overlaps another tet (core/tet_overlap.h: the interiors
+//      intersect by more than 1e-10 of the pair's size along every separating axis). Any
+//      overlap at all shows at some boundary face's own tet (why is in that header), so this
+//      catches what 3. and 4. name more precisely and the rest: regions larger than one
+//      quadrilateral triangulated differently on their two sides, a mesh inside another, a
+//      boundary folded back into the mesh. Reports the smallest pair of tets.
 // Cost: O(T) to name a tet in a message, otherwise about linear in the boundary's size (a hash
-// grid with one level per power of two of face size), parallel, and the verdict and message do
-// not depend on the thread count. `points` must be finite (ValidateMesh checks that first).
+// grid with one level per power of two of face size) for 1.-4., and for 5. a box tree over the
+// boundary's tets queried once per tet; parallel, and the verdict and message do not depend on
+// the thread count. `points` must be finite (ValidateMesh checks that first).
 // Errors are InvalidArgument and start with "mesh is not conformal: ", naming the vertex or
 // edge by its ids, the face by its vertex ids and the tet that owns it as mesh.tets[i].
 absl::Status CheckBoundaryConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets,

@@ -179,6 +179,19 @@ Mesh TwistedCrossingDiagonalsMesh() {
   return mesh;
 }
 
+// SmallMesh with one more tet of its own vertices lying inside it: no face, edge or vertex
+// shared, both boundaries closed, so only the overlap check (check 5) sees it.
+Mesh TetInsideMesh() {
+  Mesh mesh = SmallMesh();
+  const auto base = static_cast<uint32_t>(mesh.points.size());
+  for (const Vec3& p :
+       {Vec3{3.3, 3.7, 4.1}, Vec3{3.9, 3.7, 4.1}, Vec3{3.3, 4.3, 4.1}, Vec3{3.3, 3.7, 4.7}}) {
+    mesh.points.push_back(p);
+  }
+  mesh.tets.push_back({base, base + 1, base + 2, base + 3});
+  return mesh;
+}
+
 // A case built by editing the good stream.
 MalformedRequest Edit(std::string name, std::function<void(Requests&)> edit,
                       std::vector<std::string> parts,
@@ -725,6 +738,11 @@ std::vector<MalformedRequest> MalformedRequests() {
       {"TwistedCrossingDiagonals",
        [] { return Write(SmallVolume(), TwistedCrossingDiagonalsMesh()); },
        {"mesh is not conformal: boundary faces on vertices (", "so two tets overlap"}},
+      {"TetInsideTheMesh",
+       [] { return Write(SmallVolume(), TetInsideMesh()); },
+       {"mesh is not conformal: mesh.tets[",
+        "] and mesh.tets[40] overlap (their interiors "
+        "intersect"}},
       // A slab and a mesh that reaches beyond it.
       {"MeshOutsideItsSlab",
        [] {
