@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -179,41 +180,15 @@ double PairDepth(const TetAxes& a, const TetAxes& b) {
   return std::min({da, db, de});
 }
 
-// A static bounding-box tree: the boxes in Morton order of their centres (one sort), split at
-// the middle of that order down to leaves of up to four, each node's box the union of its
-// children's. Building costs one sort; the shape only affects speed, as a query visits every
-// box that meets.
+// A static bounding-box tree (median splits along the widest spread of the boxes' centres, up
+// to four boxes a leaf). Its shape only affects speed: a query visits every box that meets.
 class BoxTree {
  public:
   explicit BoxTree(std::vector<Box> boxes) : boxes_(std::move(boxes)) {
-    const size_t n = boxes_.size();
-    if (n == 0) return;
-    Vec3 lo = Centre(boxes_[0]), hi = lo;
-    for (const Box& b : boxes_) {
-      const Vec3 c = Centre(b);
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = std::min(lo[a], c[a]);
-        hi[a] = std::max(hi[a], c[a]);
-      }
-    }
-    std::vector<std::pair<uint64_t, uint32_t>> keyed(n);
-    for (size_t i = 0; i < n; ++i) {
-      const Vec3 c = Centre(boxes_[i]);
-      uint64_t code = 0;
-      for (int a = 0; a < 3; ++a) {
-        const double span = hi[a] - lo[a];
-        const double x = span > 0.0 ? (c[a] - lo[a]) / span * 2097151.0 : 0.0;
-        // NaN or out of range (coordinates near the double range) clamp; order only.
-        const uint64_t q = x >= 0.0 ? static_cast<uint64_t>(std::min(x, 2097151.0)) : 0;
-        code |= Spread(q) << a;
-      }
-      keyed[i] = {code, static_cast<uint32_t>(i)};
-    }
-    std::sort(keyed.begin(), keyed.end());
-    order_.resize(n);
-    for (size_t i = 0; i < n; ++i) order_[i] = keyed[i].second;
-    nodes_.reserve(2 * n / kLeafSize + 2);
-    Build(0, static_cast<uint32_t>(n));
+    order_.resize(boxes_.size());
+    std::iota(order_.begin(), order_.end(), uint32_t{0});
+    nodes_.reserve(2 * boxes_.size() / kLeafSize + 1);
+    if (!order_.empty()) Build(0, static_cast<uint32_t>(order_.size()));
   }
 
   // Calls visit(i) for every box i that meets `query`.
@@ -254,37 +229,39 @@ class BoxTree {
   uint32_t Build(uint32_t begin, uint32_t end) {
     const uint32_t index = static_cast<uint32_t>(nodes_.size());
     nodes_.emplace_back();
+    Box box = boxes_[order_[begin]];
+    Box centres{Centre(box), Centre(box)};
+    for (uint32_t k = begin + 1; k < end; ++k) {
+      const Box& b = boxes_[order_[k]];
+      const Vec3 c = Centre(b);
+      for (int a = 0; a < 3; ++a) {
+        box.lo[a] = std::min(box.lo[a], b.lo[a]);
+        box.hi[a] = std::max(box.hi[a], b.hi[a]);
+        centres.lo[a] = std::min(centres.lo[a], c[a]);
+        centres.hi[a] = std::max(centres.hi[a], c[a]);
+      }
+    }
+    nodes_[index].box = box;
     if (end - begin <= kLeafSize) {
-      Box box = boxes_[order_[begin]];
-      for (uint32_t k = begin + 1; k < end; ++k) box = Union(box, boxes_[order_[k]]);
-      nodes_[index] = {box, begin, end, 0};
+      nodes_[index].first = begin;
+      nodes_[index].end = end;
       return index;
     }
+    int axis = 0;
+    for (int a = 1; a < 3; ++a) {
+      if (centres.hi[a] - centres.lo[a] > centres.hi[axis] - centres.lo[axis]) axis = a;
+    }
     const uint32_t mid = begin + (end - begin) / 2;
+    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                     [&](uint32_t x, uint32_t y) {
+                       const double cx = Centre(boxes_[x])[axis], cy = Centre(boxes_[y])[axis];
+                       return cx < cy || (cx == cy && x < y);
+                     });
     const uint32_t left = Build(begin, mid);
     const uint32_t right = Build(mid, end);
-    nodes_[index] = {Union(nodes_[left].box, nodes_[right].box), left, 0, right};
+    nodes_[index].first = left;
+    nodes_[index].right = right;
     return index;
-  }
-
-  static Box Union(const Box& x, const Box& y) {
-    Box u;
-    for (int a = 0; a < 3; ++a) {
-      u.lo[a] = std::min(x.lo[a], y.lo[a]);
-      u.hi[a] = std::max(x.hi[a], y.hi[a]);
-    }
-    return u;
-  }
-
-  // 21 bits spread to every third bit.
-  static uint64_t Spread(uint64_t x) {
-    x &= 0x1fffff;
-    x = (x | x << 32) & 0x1f00000000ffffull;
-    x = (x | x << 16) & 0x1f0000ff0000ffull;
-    x = (x | x << 8) & 0x100f00f00f00f00full;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
   }
 
   static Vec3 Centre(const Box& b) {
@@ -296,18 +273,138 @@ class BoxTree {
   std::vector<Node> nodes_;
 };
 
+// Which cells of a coarse grid over the boundary faces' boxes some face box touches, with a
+// summed-area table so that "does this box touch one" costs eight lookups: most tets of a mesh
+// lie away from its boundary and are passed over on it without a walk down the box tree.
+class Occupancy {
+ public:
+  Occupancy(const std::vector<Box>& boxes, int64_t num_tets) {
+    lo_ = boxes[0].lo;
+    Vec3 hi = boxes[0].hi;
+    for (const Box& b : boxes) {
+      for (int a = 0; a < 3; ++a) {
+        lo_[a] = std::min(lo_[a], b.lo[a]);
+        hi[a] = std::max(hi[a], b.hi[a]);
+      }
+    }
+    // About one and a half cells per tet along the widest axis of a cube-like mesh, at most 96:
+    // at most 97^3 counters (3.6 MB) to build and sum, a few ms.
+    const double extent = std::max({hi[0] - lo_[0], hi[1] - lo_[1], hi[2] - lo_[2]});
+    const int cells =
+        std::clamp(static_cast<int>(1.5 * std::cbrt(static_cast<double>(num_tets))), 1, 96);
+    h_ = extent > 0.0 ? extent / cells : 1.0;
+    for (int a = 0; a < 3; ++a) {
+      dims_[a] = std::clamp(static_cast<int64_t>((hi[a] - lo_[a]) / h_) + 1, int64_t{1},
+                            int64_t{cells} + 1);
+    }
+    // Box counts per cell as a 3-D difference array, summed along each axis; then a summed-area
+    // table of the touched cells, in the same array, one larger along each axis.
+    const int64_t nx = dims_[0] + 1, ny = dims_[1] + 1, nz = dims_[2] + 1;
+    sum_.assign(static_cast<size_t>(nx * ny * nz), 0);
+    auto at = [&](int64_t i, int64_t j, int64_t k) -> int64_t& {
+      return sum_[static_cast<size_t>((k * ny + j) * nx + i)];
+    };
+    for (const Box& b : boxes) {
+      int64_t c0[3], c1[3];
+      CellRange(b, c0, c1);
+      for (int corner = 0; corner < 8; ++corner) {
+        const int64_t i = corner & 1 ? c1[0] + 1 : c0[0];
+        const int64_t j = corner & 2 ? c1[1] + 1 : c0[1];
+        const int64_t k = corner & 4 ? c1[2] + 1 : c0[2];
+        at(i, j, k) += std::popcount(static_cast<unsigned>(corner)) % 2 ? -1 : 1;
+      }
+    }
+    for (int64_t k = 0; k < nz; ++k) {
+      for (int64_t j = 0; j < ny; ++j) {
+        for (int64_t i = 1; i < nx; ++i) at(i, j, k) += at(i - 1, j, k);
+      }
+    }
+    for (int64_t k = 0; k < nz; ++k) {
+      for (int64_t j = 1; j < ny; ++j) {
+        for (int64_t i = 0; i < nx; ++i) at(i, j, k) += at(i, j - 1, k);
+      }
+    }
+    for (int64_t k = 1; k < nz; ++k) {
+      for (int64_t j = 0; j < ny; ++j) {
+        for (int64_t i = 0; i < nx; ++i) at(i, j, k) += at(i, j, k - 1);
+      }
+    }
+    // Now at(i, j, k) is the count of cell (i, j, k); turned into 0/1 and summed again, shifted
+    // by one, so that at(i, j, k) counts the touched cells below (i, j, k) on every axis.
+    for (int64_t k = nz - 1; k >= 0; --k) {
+      for (int64_t j = ny - 1; j >= 0; --j) {
+        for (int64_t i = nx - 1; i >= 0; --i) {
+          const bool inside = i > 0 && j > 0 && k > 0;
+          at(i, j, k) = inside && at(i - 1, j - 1, k - 1) > 0 ? 1 : 0;
+        }
+      }
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int64_t k = axis == 2 ? 1 : 0; k < nz; ++k) {
+        for (int64_t j = axis == 1 ? 1 : 0; j < ny; ++j) {
+          for (int64_t i = axis == 0 ? 1 : 0; i < nx; ++i) {
+            at(i, j, k) += axis == 0   ? at(i - 1, j, k)
+                           : axis == 1 ? at(i, j - 1, k)
+                                       : at(i, j, k - 1);
+          }
+        }
+      }
+    }
+  }
+
+  // Whether `b` touches a cell some face box touches.
+  bool Touches(const Box& b) const {
+    for (int a = 0; a < 3; ++a) {
+      if (b.hi[a] < lo_[a] || b.lo[a] > lo_[a] + h_ * static_cast<double>(dims_[a])) return false;
+    }
+    int64_t c0[3], c1[3];
+    CellRange(b, c0, c1);
+    const int64_t nx = dims_[0] + 1, ny = dims_[1] + 1;
+    auto at = [&](int64_t i, int64_t j, int64_t k) {
+      return sum_[static_cast<size_t>((k * ny + j) * nx + i)];
+    };
+    const int64_t x0 = c0[0], y0 = c0[1], z0 = c0[2];
+    const int64_t x1 = c1[0] + 1, y1 = c1[1] + 1, z1 = c1[2] + 1;
+    const int64_t count = at(x1, y1, z1) - at(x0, y1, z1) - at(x1, y0, z1) - at(x1, y1, z0) +
+                          at(x0, y0, z1) + at(x0, y1, z0) + at(x1, y0, z0) - at(x0, y0, z0);
+    return count > 0;
+  }
+
+ private:
+  // The cells [c0, c1] (inclusive) a box spans, clamped to the grid.
+  void CellRange(const Box& b, int64_t* c0, int64_t* c1) const {
+    for (int a = 0; a < 3; ++a) {
+      c0[a] = Cell(b.lo[a], a);
+      c1[a] = std::max(c0[a], Cell(b.hi[a], a));
+    }
+  }
+  int64_t Cell(double x, int a) const {
+    const double c = std::floor((x - lo_[a]) / h_);
+    if (!(c >= 0.0)) return 0;  // also NaN
+    return std::min(static_cast<int64_t>(std::min(c, 0x1p50)), dims_[a] - 1);
+  }
+
+  Vec3 lo_{};
+  double h_ = 1.0;
+  std::array<int64_t, 3> dims_{1, 1, 1};
+  std::vector<int64_t> sum_;
+};
+
 // A uniform grid over the boundary faces' boxes, each cell listing the faces whose box touches
 // it (compressed rows). It is also the filter that passes over the tets away from the boundary:
 // a tet whose box touches only empty cells costs a few lookups, on cells that neighbouring tets
 // share in cache.
-// Why this index, measured on the check alone (bench/core_bench, 1 thread; the checks 1-4 take
-// 12 ms, 384 ms and 14 ms of these): a 60^3-cell FiveTetMesh (1.08 M tets, 43 k boundary
-// faces) 97 ms; 250 k separate tets (1 M boundary faces) 1080 ms; a 40^3-cell mesh graded over
-// a factor 2^13 (320 k tets) 668 ms, where the grid's cells, sized to the average face, crowd
-// the finest faces. A Morton-ordered box tree gave 183 / 1744 / 390 ms, a median-split tree
-// with a coarse occupancy filter 172 / 2099 / 111 ms, a hash grid with one level per power of
-// two of face size (check 1's) 205 / 1945 / 582 ms: the tree walks cost more than the grid's
-// lookups on ordinary meshes, which matter most.
+// Why these indexes, measured on the conformity check's part (bench/core_bench, 1 thread; the
+// checks 1-4 alone take 12 ms, 572 ms and 16 ms of these; this VM's run-to-run noise is about
+// +-30%): a 60^3-cell FiveTetMesh (1.08 M tets, 43 k boundary faces), 250 k separate tets
+// (1 M boundary faces), a 40^3-cell mesh graded over a factor 2^13 (320 k tets):
+//   this uniform grid                            97-160 / 1080-1570 / 668 ms
+//   a median-split box tree + an occupancy filter   172 / 2099 / 111 ms
+//   a Morton-ordered box tree                       183 / 1744 / 390 ms
+//   a hash grid, one level per power of two (check 1's)   205 / 1945 / 582 ms
+// The grid's lookups beat the trees' walks on ordinary meshes, which matter most; on a graded
+// boundary its cells, sized to the average face, crowd with the smallest faces. So the check
+// takes the grid where the face sizes are alike and the tree where they are not (SizeSpread).
 class FaceCellGrid {
  public:
   // Faces whose box spans more cells than this are kept in a tree of their own that every
@@ -528,6 +625,21 @@ bool CoplanarOverlap(const FacePlane& plane, const std::array<const Vec3*, 3>& f
   return true;
 }
 
+// The 90th percentile of the boxes' widths over the 10th (1 for a single box).
+double SizeSpread(const std::vector<Box>& boxes) {
+  std::vector<double> widths(boxes.size());
+  for (size_t f = 0; f < boxes.size(); ++f) {
+    const Box& b = boxes[f];
+    widths[f] = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
+  }
+  const size_t low = widths.size() / 10, high = widths.size() - 1 - widths.size() / 10;
+  std::nth_element(widths.begin(), widths.begin() + low, widths.end());
+  const double small = widths[low];
+  std::nth_element(widths.begin(), widths.begin() + high, widths.end());
+  const double large = widths[high];
+  return small > 0.0 ? large / small : (large > 0.0 ? 1e300 : 1.0);
+}
+
 // An overlapping pair, smaller tet first, with the owner whose face the message names.
 struct Overlap {
   int64_t first = 0;
@@ -580,36 +692,53 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
       boxes[f] = box;
     }
   });
-  const FaceCellGrid grid(boxes);
   std::vector<std::vector<Overlap>> found(BlockCount(num_tets));
-  ForEachBlock(num_tets, [&](int64_t block, int64_t begin, int64_t end) {
-    for (int64_t t = begin; t < end; ++t) {
-      const std::array<Vec3, 4> p = Corners(points, tets[t]);
-      TetAxes mine;
-      bool have_mine = false;
-      grid.ForEachMeeting(BoxOf(p, 0.0), [&](uint32_t f) {
-        const int64_t owner = faces[f].tet;
-        if (owner == t) return;
-        std::array<const Vec3*, 3> in_plane{};
-        if (!MayCoverFace(planes[f], p, &in_plane)) return;
-        if (in_plane[0] != nullptr) {
-          const BoundaryFace& face = faces[f].face;
-          if (!CoplanarOverlap(planes[f], {&points[face[0]], &points[face[1]], &points[face[2]]},
-                               in_plane)) {
-            return;
+  // Every tet against the faces `index` finds for its box; `near` passes over the tets that
+  // cannot meet any.
+  auto scan = [&](const auto& index, const auto& near) {
+    ForEachBlock(num_tets, [&](int64_t block, int64_t begin, int64_t end) {
+      for (int64_t t = begin; t < end; ++t) {
+        const std::array<Vec3, 4> p = Corners(points, tets[t]);
+        const Box box = BoxOf(p, 0.0);
+        if (!near(box)) continue;
+        TetAxes mine;
+        bool have_mine = false;
+        index.ForEachMeeting(box, [&](uint32_t f) {
+          const int64_t owner = faces[f].tet;
+          if (owner == t) return;
+          std::array<const Vec3*, 3> in_plane{};
+          if (!MayCoverFace(planes[f], p, &in_plane)) return;
+          if (in_plane[0] != nullptr) {
+            const BoundaryFace& face = faces[f].face;
+            if (!CoplanarOverlap(planes[f], {&points[face[0]], &points[face[1]], &points[face[2]]},
+                                 in_plane)) {
+              return;
+            }
           }
-        }
-        if (!have_mine) {
-          mine = AxesOf(p);
-          have_mine = true;
-        }
-        const double depth = PairDepth(AxesOf(Corners(points, tets[owner])), mine);
-        if (depth > 0.0) {
-          found[block].push_back({std::min(t, owner), std::max(t, owner), f, depth});
-        }
-      });
-    }
-  });
+          if (!have_mine) {
+            mine = AxesOf(p);
+            have_mine = true;
+          }
+          const double depth = PairDepth(AxesOf(Corners(points, tets[owner])), mine);
+          if (depth > 0.0) {
+            found[block].push_back({std::min(t, owner), std::max(t, owner), f, depth});
+          }
+        });
+      }
+    });
+  };
+  // The index, by the spread of face sizes: the uniform grid where they are alike, the tree
+  // where they span more than a factor 16 between the 10th and 90th percentile (a graded
+  // boundary, whose smallest faces would crowd the grid's cells). Measured in FaceCellGrid's
+  // comment.
+  if (SizeSpread(boxes) <= 16.0) {
+    const FaceCellGrid grid(boxes);
+    scan(grid, [](const Box&) { return true; });
+  } else {
+    const Occupancy occupancy(boxes, num_tets);
+    const BoxTree tree(boxes);
+    scan(tree, [&](const Box& box) { return occupancy.Touches(box); });
+  }
   const Overlap* first = nullptr;
   for (const std::vector<Overlap>& f : found) {
     for (const Overlap& o : f) {

@@ -349,6 +349,28 @@ TEST(TetOverlap, OverlapAcrossADifferentlyTriangulatedHexagonIsRefused) {
   }
 }
 
+// A boundary graded over a factor 2^12 in face size takes the box tree instead of the grid
+// (tet_overlap.cc, SizeSpread): a valid graded mesh passes, and a tet placed inside it among
+// its finest tets or its coarsest ones is found.
+TEST(TetOverlap, GradedBoundariesStillFindOverlaps) {
+  Mesh graded = testing::FiveTetMesh({0, 0, 0}, {36, 36, 36}, {18, 18, 18});
+  for (Vec3& p : graded.points) {
+    for (double& x : p) x = std::exp2(x / 3.0);
+  }
+  ASSERT_TRUE(CheckConformity(graded.points, graded.tets).ok());
+  for (const Vec3& at : {Vec3{1.3, 1.4, 1.5}, Vec3{2500, 2700, 3100}}) {
+    SCOPED_TRACE(::testing::Message() << "inside at " << at[0]);
+    Mesh m = graded;
+    const auto base = static_cast<uint32_t>(m.points.size());
+    const double size = 0.01 * at[0];
+    for (const Vec3& p : kUnitTet) {
+      m.points.push_back({at[0] + size * p[0], at[1] + size * p[1], at[2] + size * p[2]});
+    }
+    m.tets.push_back({base, base + 1, base + 2, base + 3});
+    ExpectOverlap(CheckConformity(m.points, m.tets));
+  }
+}
+
 TEST(TetOverlap, SameMessageForAnyThreadCount) {
   std::mt19937_64 rng(11);
   const Mesh a = OverlapCube(rng, 8, {0, 0, 0}, 1.0);
