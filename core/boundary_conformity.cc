@@ -17,6 +17,7 @@
 #include "core/sorted_tet.h"
 #include "core/tet_overlap.h"
 #include "core/tet_topology.h"
+#include "core/vec3_ops.h"
 
 namespace tetrefine {
 namespace {
@@ -26,13 +27,6 @@ constexpr double kRelativeTolerance = 1e-13;
 // it: a midpoint or a centroid is exact only to half an ulp, and the distance itself is computed
 // from coordinate differences.
 constexpr double kRoundings = 8.0;
-
-Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double Dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double Norm2(const Vec3& a) { return Dot(a, a); }
-Vec3 Axpy(double s, const Vec3& x, const Vec3& y) {
-  return {y[0] + s * x[0], y[1] + s * x[1], y[2] + s * x[2]};
-}
 
 // Squared distance from p to the closed triangle (a, b, c), by the Voronoi regions of its
 // corners, edges and interior (Ericson, Real-Time Collision Detection, 5.1.5).
@@ -326,8 +320,7 @@ absl::Status CheckNoVertexOnFace(const std::vector<Vec3>& points, const std::vec
 // Real boundaries that fold back at an angle of zero are not valid meshes either.
 bool Folded(const Vec3& u, const Vec3& v, const Vec3& c, const Vec3& d) {
   const Vec3 e = Sub(v, u), uc = Sub(c, u), ud = Sub(d, u);
-  const Vec3 n = {e[1] * uc[2] - e[2] * uc[1], e[2] * uc[0] - e[0] * uc[2],
-                  e[0] * uc[1] - e[1] * uc[0]};
+  const Vec3 n = Cross(e, uc);
   const double longest =
       std::sqrt(std::max({Norm2(e), Norm2(uc), Norm2(ud), Norm2(Sub(c, v)), Norm2(Sub(d, v))}));
   double magnitude = 0.0;

@@ -15,10 +15,11 @@
 #include "absl/strings/str_format.h"
 #include "core/parallel.h"
 #include "core/tet_topology.h"
+#include "core/vec3_ops.h"
 
 namespace tetrefine {
-// A named namespace, not an anonymous one: a unity build compiles this file together with
-// boundary_conformity.cc, whose file-local Sub and Dot would clash with these.
+// A named namespace, not an anonymous one: a unity build compiles this file together with the
+// other core files, whose file-local names (Box, Overlap, ...) must not meet these.
 namespace tet_overlap_internal {
 namespace {
 
@@ -28,23 +29,18 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // generator or a mistaken merge produces.
 constexpr double kRelativeSlack = 1e-10;
 
-Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double Dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 Cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double Norm(const Vec3& a) { return std::sqrt(Dot(a, a)); }
-
 struct Box {
   Vec3 lo, hi;
 };
 
-Box BoxOf(const std::array<Vec3, 4>& p, double grow) {
-  Box b{p[0], p[0]};
-  for (int i = 1; i < 4; ++i) {
+// The box of `points`, grown by `grow` on every side.
+template <size_t N>
+Box BoxOf(const std::array<const Vec3*, N>& points, double grow) {
+  Box b{*points[0], *points[0]};
+  for (size_t i = 1; i < N; ++i) {
     for (int a = 0; a < 3; ++a) {
-      b.lo[a] = std::min(b.lo[a], p[i][a]);
-      b.hi[a] = std::max(b.hi[a], p[i][a]);
+      b.lo[a] = std::min(b.lo[a], (*points[i])[a]);
+      b.hi[a] = std::max(b.hi[a], (*points[i])[a]);
     }
   }
   for (int a = 0; a < 3; ++a) {
@@ -678,18 +674,7 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
                               std::max({std::abs(a[0]), std::abs(a[1]), std::abs(a[2]),
                                         std::abs(b[0]), std::abs(b[1]), std::abs(b[2]),
                                         std::abs(c[0]), std::abs(c[1]), std::abs(c[2])});
-      Box box{a, a};
-      for (const Vec3* q : {&b, &c}) {
-        for (int i = 0; i < 3; ++i) {
-          box.lo[i] = std::min(box.lo[i], (*q)[i]);
-          box.hi[i] = std::max(box.hi[i], (*q)[i]);
-        }
-      }
-      for (int i = 0; i < 3; ++i) {
-        box.lo[i] -= grow;
-        box.hi[i] += grow;
-      }
-      boxes[f] = box;
+      boxes[f] = BoxOf(std::array<const Vec3*, 3>{&a, &b, &c}, grow);
     }
   });
   std::vector<std::vector<Overlap>> found(BlockCount(num_tets));
@@ -699,7 +684,7 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
     ForEachBlock(num_tets, [&](int64_t block, int64_t begin, int64_t end) {
       for (int64_t t = begin; t < end; ++t) {
         const std::array<Vec3, 4> p = Corners(points, tets[t]);
-        const Box box = BoxOf(p, 0.0);
+        const Box box = BoxOf(std::array<const Vec3*, 4>{&p[0], &p[1], &p[2], &p[3]}, 0.0);
         if (!near(box)) continue;
         TetAxes mine;
         bool have_mine = false;
