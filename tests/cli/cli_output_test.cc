@@ -176,10 +176,14 @@ class CliOutput : public ::testing::Test {
 };
 
 // Every encoding, over several label patterns: our reader sees the same tets and labels as in
-// the default output; the file shows the encoding asked for.
+// the default output; the file shows the encoding asked for. Each encoding is run on one of the
+// patterns, in turn (every pattern meets a third of the encodings): the label patterns vary the
+// arrays' contents, the encodings how they are laid out, and the two do not interact. All three
+// for every encoding (until 2026-11-24) was 48 CLI runs, 41 s under the sanitizers.
 TEST_F(CliOutput, EveryEncodingFlagReadsBackTheSameTetsAndLabels) {
   const std::vector<Variant> variants = Variants();
-  for (int seed = 1; seed <= 3; ++seed) {
+  constexpr int kPatterns = 3;
+  for (int seed = 1; seed <= kPatterns; ++seed) {
     const std::string in = LabelledMesh(seed);
     const std::string reference_path = dir_.File(absl::StrCat("reference", seed, ".vtu"));
     const ProcessResult reference_run = Refine(in, reference_path, {"--quiet"});
@@ -188,7 +192,7 @@ TEST_F(CliOutput, EveryEncodingFlagReadsBackTheSameTetsAndLabels) {
     ASSERT_TRUE(reference.ok()) << reference.status();
     ASSERT_EQ(reference->mesh.labels.size(), reference->mesh.tets.size());
     ASSERT_GT(reference->mesh.tets.size(), 40u) << "the input should have been refined";
-    for (size_t i = 0; i < variants.size(); ++i) {
+    for (size_t i = static_cast<size_t>(seed - 1); i < variants.size(); i += kPatterns) {
       const Variant& v = variants[i];
       SCOPED_TRACE(absl::StrCat("seed ", seed, ": ", Describe(v)));
       const std::string out = dir_.File(absl::StrCat("out", seed, "_", i, v.extension));
