@@ -6,6 +6,7 @@
 #include <array>
 #include <vector>
 
+#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "core/quality.h"
 #include "core/subdivision_table.h"
@@ -91,24 +92,32 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
   // of workers.
   State next;
   const int64_t next_points = nv + total_mid + total_steiner;
+  // Each is offered huge pages before its first write (ReserveHuge): faulting them in 4 KiB
+  // pages was a third of a whole call. bench/core_bench BM_ToConvergence, one thread, 40k ->
+  // 3.88 M tets, side by side (2026-11-24): 6.49 / 6.29 s as before, 4.10 / 4.23 s with every
+  // allocation advised (GLIBC_TUNABLES=glibc.malloc.hugetlb=1), 4.3 s with these arrays advised.
+  auto sized = [](auto& v, int64_t n) {
+    ReserveHuge(v, static_cast<size_t>(n));
+    v.resize(static_cast<size_t>(n));
+  };
   tbb::parallel_invoke(
       [&] {
-        next.mesh.points.reserve(next_points);
+        ReserveHuge(next.mesh.points, static_cast<size_t>(next_points));
         next.mesh.points.assign(m.points.begin(), m.points.end());
         next.mesh.points.resize(next_points);
       },
       [&] {
-        next.mesh.values.reserve(next_points);
+        ReserveHuge(next.mesh.values, static_cast<size_t>(next_points));
         next.mesh.values.assign(m.values.begin(), m.values.end());
         next.mesh.values.resize(next_points);
       },
-      [&] { next.mesh.tets.resize(total_children); },
-      [&] { next.tet_iteration.resize(total_children); },
-      [&] { next.tet_quality.resize(total_children); },
+      [&] { sized(next.mesh.tets, total_children); },
+      [&] { sized(next.tet_iteration, total_children); },
+      [&] { sized(next.tet_quality, total_children); },
       [&] {
-        if (!state.tet_label.empty()) next.tet_label.resize(total_children);
-        if (!state.tet_parent.empty()) next.tet_parent.resize(total_children);
-        if (!state.tet_lattice_error.empty()) next.tet_lattice_error.resize(total_children);
+        if (!state.tet_label.empty()) sized(next.tet_label, total_children);
+        if (!state.tet_parent.empty()) sized(next.tet_parent, total_children);
+        if (!state.tet_lattice_error.empty()) sized(next.tet_lattice_error, total_children);
       });
   const bool labels = !state.tet_label.empty();
   const bool parents = !state.tet_parent.empty();

@@ -13,9 +13,9 @@
 #include "client/io/byte_order.h"
 #include "client/io/cell_census.h"
 #include "client/io/gmsh_format.h"
-#include "client/io/huge_pages.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
+#include "core/huge_pages.h"
 
 namespace tetrefine::io {
 namespace {

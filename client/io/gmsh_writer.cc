@@ -7,8 +7,8 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "client/io/gmsh_format.h"
-#include "client/io/huge_pages.h"
 #include "client/io/number_text.h"
+#include "core/huge_pages.h"
 
 namespace tetrefine::io {
 namespace {

@@ -7,9 +7,9 @@
 #include "absl/strings/str_cat.h"
 #include "client/io/byte_order.h"
 #include "client/io/cell_census.h"
-#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
 #include "client/io/medit_format.h"
+#include "core/huge_pages.h"
 
 namespace tetrefine::io {
 namespace {

@@ -6,8 +6,8 @@
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
 #include "client/io/cell_census.h"
-#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
+#include "core/huge_pages.h"
 
 namespace tetrefine::io {
 namespace {

@@ -14,13 +14,13 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/strip.h"
 #include "client/io/byte_order.h"
-#include "client/io/huge_pages.h"
 #include "client/io/label_names.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
 #include "client/io/vtk_cells.h"
 #include "client/io/vtk_scalar.h"
+#include "core/huge_pages.h"
 
 namespace tetrefine::io {
 namespace {

@@ -9,10 +9,10 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/io/byte_stream.h"
-#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
 #include "client/io/number_text.h"
 #include "client/io/vtk_scalar.h"
+#include "core/huge_pages.h"
 
 namespace tetrefine::io {
 namespace {

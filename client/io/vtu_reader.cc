@@ -8,7 +8,6 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/strip.h"
-#include "client/io/huge_pages.h"
 #include "client/io/io_error.h"
 #include "client/io/label_names.h"
 #include "client/io/mesh_frame.h"
@@ -16,6 +15,7 @@
 #include "client/io/vtk_cells.h"
 #include "client/io/vtu_data_array.h"
 #include "client/io/vtu_format.h"
+#include "core/huge_pages.h"
 #include "pugixml.hpp"
 
 namespace tetrefine::io {

@@ -11,13 +11,13 @@
 #include "absl/strings/str_cat.h"
 #include "client/io/base64.h"
 #include "client/io/byte_order.h"
-#include "client/io/huge_pages.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
 #include "client/io/vtk_cells.h"
 #include "client/io/vtk_scalar.h"
 #include "client/io/vtu_format.h"
 #include "client/io/xml_escape.h"
+#include "core/huge_pages.h"
 
 namespace tetrefine::io {
 namespace {

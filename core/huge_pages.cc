@@ -1,10 +1,10 @@
-#include "client/io/huge_pages.h"
+#include "core/huge_pages.h"
 
 #include <sys/mman.h>
 
 #include <cstdint>
 
-namespace tetrefine::io {
+namespace tetrefine {
 
 void AdviseHugePages(const void* data, size_t bytes) {
   constexpr size_t kMin = size_t{4} << 20;
@@ -17,4 +17,4 @@ void AdviseHugePages(const void* data, size_t bytes) {
   madvise(reinterpret_cast<void*>(start), end - start, MADV_HUGEPAGE);
 }
 
-}  // namespace tetrefine::io
+}  // namespace tetrefine
