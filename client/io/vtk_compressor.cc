@@ -144,40 +144,36 @@ BlockCompressor::~BlockCompressor() {
 }
 
 void BlockCompressor::Compress(absl::string_view raw, std::string& out) {
-  const size_t start = out.size();
+  size_t size = 0;
   switch (compressor_) {
     case VtkCompressor::kZlib: {
       // Only out of memory leaves no coder; writing the block uncompressed would corrupt the file.
       if (deflate_ == nullptr) throw std::bad_alloc();
       const size_t bound = libdeflate_zlib_compress_bound(deflate_, raw.size());
-      out.resize(start + bound);
-      const size_t size =
-          libdeflate_zlib_compress(deflate_, raw.data(), raw.size(), out.data() + start, bound);
-      out.resize(start + size);
-      return;
+      if (scratch_.size() < bound) scratch_.resize(bound);
+      size = libdeflate_zlib_compress(deflate_, raw.data(), raw.size(), scratch_.data(), bound);
+      break;
     }
     case VtkCompressor::kLzma: {
       const size_t bound = lzma_stream_buffer_bound(raw.size());
-      out.resize(start + bound);
-      size_t out_pos = 0;
+      if (scratch_.size() < bound) scratch_.resize(bound);
       lzma_easy_buffer_encode(static_cast<uint32_t>(std::clamp(level_, 0, 9)), LZMA_CHECK_CRC64,
                               nullptr, reinterpret_cast<const uint8_t*>(raw.data()), raw.size(),
-                              reinterpret_cast<uint8_t*>(out.data() + start), &out_pos, bound);
-      out.resize(start + out_pos);
-      return;
+                              reinterpret_cast<uint8_t*>(scratch_.data()), &size, bound);
+      break;
     }
     case VtkCompressor::kLz4: {
       const int bound = LZ4_compressBound(static_cast<int>(raw.size()));
-      out.resize(start + bound);
-      const int size =
-          LZ4_compress_default(raw.data(), out.data() + start, static_cast<int>(raw.size()), bound);
-      out.resize(start + size);
-      return;
+      if (scratch_.size() < static_cast<size_t>(bound)) scratch_.resize(bound);
+      size = static_cast<size_t>(
+          LZ4_compress_default(raw.data(), scratch_.data(), static_cast<int>(raw.size()), bound));
+      break;
     }
     case VtkCompressor::kNone:
-      break;
+      out.append(raw.data(), raw.size());
+      return;
   }
-  out.append(raw.data(), raw.size());
+  out.append(scratch_.data(), size);
 }
 
 }  // namespace tetrefine::io

@@ -51,6 +51,11 @@ class BlockCompressor {
   VtkCompressor compressor_;
   int level_;
   ::libdeflate_compressor* deflate_ = nullptr;
+  // Where a block is compressed before its compressed bytes are appended to `out`: sized to the
+  // coder's worst case once and reused. Resizing `out` to that bound for every block zeroed the
+  // bound and faulted in fresh pages for it, a quarter of the page faults of a whole
+  // `tetrefine refine` writing a 3.3 M-tet .vtu (bench/file_to_file.sh, 2026-11-24).
+  std::string scratch_;
 };
 
 }  // namespace tetrefine::io
