@@ -148,8 +148,14 @@ int LongestEdge(const std::array<Vec3, 4>& p) {
 
 int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                             const EdgeTable& edges, int rounds, FillLater<uint8_t>& split,
-                            CancelFlag& cancel) {
+                            CancelFlag& cancel, FillLater<uint8_t>* longest) {
   const int64_t nt = static_cast<int64_t>(tets.size());
+  FillLater<uint8_t> own;
+  if (longest == nullptr) {
+    own.assign(static_cast<size_t>(nt), kLongestUnknown);
+    longest = &own;
+  }
+  FillLater<uint8_t>& cache = *longest;
   int64_t added = 0;
   for (int round = 0; round < rounds; ++round) {
     FillLater<uint8_t> next(split.begin(), split.end());
@@ -160,10 +166,14 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
         bool any = false;
         for (int k = 0; k < 6; ++k) any |= split[te[k]] != 0;
         if (!any) continue;
-        const Tet& tet = tets[t];
-        const int longest =
-            LongestEdge({points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]});
-        if (split[te[longest]] == 0) MarkSplit(next, te[longest]);
+        // Only this block reads or writes cache[t]: no two threads share an entry.
+        if (cache[t] == kLongestUnknown) {
+          const Tet& tet = tets[t];
+          cache[t] = static_cast<uint8_t>(
+              LongestEdge({points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]}));
+        }
+        const uint32_t e = te[cache[t]];
+        if (split[e] == 0) MarkSplit(next, e);
       }
     });
     if (cancel.IsSet()) return added;

@@ -66,9 +66,15 @@ int LongestEdge(const std::array<Vec3, 4>& p);
 // the result does not depend on the order tets are visited in. Needs edges.tet_edges. Returns
 // the number of edges the closure added. Polls `cancel` per block: once it is set the marks are
 // incomplete and the caller must stop.
+//
+// `longest` (T entries, or null): a cache of each tet's LongestEdge, kLongestUnknown where not
+// yet computed, shared by the closure calls of one iteration. The closure passes of an
+// iteration (up to 12 in the longest-edge scheme) met the same tets again and again, and
+// LongestEdge was 6.6% of a whole call (bench/core_bench BM_ToConvergence, 2026-11-24).
+inline constexpr uint8_t kLongestUnknown = 0xff;
 int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                             const EdgeTable& edges, int rounds, FillLater<uint8_t>& split,
-                            CancelFlag& cancel);
+                            CancelFlag& cancel, FillLater<uint8_t>* longest = nullptr);
 
 // One round of the quality guard: every tet whose split (by the paper's table) would make a
 // child of mean-ratio quality below `ratio` times its own splits all six edges instead (regular

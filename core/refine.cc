@@ -260,16 +260,19 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     stats.mean_error = errors.mean_error;
     stats.max_segment_error = errors.max_segment_error;
     stats.failing_tets = failing_tets;
+    FillLater<uint8_t> longest;
     if (rules.closure_rounds > 0) {
+      longest.assign(state.tets->size(), refine_internal::kLongestUnknown);
       stats.closure_edges = refine_internal::CloseToLongestEdges(
-          *state.points, *state.tets, edges, rules.closure_rounds, errors.split, cancel);
+          *state.points, *state.tets, edges, rules.closure_rounds, errors.split, cancel, &longest);
     }
     for (int r = 0; r < rules.guard_rounds; ++r) {
       stats.guard_edges += refine_internal::PromoteBadSplits(
           *state.points, *state.tets, edges, rules.guard_ratio, errors.split, cancel);
       if (rules.closure_rounds > 0) {
-        stats.closure_edges += refine_internal::CloseToLongestEdges(
-            *state.points, *state.tets, edges, rules.closure_rounds, errors.split, cancel);
+        stats.closure_edges += refine_internal::CloseToLongestEdges(*state.points, *state.tets,
+                                                                    edges, rules.closure_rounds,
+                                                                    errors.split, cancel, &longest);
       }
     }
     // The closure and the guard poll cancellation (each pass reads every tet): their marks are

@@ -48,5 +48,53 @@ TEST(EdgeMarkingTest, ClosureAndGuardMarkNothingOnceCancelled) {
   EXPECT_TRUE(m.split == before);
 }
 
+
+// The closure with the longest-edge cache shared across calls marks exactly what it marks with
+// a fresh cache per call, and the cache holds LongestEdge for every tet it filled: the cache is
+// a saving, never a different answer. Random jittered meshes, several split seeds, the guard
+// between the closure calls as in an iteration of the longest-edge scheme.
+TEST(EdgeMarkingTest, SharedLongestEdgeCacheChangesNoMark) {
+  const std::function<bool()> never = [] { return false; };
+  for (uint32_t seed = 1; seed <= 12; ++seed) {
+    Mesh mesh = testing::FiveTetMesh({0.0, 0.0, 0.0}, {6.0, 5.0, 4.0}, {6, 5, 4});
+    uint32_t state = seed * 2654435761u;
+    auto next = [&state] {
+      state = state * 1664525u + 1013904223u;
+      return static_cast<double>(state >> 8) / static_cast<double>(1u << 24);
+    };
+    for (Vec3& p : mesh.points) {
+      for (double& x : p) x += 0.2 * (next() - 0.5);  // interior jitter keeps tets positive
+    }
+    EdgeTable edges = BuildEdgeTable(mesh.tets, static_cast<int64_t>(mesh.points.size()));
+    AddTetEdges(mesh.tets, &edges);
+    FillLater<uint8_t> fresh(static_cast<size_t>(edges.size()), 0);
+    for (int64_t e = 0; e < edges.size(); ++e) fresh[e] = next() < 0.03 ? 1 : 0;
+    FillLater<uint8_t> cached = fresh;
+    FillLater<uint8_t> cache(mesh.tets.size(), kLongestUnknown);
+    CancelFlag running(never);
+    for (int call = 0; call < 3; ++call) {
+      if (call > 0) {
+        PromoteBadSplits(mesh.points, mesh.tets, edges, 0.65, fresh, running);
+        PromoteBadSplits(mesh.points, mesh.tets, edges, 0.65, cached, running);
+      }
+      const int64_t a = CloseToLongestEdges(mesh.points, mesh.tets, edges, 4, fresh, running);
+      const int64_t b =
+          CloseToLongestEdges(mesh.points, mesh.tets, edges, 4, cached, running, &cache);
+      EXPECT_EQ(a, b) << "seed " << seed << ", call " << call;
+      EXPECT_TRUE(fresh == cached) << "seed " << seed << ", call " << call;
+    }
+    int64_t filled = 0;
+    for (size_t t = 0; t < mesh.tets.size(); ++t) {
+      if (cache[t] == kLongestUnknown) continue;
+      ++filled;
+      const Tet& tet = mesh.tets[t];
+      EXPECT_EQ(cache[t], LongestEdge({mesh.points[tet[0]], mesh.points[tet[1]],
+                                       mesh.points[tet[2]], mesh.points[tet[3]]}))
+          << "seed " << seed << ", tet " << t;
+    }
+    EXPECT_GT(filled, 0) << "seed " << seed << ": the closure had no tet to look at";
+  }
+}
+
 }  // namespace
 }  // namespace tetrefine::refine_internal
