@@ -92,10 +92,12 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
   // of workers.
   State next;
   const int64_t next_points = nv + total_mid + total_steiner;
-  // Each is offered huge pages before its first write (ReserveHuge): faulting them in 4 KiB
-  // pages was a third of a whole call. bench/core_bench BM_ToConvergence, one thread, 40k ->
-  // 3.88 M tets, side by side (2026-11-24): 6.49 / 6.29 s as before, 4.10 / 4.23 s with every
-  // allocation advised (GLIBC_TUNABLES=glibc.malloc.hugetlb=1), 4.3 s with these arrays advised.
+  // Each is offered huge pages before its first write (ReserveHuge): page faults were a third
+  // of a whole call. bench/core_bench BM_ToConvergence, one thread, 40k -> 3.88 M tets
+  // (2026-11-24): 6.29-6.49 s and 70 k faults as before; 4.10-4.23 s with every allocation
+  // advised (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, 7 k faults); with these arrays and the
+  // edge table's buckets (core/edge_table.cc) advised, 4.61-4.77 s and 16 k faults against
+  // 6.35-7.17 s for the commit before, interleaved.
   auto sized = [](auto& v, int64_t n) {
     ReserveHuge(v, static_cast<size_t>(n));
     v.resize(static_cast<size_t>(n));
