@@ -48,7 +48,6 @@ TEST(EdgeMarkingTest, ClosureAndGuardMarkNothingOnceCancelled) {
   EXPECT_TRUE(m.split == before);
 }
 
-
 // The closure with the longest-edge cache shared across calls marks exactly what it marks with
 // a fresh cache per call, and the cache holds LongestEdge for every tet it filled: the cache is
 // a saving, never a different answer. Random jittered meshes, several split seeds, the guard
