@@ -10,15 +10,10 @@
 #include "core/segment_error.h"
 #include "core/subdivision_table.h"
 #include "core/tet_topology.h"
+#include "core/vec3_ops.h"
 
 namespace tetrefine::refine_internal {
 namespace {
-
-bool LexLess(const Vec3& a, const Vec3& b) {
-  if (a[0] != b[0]) return a[0] < b[0];
-  if (a[1] != b[1]) return a[1] < b[1];
-  return a[2] < b[2];
-}
 
 // Marks edge e split. Many tets may mark the same edge at once; they all write 1.
 void MarkSplit(FillLater<uint8_t>& split, uint32_t e) {

@@ -6,15 +6,10 @@
 #include <utility>
 
 #include "absl/container/inlined_vector.h"
+#include "core/vec3_ops.h"
 
 namespace tetrefine {
 namespace {
-
-bool LexLess(const Vec3& a, const Vec3& b) {
-  if (a[0] != b[0]) return a[0] < b[0];
-  if (a[1] != b[1]) return a[1] < b[1];
-  return a[2] < b[2];
-}
 
 // p[0] + p[1] t + p[2] t^2 + p[3] t^3 at t.
 double Cubic(const std::array<double, 4>& p, double t) {

@@ -8,6 +8,7 @@
 
 #include "core/mesh.h"
 #include "core/tiling_check.h"
+#include "core/vec3_ops.h"
 
 namespace tetrefine {
 namespace {
@@ -446,12 +447,6 @@ std::array<SubdivisionEntry, kNumSubdivisionKeys> BuildSubdivisionTable() {
     table[key] = b.Finish(pattern);
   }
   return table;
-}
-
-bool LexLess(const Vec3& a, const Vec3& b) {
-  if (a[0] != b[0]) return a[0] < b[0];
-  if (a[1] != b[1]) return a[1] < b[1];
-  return a[2] < b[2];
 }
 
 double SquaredLength(const Vec3& a, const Vec3& b) {
