@@ -21,13 +21,29 @@ bool InAnotherBox(const Vec3& p, const std::vector<MeshPart>& parts, size_t self
 
 }  // namespace
 
-absl::StatusOr<MergedMesh> MergeParts(const Mesh& input, const Volume& volume,
-                                      OutsidePolicy outside, const std::vector<MeshPart>& parts,
-                                      const std::vector<const RefineResult*>& results) {
+absl::StatusOr<RefinedMesh> PieceOfPart(int p, const MeshPart& part, RefineResult& refined) {
+  RefinedMesh piece;
+  piece.tet_parent.reserve(refined.tet_parent.size());
+  for (uint32_t parent : refined.tet_parent) {
+    if (parent >= part.input_tet.size()) {
+      return absl::InternalError(
+          absl::StrCat("part ", p, ": tet parent ", parent, " is not a tet of the part sent"));
+    }
+    piece.tet_parent.push_back(part.input_tet[parent]);
+  }
+  piece.mesh = std::move(refined.mesh);
+  piece.tet_iteration = std::move(refined.tet_iteration);
+  piece.tet_quality = std::move(refined.tet_quality);
+  return piece;
+}
+
+absl::StatusOr<RefinedMesh> MergeParts(const Mesh& input, const Volume& volume,
+                                       OutsidePolicy outside, const std::vector<MeshPart>& parts,
+                                       const std::vector<const RefineResult*>& results) {
   if (parts.size() != results.size()) {
     return absl::InternalError("MergeParts: one result per part expected");
   }
-  MergedMesh out;
+  RefinedMesh out;
   Mesh& merged = out.mesh;
   const size_t num_input = input.points.size();
   merged.points = input.points;

@@ -13,7 +13,8 @@
 
 namespace tetrefine::sharding {
 
-struct MergedMesh {
+// A refined mesh with its per-tet arrays: the merged whole, or one part of it kept as a piece.
+struct RefinedMesh {
   Mesh mesh;
   std::vector<int32_t> tet_iteration;
   std::vector<float> tet_quality;
@@ -35,8 +36,13 @@ struct MergedMesh {
 //
 // INTERNAL if a part's result does not start with its input vertices, or if two parts disagree on
 // the value at a shared vertex: either would mean the parts were not refined consistently.
-absl::StatusOr<MergedMesh> MergeParts(const Mesh& input, const Volume& volume,
-                                      OutsidePolicy outside, const std::vector<MeshPart>& parts,
-                                      const std::vector<const RefineResult*>& results);
+// Part `p`'s refined result as a piece of the whole, without merging: its mesh and per-tet arrays
+// moved out of `refined`, its tet parents mapped from the part's tets to the input's through
+// part.input_tet. INTERNAL if a parent is not a tet of the part.
+absl::StatusOr<RefinedMesh> PieceOfPart(int p, const MeshPart& part, RefineResult& refined);
+
+absl::StatusOr<RefinedMesh> MergeParts(const Mesh& input, const Volume& volume,
+                                       OutsidePolicy outside, const std::vector<MeshPart>& parts,
+                                       const std::vector<const RefineResult*>& results);
 
 }  // namespace tetrefine::sharding

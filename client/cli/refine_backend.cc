@@ -87,6 +87,16 @@ class ShardedBackend : public RefineBackend {
     return sharding::RefineSharded(channels_, volume, mesh, options, shards_, callbacks, call_);
   }
 
+  absl::StatusOr<sharding::ShardedResult> RefineInPieces(
+      const Volume& volume, const Mesh& mesh, const client::RefineRequestOptions& options,
+      const client::RefineCallbacks& callbacks) override {
+    absl::StatusOr<size_t> chunk = ChunkBytesForServers(channels_, call_.bearer_token);
+    if (!chunk.ok()) return chunk.status();
+    call_.chunk_bytes = *chunk;
+    return sharding::RefineShardedInPieces(channels_, volume, mesh, options, shards_, callbacks,
+                                           call_);
+  }
+
  private:
   std::string name_;
   std::vector<std::shared_ptr<grpc::Channel>> channels_;
@@ -95,6 +105,13 @@ class ShardedBackend : public RefineBackend {
 };
 
 }  // namespace
+
+absl::StatusOr<sharding::ShardedResult> RefineBackend::RefineInPieces(
+    const Volume&, const Mesh&, const client::RefineRequestOptions&,
+    const client::RefineCallbacks&) {
+  return absl::UnimplementedError(
+      absl::StrCat(Name(), " has no parts to keep as pieces: a .pvtu needs a sharded run"));
+}
 
 absl::StatusOr<std::unique_ptr<RefineBackend>> StartEmbeddedBackend(
     const server::ServiceConfig& config) {

@@ -8,6 +8,7 @@
 #include "absl/status/statusor.h"
 #include "client/cli/grpc_channel.h"
 #include "client/refine_client.h"
+#include "client/sharding/sharded_refine.h"
 #include "core/mesh.h"
 #include "core/volume.h"
 #include "grpcpp/channel.h"
@@ -31,6 +32,14 @@ class RefineBackend {
   virtual absl::StatusOr<client::ClientResult> Refine(const Volume& volume, const Mesh& mesh,
                                                       const client::RefineRequestOptions& options,
                                                       const client::RefineCallbacks& callbacks) = 0;
+
+  // The same refinement with the result kept as the parts' own meshes (ShardOptions::keep_pieces:
+  // reply.result has no mesh, `pieces` hold it), so that a .pvtu is written piece by piece and
+  // the result is never merged here. Only a sharded backend has parts: the others return
+  // UNIMPLEMENTED.
+  virtual absl::StatusOr<sharding::ShardedResult> RefineInPieces(
+      const Volume& volume, const Mesh& mesh, const client::RefineRequestOptions& options,
+      const client::RefineCallbacks& callbacks);
 };
 
 // The service started inside this process (server::EmbeddedServer), called through the same

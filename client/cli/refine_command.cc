@@ -25,7 +25,6 @@
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_write_flags.h"
 #include "client/cli/progress.h"
-#include "client/cli/pvtu_pieces.h"
 #include "client/cli/refine_backend.h"
 #include "client/cli/refine_report.h"
 #include "client/cli/stats_json.h"
@@ -295,11 +294,19 @@ absl::Status WriteMeshReported(const RefineSettings& s, Progress& progress, cons
   return absl::OkStatus();
 }
 
-// Writes `file` as the .pvtu at s.output_path with one .vtu piece per shard, reported as one
-// progress phase (sizes summed over the pieces and the index).
+// Vertices summed over `pieces` (a vertex on a boundary between pieces counts once per piece).
+int64_t PieceVertices(const std::vector<sharding::RefinedMesh>& pieces) {
+  int64_t n = 0;
+  for (const sharding::RefinedMesh& piece : pieces) {
+    n += static_cast<int64_t>(piece.mesh.points.size());
+  }
+  return n;
+}
+
+// Writes the sharded run's `pieces` (`tets` in all) as the .pvtu at s.output_path with one .vtu
+// per piece, reported as one progress phase (sizes summed over the pieces and the index).
 absl::Status WritePiecesReported(const RefineSettings& s, Progress& progress,
-                                 const io::MeshFile& file) {
-  const std::vector<io::MeshFile> pieces = CutIntoPieces(file, s.shards);
+                                 const std::vector<io::MeshFile>& pieces, int64_t tets) {
   progress.Begin(absl::StrCat("writing ", s.output_path, " and ", pieces.size(), " pieces"));
   absl::Status written = io::WritePvtu(s.output_path, pieces, s.write.vtu);
   if (!written.ok()) {
@@ -310,8 +317,7 @@ absl::Status WritePiecesReported(const RefineSettings& s, Progress& progress,
   for (size_t k = 0; k < pieces.size(); ++k) {
     bytes += std::max<int64_t>(FileSize(io::PvtuPiecePath(s.output_path, static_cast<int>(k))), 0);
   }
-  progress.End(absl::StrCat(FormatCount(static_cast<int64_t>(file.mesh.tets.size())), " tets, ",
-                            FormatBytes(bytes)));
+  progress.End(absl::StrCat(FormatCount(tets), " tets, ", FormatBytes(bytes)));
   return absl::OkStatus();
 }
 
@@ -448,15 +454,29 @@ int RunRefinement(const RefineSettings& s) {
   callbacks.should_cancel = [&] { return g_interrupted != 0 || !iteration_write.ok(); };
 
   const auto refine_start = std::chrono::steady_clock::now();
-  absl::StatusOr<client::ClientResult> reply =
-      (*backend)->Refine(volume->volume, mesh, s.options, callbacks);
+  // A .pvtu is written from the parts' own meshes: the result is never merged here.
+  std::vector<sharding::RefinedMesh> pieces;
+  absl::StatusOr<client::ClientResult> reply = absl::UnknownError("not run");
+  if (s.pvtu) {
+    absl::StatusOr<sharding::ShardedResult> sharded =
+        (*backend)->RefineInPieces(volume->volume, mesh, s.options, callbacks);
+    if (sharded.ok()) {
+      pieces = std::move(sharded->pieces);
+      reply = std::move(sharded->reply);
+    } else {
+      reply = sharded.status();
+    }
+  } else {
+    reply = (*backend)->Refine(volume->volume, mesh, s.options, callbacks);
+  }
   silence.Touch(/*armed=*/false);
   if (reply.ok() && s.shards > 0) {
     // Sharded runs report the combined iterations once all parts are done, and their calls'
-    // phases not at all: say at least that the parts are back and merged.
-    progress.Line(absl::StrCat("parts refined, measured and merged: ",
-                               FormatCount(static_cast<int64_t>(reply->result.mesh.tets.size())),
-                               " tets, ", FormatSeconds(SecondsSince(refine_start))));
+    // phases not at all: say at least that the parts are back (and merged, unless kept).
+    progress.Line(absl::StrCat("parts refined and measured",
+                               s.pvtu ? ", kept as pieces: " : ", merged: ",
+                               FormatCount(reply->result.final_quality.count), " tets, ",
+                               FormatSeconds(SecondsSince(refine_start))));
   }
   if (!iteration_write.ok()) return Fail(iteration_write, kExitUsage);
   if (g_interrupted != 0) return Fail("interrupted; no output written", 130);
@@ -481,22 +501,44 @@ int RunRefinement(const RefineSettings& s) {
                        .options = s.options,
                        .fit_mesh_to_volume = s.fit_mesh_to_volume,
                        .input_vertices = static_cast<int64_t>(mesh.points.size()),
-                       .input_tets = static_cast<int64_t>(mesh.tets.size())};
+                       .input_tets = static_cast<int64_t>(mesh.tets.size()),
+                       .output_pieces = static_cast<int>(pieces.size()),
+                       .piece_vertices = PieceVertices(pieces)};
     stats_json = RefineStatsJson(run, *reply);
   }
-  const size_t out_vertices = result.mesh.points.size();
-  const size_t out_tets = result.mesh.tets.size();
-  io::MeshFile out{.mesh = std::move(result.mesh),
-                   .tet_iteration = std::move(result.tet_iteration),
-                   .tet_quality = std::move(result.tet_quality)};
-  out.label_name = tags.label_name;
-  out.frame = tags.frame;
-  if (!mesh.labels.empty() && out.mesh.labels.empty()) {
-    PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
-                              " is written without them"));
+  const int64_t out_vertices =
+      s.pvtu ? PieceVertices(pieces) : static_cast<int64_t>(result.mesh.points.size());
+  const int64_t out_tets = result.final_quality.count;
+  const size_t out_pieces = pieces.size();
+  absl::Status written;
+  if (s.pvtu) {
+    std::vector<io::MeshFile> files;
+    for (sharding::RefinedMesh& piece : pieces) {
+      io::MeshFile& file =
+          files.emplace_back(io::MeshFile{.mesh = std::move(piece.mesh),
+                                          .tet_iteration = std::move(piece.tet_iteration),
+                                          .tet_quality = std::move(piece.tet_quality)});
+      file.label_name = tags.label_name;
+      file.frame = tags.frame;
+    }
+    pieces.clear();
+    if (!mesh.labels.empty() && !files.empty() && files[0].mesh.labels.empty()) {
+      PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
+                                " is written without them"));
+    }
+    written = WritePiecesReported(s, progress, files, out_tets);
+  } else {
+    io::MeshFile out{.mesh = std::move(result.mesh),
+                     .tet_iteration = std::move(result.tet_iteration),
+                     .tet_quality = std::move(result.tet_quality)};
+    out.label_name = tags.label_name;
+    out.frame = tags.frame;
+    if (!mesh.labels.empty() && out.mesh.labels.empty()) {
+      PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
+                                " is written without them"));
+    }
+    written = WriteMeshReported(s, progress, s.output_path, out);
   }
-  absl::Status written = s.pvtu ? WritePiecesReported(s, progress, out)
-                                : WriteMeshReported(s, progress, s.output_path, out);
   if (!written.ok()) return Fail(written, kExitUsage);
   if (!s.stats_json_path.empty()) {
     progress.Begin(absl::StrCat("writing ", s.stats_json_path));
@@ -509,12 +551,10 @@ int RunRefinement(const RefineSettings& s) {
   }
   std::fputs(report.c_str(), stdout);
   std::printf(
-      "Wrote %s%s: %zu vertices, %zu tets%s\n", s.output_path.c_str(),
-      s.pvtu ? absl::StrCat(" (", std::min<size_t>(static_cast<size_t>(s.shards), out_tets),
-                            " .vtu pieces)")
-                   .c_str()
-             : "",
-      out_vertices, out_tets,
+      "Wrote %s%s: %lld vertices%s, %lld tets%s\n", s.output_path.c_str(),
+      s.pvtu ? absl::StrCat(" (", out_pieces, " .vtu pieces)").c_str() : "",
+      static_cast<long long>(out_vertices), s.pvtu ? " over the pieces" : "",
+      static_cast<long long>(out_tets),
       s.stats_json_path.empty() ? "" : absl::StrCat("; statistics in ", s.stats_json_path).c_str());
   return kExitOk;
 }

@@ -107,7 +107,7 @@ std::string FormatRefineReport(const RefineResult& result, double epsilon) {
     absl::StrAppend(&out,
                     absl::StrFormat("Certified: lattice error at most %.6f in every one of "
                                     "the %d tets (n = %d)\n",
-                                    result.certified_max_error, result.mesh.tets.size(), l.n));
+                                    result.certified_max_error, result.final_quality.count, l.n));
   }
   if (result.tets_reoriented > 0) {
     absl::StrAppend(&out, "Inverted input tets reoriented: ", result.tets_reoriented, "\n");

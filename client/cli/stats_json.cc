@@ -169,9 +169,14 @@ std::string RefineStatsJson(const RunDescription& run, const client::ClientResul
   json.Key("output_mesh");
   json.BeginObject();
   json.Key("vertices");
-  json.Int(static_cast<int64_t>(r.mesh.points.size()));
+  json.Int(run.output_pieces > 0 ? run.piece_vertices : static_cast<int64_t>(r.mesh.points.size()));
   json.Key("tets");
-  json.Int(static_cast<int64_t>(r.mesh.tets.size()));
+  json.Int(run.output_pieces > 0 ? r.final_quality.count
+                                 : static_cast<int64_t>(r.mesh.tets.size()));
+  if (run.output_pieces > 0) {
+    json.Key("pieces");
+    json.Int(run.output_pieces);
+  }
   json.EndObject();
   json.Key("seconds");
   json.BeginObject();

@@ -17,6 +17,11 @@ struct RunDescription {
   bool fit_mesh_to_volume = false;
   int64_t input_vertices = 0;
   int64_t input_tets = 0;
+  // > 0: the result was written as that many .pvtu pieces, never merged. output_mesh then counts
+  // `piece_vertices`, the vertices summed over the pieces (a vertex on the boundary between two
+  // pieces is in both), and says how many pieces.
+  int output_pieces = 0;
+  int64_t piece_vertices = 0;
 };
 
 // The same content as the printed report, as a JSON document (see README "Command line"):

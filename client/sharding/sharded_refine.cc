@@ -430,10 +430,23 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
       options.refine.certify && result.stop_reason == StopReason::kConverged && converged
           ? certified
           : -1.0;
-  result.mesh = std::move(whole.mesh);
-  result.tet_iteration = std::move(whole.tet_iteration);
-  result.tet_quality = std::move(whole.tet_quality);
-  if (options.refine.track_parents) result.tet_parent = std::move(whole.tet_parent);
+  if (shard_options.keep_pieces) {
+    // The measuring round's parts are the pieces: its calls are done with them.
+    for (MeshPart& part : parts) {
+      RefinedMesh& piece = out.pieces.emplace_back();
+      for (uint32_t t : part.input_tet) {
+        piece.tet_iteration.push_back(whole.tet_iteration[t]);
+        piece.tet_quality.push_back(whole.tet_quality[t]);
+        if (options.refine.track_parents) piece.tet_parent.push_back(whole.tet_parent[t]);
+      }
+      piece.mesh = std::move(part.mesh);
+    }
+  } else {
+    result.mesh = std::move(whole.mesh);
+    result.tet_iteration = std::move(whole.tet_iteration);
+    result.tet_quality = std::move(whole.tet_quality);
+    if (options.refine.track_parents) result.tet_parent = std::move(whole.tet_parent);
+  }
   for (const auto& reply : replies) {
     server_budget = server_budget == 0 ? reply->service.max_tets
                                        : std::min(server_budget, reply->service.max_tets);
@@ -507,10 +520,6 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   }
 
   const Clock::time_point merge_start = Clock::now();
-  absl::StatusOr<MergedMesh> merged =
-      MergeParts(mesh, volume, options.refine.outside, parts, results);
-  if (!merged.ok()) return merged.status();
-
   ShardedResult out;
   RefineResult& result = out.reply.result;
   result.iterations = CombineIterations(results, stop.iterations);
@@ -521,10 +530,22 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   std::vector<double> volumes;
   for (const MeshPart& part : parts) volumes.push_back(MeshVolume(part.mesh));
   CombineSummary(results, volumes, &result);
-  result.mesh = std::move(merged->mesh);
-  result.tet_iteration = std::move(merged->tet_iteration);
-  result.tet_quality = std::move(merged->tet_quality);
-  result.tet_parent = std::move(merged->tet_parent);
+  // After the statistics: they count the edges of a part that converged early from its mesh.
+  if (shard_options.keep_pieces) {
+    for (int p = 0; p < num_parts; ++p) {
+      absl::StatusOr<RefinedMesh> piece = PieceOfPart(p, parts[p], replies[p]->result);
+      if (!piece.ok()) return piece.status();
+      out.pieces.push_back(*std::move(piece));
+    }
+  } else {
+    absl::StatusOr<RefinedMesh> merged =
+        MergeParts(mesh, volume, options.refine.outside, parts, results);
+    if (!merged.ok()) return merged.status();
+    result.mesh = std::move(merged->mesh);
+    result.tet_iteration = std::move(merged->tet_iteration);
+    result.tet_quality = std::move(merged->tet_quality);
+    result.tet_parent = std::move(merged->tet_parent);
+  }
   out.reply.service.max_tets = budget;
   for (int p = 0; p < num_parts; ++p) {
     const client::ClientResult& reply = *replies[p];
@@ -555,16 +576,20 @@ std::vector<std::shared_ptr<grpc::Channel>> ChannelsFor(
   return channels;
 }
 
-absl::StatusOr<client::ClientResult> RefineSharded(
+namespace {
+
+// RefineSharded and RefineShardedInPieces: the CLI's call shape over ShardedRefine.
+absl::StatusOr<ShardedResult> RefineShardedFor(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
-    const client::RefineCallbacks& callbacks, const client::CallOptions& call) {
+    const client::RefineCallbacks& callbacks, const client::CallOptions& call, bool keep_pieces) {
   if (callbacks.on_mesh) {
     return absl::UnimplementedError("sharded refinement does not stream intermediate meshes");
   }
   ShardOptions shard;
   shard.shards = shards;
   shard.call = call;
+  shard.keep_pieces = keep_pieces;
   ShardCallbacks sharded;
   sharded.should_cancel = callbacks.should_cancel;
   absl::StatusOr<ShardedResult> result =
@@ -575,7 +600,26 @@ absl::StatusOr<client::ClientResult> RefineSharded(
       callbacks.on_iteration(stats);
     }
   }
+  return result;
+}
+
+}  // namespace
+
+absl::StatusOr<client::ClientResult> RefineSharded(
+    const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+    const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
+    const client::RefineCallbacks& callbacks, const client::CallOptions& call) {
+  absl::StatusOr<ShardedResult> result =
+      RefineShardedFor(targets, volume, mesh, options, shards, callbacks, call, false);
+  if (!result.ok()) return result.status();
   return std::move(result->reply);
+}
+
+absl::StatusOr<ShardedResult> RefineShardedInPieces(
+    const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+    const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
+    const client::RefineCallbacks& callbacks, const client::CallOptions& call) {
+  return RefineShardedFor(targets, volume, mesh, options, shards, callbacks, call, true);
 }
 
 }  // namespace tetrefine::sharding

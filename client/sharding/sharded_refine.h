@@ -27,6 +27,7 @@
 #include "grpcpp/channel.h"
 #include "grpcpp/security/credentials.h"
 #include "sharding/halo_parts.h"
+#include "sharding/part_merge.h"
 
 namespace tetrefine::sharding {
 
@@ -42,6 +43,11 @@ struct ShardOptions {
   // part's own tets. The default is what the scheme reads (sharding/halo_parts.h); a narrower
   // halo gives a different mesh, and exists for the test that shows it.
   int halo_rings = kHaloRings;
+  // The result as the parts' own meshes (ShardedResult::pieces) instead of one merged mesh: a
+  // .pvtu is written from them without the whole mesh ever being put together here. Under the
+  // paper's scheme no merge happens at all; the halo schemes hold the whole mesh between their
+  // rounds anyway, and the pieces are then the measuring round's parts.
+  bool keep_pieces = false;
 };
 
 struct ShardCallbacks {
@@ -77,8 +83,15 @@ struct ShardedResult {
   // per-iteration statistics combined (see result_combine.h for how, and where they differ
   // from an unsharded run's); the stop reason the unsharded run has; norm_coeff as sent.
   // service.max_tets is the budget applied, input_seconds the slowest part's input, and
-  // total_seconds the wall time of the whole sharded run.
+  // total_seconds the wall time of the whole sharded run. With ShardOptions::keep_pieces the
+  // mesh and its per-tet arrays (tet_iteration, tet_quality, tet_parent) are empty and `pieces`
+  // hold them; everything else is as without.
   client::ClientResult reply;
+  // With keep_pieces: one per part, in part order, each with its own vertex numbering (a vertex
+  // on the boundary between two pieces is in both, with the same coordinates and value to the
+  // bit). Together they hold exactly the merged result's tets, with tet_parent indexing the
+  // input's tets; input vertices used by no tet are in none.
+  std::vector<RefinedMesh> pieces;
   std::vector<ShardReport> shards;
   double split_seconds = 0.0;  // cutting the mesh into parts (here, before any call)
   double merge_seconds = 0.0;  // merging the parts' meshes and statistics
@@ -121,6 +134,13 @@ absl::StatusOr<ShardedResult> ShardedRefine(
 // callbacks.on_iteration receives the combined statistics of each iteration once every part is
 // done (the parts' own iterations are not forwarded); on_mesh is UNIMPLEMENTED.
 absl::StatusOr<client::ClientResult> RefineSharded(
+    const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
+    const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
+    const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {});
+
+// As RefineSharded, with ShardOptions::keep_pieces: the whole ShardedResult, whose reply has no
+// mesh and whose pieces hold the result (for a .pvtu written piece by piece).
+absl::StatusOr<ShardedResult> RefineShardedInPieces(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
     const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {});

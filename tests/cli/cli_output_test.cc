@@ -15,7 +15,6 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "client/cli/progress.h"
-#include "client/cli/pvtu_pieces.h"
 #include "client/io/mesh_io.h"
 #include "gtest/gtest.h"
 #include "tests/cli/cli_test_util.h"
@@ -25,7 +24,6 @@
 namespace tetrefine::clitest {
 namespace {
 
-using cli::CutIntoPieces;
 using cli::FormatBytes;
 using cli::FormatCount;
 using cli::FormatSeconds;
@@ -391,52 +389,6 @@ TEST(CliProgressFormat, CountsAndBytesStayWithinHalfAPercent) {
   EXPECT_EQ(FormatCount(1600000), "1.60 M");
   EXPECT_EQ(FormatBytes(31400000), "31.4 MB");
   EXPECT_EQ(FormatSeconds(0.424), "0.42 s");
-}
-
-// Over random meshes and piece counts: the pieces together hold each tet exactly once, with its
-// corners, label, iteration and quality; every piece has tets and uses each of its vertices.
-TEST(CliPvtuPieces, PiecesPartitionTheTetsAndKeepTheirArrays) {
-  for (uint64_t seed = 1; seed <= 20; ++seed) {
-    io::iotest::RandomMeshOptions options;
-    options.labels = true;
-    options.vertices = 40 + static_cast<int>(seed * 7 % 50);
-    options.tets = 30 + static_cast<int>(seed * 13 % 90);
-    options.frame = seed % 2 ? io::MeshFrame::kLps : io::MeshFrame::kUntagged;
-    const io::MeshFile file = io::iotest::RandomMesh(seed, options);
-    using Record = std::tuple<std::array<Vec3, 4>, int32_t, int32_t, float>;
-    auto records = [](const io::MeshFile& f) {
-      std::vector<Record> out;
-      for (size_t t = 0; t < f.mesh.tets.size(); ++t) {
-        std::array<Vec3, 4> corners;
-        for (int c = 0; c < 4; ++c) corners[c] = f.mesh.points[f.mesh.tets[t][c]];
-        out.emplace_back(corners, f.mesh.labels[t], f.tet_iteration[t], f.tet_quality[t]);
-      }
-      return out;
-    };
-    std::vector<Record> whole = records(file);
-    std::sort(whole.begin(), whole.end());
-    for (int count : {1, 2, 3, 7, 1000}) {
-      SCOPED_TRACE(absl::StrCat("seed ", seed, ", ", count, " pieces"));
-      const std::vector<io::MeshFile> pieces = CutIntoPieces(file, count);
-      EXPECT_EQ(pieces.size(), std::min<size_t>(count, file.mesh.tets.size()));
-      std::vector<Record> together;
-      for (const io::MeshFile& piece : pieces) {
-        ASSERT_TRUE(io::ValidateMeshFile(piece, "piece").ok());
-        EXPECT_FALSE(piece.mesh.tets.empty());
-        EXPECT_EQ(piece.label_name, file.label_name);
-        EXPECT_EQ(piece.frame, file.frame);
-        EXPECT_EQ(piece.mesh.values.size(), piece.mesh.points.size());
-        std::vector<bool> used(piece.mesh.points.size(), false);
-        for (const Tet& t : piece.mesh.tets) {
-          for (uint32_t v : t) used[v] = true;
-        }
-        EXPECT_EQ(std::count(used.begin(), used.end(), false), 0);
-        for (const Record& r : records(piece)) together.push_back(r);
-      }
-      std::sort(together.begin(), together.end());
-      EXPECT_EQ(together, whole);
-    }
-  }
 }
 
 }  // namespace

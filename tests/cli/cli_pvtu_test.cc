@@ -17,6 +17,7 @@
 #include "client/io/pvtu_writer.h"
 #include "core/mesh.h"
 #include "gtest/gtest.h"
+#include "nlohmann/json.hpp"
 #include "tests/cli/cli_test_util.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/geometry.h"
@@ -191,13 +192,29 @@ TEST_F(CliPvtu, PiecesHoldExactlyTheMergedResult) {
 }
 
 TEST_F(CliPvtu, PvtuFlagNamesTheIndexAfterTheOutput) {
-  const ProcessResult run =
-      Refine({"--shards", "2", "--pvtu", "--output", dir_.File("named.vtu"), "--quiet"});
+  const std::string stats = dir_.File("named.json");
+  const ProcessResult run = Refine({"--shards", "2", "--pvtu", "--output", dir_.File("named.vtu"),
+                                    "--stats-json", stats, "--quiet"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(FileExists(dir_.File("named.pvtu")));
   EXPECT_TRUE(FileExists(dir_.File("named_0.vtu")));
   EXPECT_TRUE(FileExists(dir_.File("named_1.vtu")));
   EXPECT_FALSE(FileExists(dir_.File("named.vtu")));
+  // The result is never merged: the statistics count the pieces' tets and vertices.
+  int64_t tets = 0, vertices = 0;
+  for (int k = 0; k < 2; ++k) {
+    absl::StatusOr<io::MeshFile> piece = io::ReadMesh(dir_.File(absl::StrCat("named_", k, ".vtu")));
+    ASSERT_TRUE(piece.ok()) << piece.status();
+    tets += static_cast<int64_t>(piece->mesh.tets.size());
+    vertices += static_cast<int64_t>(piece->mesh.points.size());
+  }
+  const nlohmann::json json = nlohmann::json::parse(ReadBytes(stats));
+  EXPECT_EQ(json["output_mesh"]["pieces"], 2);
+  EXPECT_EQ(json["output_mesh"]["tets"], tets);
+  EXPECT_EQ(json["output_mesh"]["vertices"], vertices);
+  EXPECT_TRUE(absl::StrContains(
+      run.out, absl::StrCat(vertices, " vertices over the pieces, ", tets, " tets")))
+      << run.out;
 }
 
 TEST_F(CliPvtu, PiecesNeedAShardedRun) {

@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "client/io/mesh_io.h"
@@ -402,6 +403,82 @@ TEST_F(ShardedRefineTest, LabelsAndParentsMatchTheUnshardedRun) {
       ASSERT_EQ(sharded.reply.result.tet_parent.size(), sharded.reply.result.mesh.tets.size());
       EXPECT_EQ(keyed(sharded.reply.result), want);
     }
+  }
+}
+
+// Per tet, by its sorted corner positions: what it carries (label, input parent, iteration,
+// quality) and its corners' values, so that tets compare across vertex numberings.
+using TetCargo = std::tuple<int32_t, uint32_t, int32_t, float, std::array<double, 4>>;
+void AddKeyed(const Mesh& mesh, const std::vector<int32_t>& iteration,
+              const std::vector<float>& quality, const std::vector<uint32_t>& parent,
+              std::map<std::array<Vec3, 4>, TetCargo>* out) {
+  for (size_t t = 0; t < mesh.tets.size(); ++t) {
+    std::array<std::pair<Vec3, double>, 4> corners;
+    for (int k = 0; k < 4; ++k) {
+      corners[k] = {mesh.points[mesh.tets[t][k]], mesh.values[mesh.tets[t][k]]};
+    }
+    std::sort(corners.begin(), corners.end());
+    std::array<Vec3, 4> key;
+    std::array<double, 4> values;
+    for (int k = 0; k < 4; ++k) std::tie(key[k], values[k]) = corners[k];
+    EXPECT_TRUE(
+        out->emplace(key, TetCargo{mesh.labels[t], parent[t], iteration[t], quality[t], values})
+            .second)
+        << "tet " << t << " is in two pieces";
+  }
+}
+
+double TotalVolume(const Mesh& mesh) {
+  double volume = 0.0;
+  for (const Tet& t : mesh.tets) {
+    const auto& p = mesh.points;
+    volume += SignedVolume6(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) / 6.0;
+  }
+  return volume;
+}
+
+// keep_pieces: the parts' own meshes are the result, never merged, and together they are
+// exactly the merged result; the statistics are those of the merged run.
+TEST_F(ShardedRefineTest, KeptPiecesHoldExactlyTheMergedResult) {
+  StructuredCase c;
+  for (size_t t = 0; t < c.mesh.tets.size(); ++t) c.mesh.labels.push_back(static_cast<int>(t % 5));
+  for (const RefineScheme scheme : {RefineScheme::kPaper, RefineScheme::kLongestEdge}) {
+    SCOPED_TRACE(std::string(RefineSchemeName(scheme)));
+    client::RefineRequestOptions options = Options(0.004, 2);
+    options.refine.scheme = scheme;
+    options.refine.track_parents = true;
+    const sharding::ShardedResult merged = Sharded(c.volume, c.mesh, options, 3);
+    const RefineResult& m = merged.reply.result;
+    ASSERT_GT(m.iterations.size(), 0u);
+    std::map<std::array<Vec3, 4>, TetCargo> want;
+    AddKeyed(m.mesh, m.tet_iteration, m.tet_quality, m.tet_parent, &want);
+
+    sharding::ShardOptions shard = Shards(3);
+    shard.keep_pieces = true;
+    absl::StatusOr<sharding::ShardedResult> kept =
+        sharding::ShardedRefine(channels_, c.volume, c.mesh, options, shard);
+    ASSERT_TRUE(kept.ok()) << kept.status();
+    const RefineResult& k = kept->reply.result;
+    EXPECT_TRUE(k.mesh.tets.empty());
+    EXPECT_TRUE(k.tet_quality.empty());
+    EXPECT_EQ(k.stop_reason, m.stop_reason);
+    EXPECT_EQ(k.iterations.size(), m.iterations.size());
+    EXPECT_EQ(k.final_quality.count, m.final_quality.count);
+    EXPECT_EQ(k.final_quality.min, m.final_quality.min);
+    EXPECT_EQ(k.final_max_error, m.final_max_error);
+    ASSERT_EQ(kept->pieces.size(), 3u);
+    std::map<std::array<Vec3, 4>, TetCargo> got;
+    double pieces_volume = 0.0;
+    for (const sharding::RefinedMesh& piece : kept->pieces) {
+      ASSERT_FALSE(piece.mesh.tets.empty());
+      ASSERT_EQ(piece.mesh.values.size(), piece.mesh.points.size());
+      ASSERT_EQ(piece.mesh.labels.size(), piece.mesh.tets.size());
+      ASSERT_EQ(piece.tet_parent.size(), piece.mesh.tets.size());
+      AddKeyed(piece.mesh, piece.tet_iteration, piece.tet_quality, piece.tet_parent, &got);
+      pieces_volume += TotalVolume(piece.mesh);
+    }
+    EXPECT_EQ(got, want);
+    EXPECT_NEAR(pieces_volume, TotalVolume(m.mesh), 1e-9 * TotalVolume(m.mesh));
   }
 }
 
