@@ -87,6 +87,11 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
 // Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165
 // points for n = 8) and keeps its discrepancy in state.tet_lattice_error (final until the tet is
 // split); a tet above epsilon gets its longest edge split. Returns the number of failing tets.
+// Splitting instead the edge nearest the tet's lattice maximum (largest sum of the point's two
+// barycentric weights, longest on ties) was measured 2026-11-24 on the unit cube fitted to the
+// three real volumes at eps 0.1 and 0.05 (`refine --certify --fit-mesh-to-volume`): 7-12% more
+// tets in every run and a worse worst tet in five of six (epi eps 0.1: 185,861 tets, min
+// 0.146, against 165,485 and 0.172). The longest edge shrinks the tet fastest.
 int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,
                         const EdgeTestParams& params, FillLater<uint8_t>& split,
                         CancelFlag& cancel);
