@@ -200,10 +200,20 @@ absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const
     const int64_t out = FirstVertexOutside(volume, mesh);
     if (out >= 0) {
       const Vec3& p = mesh.points[static_cast<size_t>(out)];
+      // A rotated grid fills only part of its world box: a vertex inside the box can still be
+      // outside, and the grid index says where.
+      std::string where = absl::StrCat("world box ", FormatBox(VolumeWorldBox(volume)));
+      if (!volume.axis_aligned()) {
+        const Vec3 u = volume.ContinuousIndex(p);
+        const Index3& d = volume.grid().dims;
+        where = absl::StrFormat(
+            "at grid index (%.4g, %.4g, %.4g), outside [0, %d] x [0, %d] x [0, %d]; the volume "
+            "is oblique, and its %s only bounds the rotated grid",
+            u[0], u[1], u[2], d[0] - 1, d[1] - 1, d[2] - 1, where);
+      }
       return absl::InvalidArgumentError(
           absl::StrCat(s.mesh_path, ": vertex ", out, " at (", p[0], ", ", p[1], ", ", p[2],
-                       ") lies outside the volume ", s.volume_path, " (world box ",
-                       FormatBox(VolumeWorldBox(volume)),
+                       ") lies outside the volume ", s.volume_path, " (", where,
                        "); use --fit-mesh-to-volume to place the mesh inside it, or --clamp"));
     }
   }

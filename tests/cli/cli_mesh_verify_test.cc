@@ -223,6 +223,24 @@ TEST_F(CliMeshVerify, ObliqueVolumeMeshesRefinesAndSlicesInItsFrame) {
   ASSERT_EQ(refine.exit_code, 0) << refine.err;
   EXPECT_EQ(Verify(dir_.File("cube.vtu")).exit_code, 0);
 
+  // A mesh inside the rotated grid's world box but not inside the grid: the error says which
+  // grid index the vertex has and why the box did not tell.
+  io::MeshFile corner;
+  // World box [-12.2, 3] x [0, 15.6] x [-2, 10]; (2, 14, 5) is near its corner (3, 15.6), which
+  // the rotated grid does not reach.
+  corner.mesh.points = {{2.0, 14.0, 5.0}, {1.0, 14.0, 5.0}, {2.0, 13.0, 5.0}, {2.0, 14.0, 6.0}};
+  corner.mesh.tets = {{0, 1, 2, 3}};
+  ASSERT_TRUE(io::WriteMesh(dir_.File("corner.vtu"), corner).ok());
+  const ProcessResult outside =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", dir_.File("corner.vtu"), "--epsilon",
+                    "0.1", "--output", dir_.File("corner_out.vtu")});
+  EXPECT_EQ(outside.exit_code, 2) << outside.err;
+  for (const char* text : {"corner.vtu: vertex 0 at (2, 14, 5) lies outside the volume",
+                           "at grid index (14, 4.667, 2.5), outside [0, 10] x [0, 8] x [0, 6]",
+                           "is oblique", "--fit-mesh-to-volume"}) {
+    EXPECT_TRUE(absl::StrContains(outside.err, text)) << text << " missing from\n" << outside.err;
+  }
+
   const ProcessResult slice = RunTetrefine({"slice", "--volume", volume_, "--mesh",
                                             dir_.File("grid.vtu"), "--output", dir_.File("s.png")});
   EXPECT_EQ(slice.exit_code, 0) << slice.err;
