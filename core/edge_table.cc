@@ -105,19 +105,39 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
 
 void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table) {
   const int64_t num_tets = static_cast<int64_t>(tets.size());
-  table->tet_edges.resize(num_tets);
+  // Fresh memory costs a page fault and the kernel's zeroing per page, and on this project's VM
+  // that was 0.18 s for the 95 MB of 3.95 M tets, a third of this function: an array passed in
+  // (refine.cc passes the iteration before's) is refilled in place when it has room, and a new
+  // one gets an eighth more, since late iterations grow by a few percent.
+  auto& tet_edges = table->tet_edges;
+  if (tet_edges.capacity() < static_cast<size_t>(num_tets)) {
+    tet_edges = {};
+    tet_edges.reserve(static_cast<size_t>(num_tets + num_tets / 8));
+  }
+  tet_edges.resize(num_tets);
+  const uint32_t* first = table->first.data();
+  const uint32_t* second = table->second.data();
   ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t t = begin; t < end; ++t) {
-      // One pass over each of the three buckets the tet's edges start in: the bucket of v[i]
-      // is sorted and holds v[i+1..3] in increasing order.
+      // The bucket of v[i] is sorted and holds v[i+1..3]: the id of edge (v[i], v[j]) is the
+      // bucket's start plus the number of its entries below v[j]. Counting over the whole
+      // bucket, without a branch on the data, took 0.35 s where stopping at each target took
+      // 0.45 s (3.95 M tets of a refined T1 brain mesh, one thread, 2026-11-24): the early exits
+      // were mispredicted, and a bucket holds about seven entries.
       const SortedTet s = SortTet(tets[t]);
+      std::array<uint32_t, 6>& out = table->tet_edges[t];
       for (int i = 0; i < 3; ++i) {
-        const uint32_t* p = table->second.data() + table->first[s.v[i]];
-        for (int j = i + 1; j < 4; ++j) {
-          while (*p < s.v[j]) ++p;
-          table->tet_edges[t][EdgeIndex(s.local[i], s.local[j])] =
-              static_cast<uint32_t>(p - table->second.data());
+        const uint32_t b = first[s.v[i]];
+        const uint32_t e = first[s.v[i] + 1];
+        uint32_t below1 = 0, below2 = 0, below3 = 0;
+        for (uint32_t k = b; k < e; ++k) {
+          const uint32_t x = second[k];
+          below1 += x < s.v[1];
+          below2 += x < s.v[2];
+          below3 += x < s.v[3];
         }
+        const uint32_t below[4] = {0, below1, below2, below3};
+        for (int j = i + 1; j < 4; ++j) out[EdgeIndex(s.local[i], s.local[j])] = b + below[j];
       }
     }
   });

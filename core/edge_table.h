@@ -26,7 +26,8 @@ struct EdgeTable {
 // evaluating edges does not need it, and the last evaluation of a run subdivides nothing.
 EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points);
 
-// Fills table->tet_edges for the tets it was built from.
+// Fills table->tet_edges for the tets it was built from. Whatever the array holds on entry is
+// overwritten; its memory is reused when it has room (pass the previous iteration's array).
 void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table);
 
 }  // namespace tetrefine

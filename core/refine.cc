@@ -218,6 +218,13 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   CancelFlag cancel(options.should_cancel);
   result.stop_reason = StopReason::kMaxIterations;
   std::optional<KnownEdges> known;
+  // The tet-edge array of the iteration before, kept for its memory: AddTetEdges fills it again
+  // (see there).
+  FillLater<std::array<uint32_t, 6>> spare_tet_edges;
+  const auto add_tet_edges = [&](EdgeTable& table) {
+    table.tet_edges = std::move(spare_tet_edges);
+    AddTetEdges(*state.tets, &table);
+  };
   bool certified = false;
   for (int iteration = 1;; ++iteration) {
     const auto iteration_start = Clock::now();
@@ -237,7 +244,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     result.final_mean_error = errors.mean_error;
     int64_t failing_tets = 0;
     if (options.certify) {
-      AddTetEdges(*state.tets, &edges);
+      add_tet_edges(edges);
       failing_tets = refine_internal::MarkFailingTets(volume, state, edges, options.lattice_n,
                                                       params, errors.split, cancel);
       if (cancel.IsSet()) {
@@ -254,7 +261,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       result.stop_reason = StopReason::kMaxIterations;
       break;
     }
-    if (edges.tet_edges.empty()) AddTetEdges(*state.tets, &edges);
+    if (edges.tet_edges.empty()) add_tet_edges(edges);
     IterationStats stats;
     stats.iteration = iteration;
     stats.initial_tets = static_cast<int64_t>(state.tets->size());
@@ -295,7 +302,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
                                                                 : StopReason::kQualityFloor;
       break;
     }
-    edges.tet_edges = {};
+    spare_tet_edges = std::move(edges.tet_edges);
     known =
         KnownEdges{std::move(edges), std::move(errors.mid_value), std::move(errors.segment_error)};
     stats.final_tets = static_cast<int64_t>(state.mesh.tets.size());

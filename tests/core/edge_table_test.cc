@@ -79,6 +79,23 @@ TEST(EdgeTableTest, TetEdgesNameTheTetsOwnEdges) {
   }
 }
 
+// AddTetEdges refills the array a table already holds (a refinement passes the iteration
+// before's): stale contents, larger or smaller, leave no trace.
+TEST(EdgeTableTest, TetEdgesReuseAStaleArray) {
+  const Mesh m = RefinedMesh(testing::Seeds(1)[0], 2);
+  EdgeTable fresh = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size()));
+  AddTetEdges(m.tets, &fresh);
+  for (const size_t stale_size : {m.tets.size() / 3, m.tets.size(), 2 * m.tets.size()}) {
+    EdgeTable reused = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size()));
+    reused.tet_edges.assign(stale_size, {7, 7, 7, 7, 7, 7});
+    AddTetEdges(m.tets, &reused);
+    ASSERT_EQ(reused.tet_edges.size(), m.tets.size());
+    EXPECT_TRUE(
+        std::equal(reused.tet_edges.begin(), reused.tet_edges.end(), fresh.tet_edges.begin()))
+        << "stale array of " << stale_size;
+  }
+}
+
 TEST(EdgeTableTest, SameTableForEveryThreadCount) {
   const Mesh m = RefinedMesh(testing::Seeds(1)[0], 3);
   EdgeTable one;
