@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <bit>
-#include <memory>
 
 #include "core/counting_sort.h"
-#include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "core/sorted_tet.h"
 #include "core/tet_topology.h"
@@ -48,13 +46,16 @@ uint32_t* SortUnique(uint32_t* b, uint32_t* e, std::vector<uint32_t>& seen) {
 
 }  // namespace
 
-EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
+EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points,
+                         FillLater<uint32_t>* scratch) {
   const int64_t num_tets = static_cast<int64_t>(tets.size());
   // Bucket every tet edge by its smaller endpoint (a counting sort), then sort and deduplicate
   // each small bucket. With the tet's vertices sorted, its smallest vertex starts 3 edges, the
   // next 2, the next 1.
   // Not value-initialised: every entry is written by the fill pass.
-  std::unique_ptr<uint32_t[]> raw;
+  FillLater<uint32_t> own;
+  FillLater<uint32_t>& buckets = scratch != nullptr ? *scratch : own;
+  uint32_t* raw = nullptr;
   const BucketLayout layout = CountingSort(
       num_tets, num_points,
       [&](int64_t t, auto add) {
@@ -64,15 +65,20 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
         add(s.v[2], 1);
       },
       [&](uint64_t total) {
-        // Offered huge pages before the fill writes it: in 4 KiB pages this array took 80% of a
-        // whole call's page faults (bench/core_bench BM_ToConvergence, 2026-11-24).
-        raw.reset(new uint32_t[total]);
-        AdviseHugePages(raw.get(), total * sizeof(uint32_t));
+        // FillLater offers huge pages: in 4 KiB pages this array took 80% of a whole call's
+        // page faults (bench/core_bench BM_ToConvergence, 2026-11-24). A reused one has room
+        // for an eighth more, as late iterations grow by a few percent.
+        if (buckets.capacity() < total) {
+          buckets = {};
+          buckets.reserve(total + total / 8);
+        }
+        buckets.resize(total);
+        raw = buckets.data();
       },
       [&](int64_t t, auto slot) {
         const SortedTet s = SortTet(tets[t]);
         for (int i = 0; i < 3; ++i) {
-          uint32_t* out = raw.get() + slot(s.v[i], static_cast<uint32_t>(3 - i));
+          uint32_t* out = raw + slot(s.v[i], static_cast<uint32_t>(3 - i));
           for (int j = i + 1; j < 4; ++j) *out++ = s.v[j];
         }
       });
@@ -81,8 +87,8 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
   ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
     std::vector<uint32_t> seen;
     for (int64_t v = begin; v < end; ++v) {
-      uint32_t* b = raw.get() + start[v];
-      uint32_t* e = raw.get() + start[v + 1];
+      uint32_t* b = raw + start[v];
+      uint32_t* e = raw + start[v + 1];
       unique_count[v] = static_cast<uint32_t>(SortUnique(b, e, seen) - b);
     }
   });
@@ -97,7 +103,7 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
   table.second.resize(edges);
   ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t v = begin; v < end; ++v) {
-      std::copy_n(raw.get() + start[v], unique_count[v], table.second.data() + table.first[v]);
+      std::copy_n(raw + start[v], unique_count[v], table.second.data() + table.first[v]);
     }
   });
   return table;

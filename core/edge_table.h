@@ -24,7 +24,12 @@ struct EdgeTable {
 // Lists the unique edges (first, second) in O(T) work plus small per-vertex sorts, in parallel
 // on the current arena. Indices must be valid (the mesh validated). tet_edges is left empty:
 // evaluating edges does not need it, and the last evaluation of a run subdivides nothing.
-EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points);
+//
+// `scratch` (or null): where the unsorted buckets go, 6 entries a tet; its memory is reused
+// when it has room. A refinement passes the same one every iteration: fresh memory costs a page
+// fault and the kernel's zeroing per page (see AddTetEdges).
+EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points,
+                         FillLater<uint32_t>* scratch = nullptr);
 
 // Fills table->tet_edges for the tets it was built from. Whatever the array holds on entry is
 // overwritten; its memory is reused when it has room (pass the previous iteration's array).
