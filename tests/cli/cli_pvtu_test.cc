@@ -17,7 +17,6 @@
 #include "client/io/pvtu_writer.h"
 #include "core/mesh.h"
 #include "gtest/gtest.h"
-#include "nlohmann/json.hpp"
 #include "tests/cli/cli_test_util.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/geometry.h"
@@ -208,10 +207,14 @@ TEST_F(CliPvtu, PvtuFlagNamesTheIndexAfterTheOutput) {
     tets += static_cast<int64_t>(piece->mesh.tets.size());
     vertices += static_cast<int64_t>(piece->mesh.points.size());
   }
-  const nlohmann::json json = nlohmann::json::parse(ReadBytes(stats));
-  EXPECT_EQ(json["output_mesh"]["pieces"], 2);
-  EXPECT_EQ(json["output_mesh"]["tets"], tets);
-  EXPECT_EQ(json["output_mesh"]["vertices"], vertices);
+  // Substrings rather than a JSON parser: nlohmann-json's header cost this test binary more
+  // compile time than the check is worth (cli_refine_test.cc parses a document with Python).
+  const std::string json = ReadBytes(stats);
+  for (const std::string& field :
+       {std::string("\"pieces\": 2"), absl::StrCat("\"vertices\": ", vertices),
+        absl::StrCat("\"tets\": ", tets)}) {
+    EXPECT_TRUE(absl::StrContains(json, field)) << field << " missing from\n" << json;
+  }
   EXPECT_TRUE(absl::StrContains(
       run.out, absl::StrCat(vertices, " vertices over the pieces, ", tets, " tets")))
       << run.out;
