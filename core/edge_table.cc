@@ -66,13 +66,8 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points,
       },
       [&](uint64_t total) {
         // FillLater offers huge pages: in 4 KiB pages this array took 80% of a whole call's
-        // page faults (bench/core_bench BM_ToConvergence, 2026-11-24). A reused one has room
-        // for an eighth more, as late iterations grow by a few percent.
-        if (buckets.capacity() < total) {
-          buckets = {};
-          buckets.reserve(total + total / 8);
-        }
-        buckets.resize(total);
+        // page faults (bench/core_bench BM_ToConvergence, 2026-11-24).
+        ResizeForRefill(buckets, total);
         raw = buckets.data();
       },
       [&](int64_t t, auto slot) {
@@ -111,16 +106,8 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points,
 
 void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table) {
   const int64_t num_tets = static_cast<int64_t>(tets.size());
-  // Fresh memory costs a page fault and the kernel's zeroing per page, and on this project's VM
-  // that was 0.18 s for the 95 MB of 3.95 M tets, a third of this function: an array passed in
-  // (refine.cc passes the iteration before's) is refilled in place when it has room, and a new
-  // one gets an eighth more, since late iterations grow by a few percent.
-  auto& tet_edges = table->tet_edges;
-  if (tet_edges.capacity() < static_cast<size_t>(num_tets)) {
-    tet_edges = {};
-    tet_edges.reserve(static_cast<size_t>(num_tets + num_tets / 8));
-  }
-  tet_edges.resize(num_tets);
+  // An array passed in (refine.cc passes the iteration before's) is refilled in place.
+  ResizeForRefill(table->tet_edges, static_cast<size_t>(num_tets));
   const uint32_t* first = table->first.data();
   const uint32_t* second = table->second.data();
   ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {

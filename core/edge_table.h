@@ -26,8 +26,8 @@ struct EdgeTable {
 // evaluating edges does not need it, and the last evaluation of a run subdivides nothing.
 //
 // `scratch` (or null): where the unsorted buckets go, 6 entries a tet; its memory is reused
-// when it has room. A refinement passes the same one every iteration: fresh memory costs a page
-// fault and the kernel's zeroing per page (see AddTetEdges).
+// when it has room (ResizeForRefill, core/fill_later.h). A refinement passes the same one every
+// iteration.
 EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points,
                          FillLater<uint32_t>* scratch = nullptr);
 

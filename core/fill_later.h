@@ -76,4 +76,18 @@ class DefaultInitAllocator : public Base {
 template <typename T>
 using FillLater = std::vector<T, DefaultInitAllocator<T>>;
 
+// Makes `v` n elements long for a pass that overwrites every one, in the memory it already has
+// when that is enough; else in a new array with an eighth more room, since a refinement's late
+// iterations grow by a few percent. Why: fresh memory costs a page fault and the kernel's zeroing
+// per page, and on this project's VM that was 0.18 s for the 95 MB tet-edge array of 3.95 M
+// tets, a third of AddTetEdges (2026-11-24). Whatever `v` held is not kept.
+template <typename T>
+void ResizeForRefill(FillLater<T>& v, size_t n) {
+  if (v.capacity() < n) {
+    v = {};
+    v.reserve(n + n / 8);
+  }
+  v.resize(n);
+}
+
 }  // namespace tetrefine

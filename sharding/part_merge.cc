@@ -19,17 +19,27 @@ bool InAnotherBox(const Vec3& p, const std::vector<MeshPart>& parts, size_t self
   return false;
 }
 
-}  // namespace
-
-absl::StatusOr<RefinedMesh> PieceOfPart(int p, const MeshPart& part, RefineResult& refined) {
-  RefinedMesh piece;
-  piece.tet_parent.reserve(refined.tet_parent.size());
-  for (uint32_t parent : refined.tet_parent) {
+// Appends to `out` the input tet of each of part `p`'s tet parents (indices into the part's
+// tets, as its server returned them). INTERNAL if one is not a tet of the part.
+absl::Status AppendInputParents(int p, const MeshPart& part, const std::vector<uint32_t>& parents,
+                                std::vector<uint32_t>& out) {
+  out.reserve(out.size() + parents.size());
+  for (uint32_t parent : parents) {
     if (parent >= part.input_tet.size()) {
       return absl::InternalError(
           absl::StrCat("part ", p, ": tet parent ", parent, " is not a tet of the part sent"));
     }
-    piece.tet_parent.push_back(part.input_tet[parent]);
+    out.push_back(part.input_tet[parent]);
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<RefinedMesh> PieceOfPart(int p, const MeshPart& part, RefineResult& refined) {
+  RefinedMesh piece;
+  if (absl::Status s = AppendInputParents(p, part, refined.tet_parent, piece.tet_parent); !s.ok()) {
+    return s;
   }
   piece.mesh = std::move(refined.mesh);
   piece.tet_iteration = std::move(refined.tet_iteration);
@@ -107,12 +117,10 @@ absl::StatusOr<RefinedMesh> MergeParts(const Mesh& input, const Volume& volume,
     out.tet_quality.insert(out.tet_quality.end(), results[p]->tet_quality.begin(),
                            results[p]->tet_quality.end());
     merged.labels.insert(merged.labels.end(), refined.labels.begin(), refined.labels.end());
-    for (uint32_t parent : results[p]->tet_parent) {
-      if (parent >= part.input_tet.size()) {
-        return absl::InternalError(
-            absl::StrCat("part ", p, ": tet parent ", parent, " is not a tet of the part sent"));
-      }
-      out.tet_parent.push_back(part.input_tet[parent]);
+    if (absl::Status s =
+            AppendInputParents(static_cast<int>(p), part, results[p]->tet_parent, out.tet_parent);
+        !s.ok()) {
+      return s;
     }
   }
   for (size_t v = 0; v < num_input; ++v) {

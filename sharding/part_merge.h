@@ -36,13 +36,13 @@ struct RefinedMesh {
 //
 // INTERNAL if a part's result does not start with its input vertices, or if two parts disagree on
 // the value at a shared vertex: either would mean the parts were not refined consistently.
+absl::StatusOr<RefinedMesh> MergeParts(const Mesh& input, const Volume& volume,
+                                       OutsidePolicy outside, const std::vector<MeshPart>& parts,
+                                       const std::vector<const RefineResult*>& results);
+
 // Part `p`'s refined result as a piece of the whole, without merging: its mesh and per-tet arrays
 // moved out of `refined`, its tet parents mapped from the part's tets to the input's through
 // part.input_tet. INTERNAL if a parent is not a tet of the part.
 absl::StatusOr<RefinedMesh> PieceOfPart(int p, const MeshPart& part, RefineResult& refined);
-
-absl::StatusOr<RefinedMesh> MergeParts(const Mesh& input, const Volume& volume,
-                                       OutsidePolicy outside, const std::vector<MeshPart>& parts,
-                                       const std::vector<const RefineResult*>& results);
 
 }  // namespace tetrefine::sharding

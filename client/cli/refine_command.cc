@@ -466,19 +466,14 @@ int RunRefinement(const RefineSettings& s) {
   const auto refine_start = std::chrono::steady_clock::now();
   // A .pvtu is written from the parts' own meshes: the result is never merged here.
   std::vector<sharding::RefinedMesh> pieces;
-  absl::StatusOr<client::ClientResult> reply = absl::UnknownError("not run");
-  if (s.pvtu) {
+  absl::StatusOr<client::ClientResult> reply = [&]() -> absl::StatusOr<client::ClientResult> {
+    if (!s.pvtu) return (*backend)->Refine(volume->volume, mesh, s.options, callbacks);
     absl::StatusOr<sharding::ShardedResult> sharded =
         (*backend)->RefineInPieces(volume->volume, mesh, s.options, callbacks);
-    if (sharded.ok()) {
-      pieces = std::move(sharded->pieces);
-      reply = std::move(sharded->reply);
-    } else {
-      reply = sharded.status();
-    }
-  } else {
-    reply = (*backend)->Refine(volume->volume, mesh, s.options, callbacks);
-  }
+    if (!sharded.ok()) return sharded.status();
+    pieces = std::move(sharded->pieces);
+    return std::move(sharded->reply);
+  }();
   silence.Touch(/*armed=*/false);
   if (reply.ok() && s.shards > 0) {
     // Sharded runs report the combined iterations once all parts are done, and their calls'
@@ -500,6 +495,7 @@ int RunRefinement(const RefineSettings& s) {
         kExitFailed);
   }
   RefineResult& result = reply->result;
+  const int64_t piece_vertices = PieceVertices(pieces);
   // Everything that reads the result's mesh is done before the mesh moves into the file.
   const std::string report = FormatRefineReport(result, s.options.refine.epsilon);
   std::string stats_json;
@@ -513,42 +509,36 @@ int RunRefinement(const RefineSettings& s) {
                        .input_vertices = static_cast<int64_t>(mesh.points.size()),
                        .input_tets = static_cast<int64_t>(mesh.tets.size()),
                        .output_pieces = static_cast<int>(pieces.size()),
-                       .piece_vertices = PieceVertices(pieces)};
+                       .piece_vertices = piece_vertices};
     stats_json = RefineStatsJson(run, *reply);
   }
   const int64_t out_vertices =
-      s.pvtu ? PieceVertices(pieces) : static_cast<int64_t>(result.mesh.points.size());
+      s.pvtu ? piece_vertices : static_cast<int64_t>(result.mesh.points.size());
   const int64_t out_tets = result.final_quality.count;
   const size_t out_pieces = pieces.size();
-  absl::Status written;
+  // The files to write: one per piece, or the whole result; each moves its mesh out.
+  std::vector<io::MeshFile> files;
+  const auto add_file = [&](Mesh& m, std::vector<int32_t>& iteration, std::vector<float>& quality) {
+    io::MeshFile& file = files.emplace_back(io::MeshFile{.mesh = std::move(m),
+                                                         .tet_iteration = std::move(iteration),
+                                                         .tet_quality = std::move(quality)});
+    file.label_name = tags.label_name;
+    file.frame = tags.frame;
+  };
   if (s.pvtu) {
-    std::vector<io::MeshFile> files;
     for (sharding::RefinedMesh& piece : pieces) {
-      io::MeshFile& file =
-          files.emplace_back(io::MeshFile{.mesh = std::move(piece.mesh),
-                                          .tet_iteration = std::move(piece.tet_iteration),
-                                          .tet_quality = std::move(piece.tet_quality)});
-      file.label_name = tags.label_name;
-      file.frame = tags.frame;
+      add_file(piece.mesh, piece.tet_iteration, piece.tet_quality);
     }
     pieces.clear();
-    if (!mesh.labels.empty() && !files.empty() && files[0].mesh.labels.empty()) {
-      PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
-                                " is written without them"));
-    }
-    written = WritePiecesReported(s, progress, files, out_tets);
   } else {
-    io::MeshFile out{.mesh = std::move(result.mesh),
-                     .tet_iteration = std::move(result.tet_iteration),
-                     .tet_quality = std::move(result.tet_quality)};
-    out.label_name = tags.label_name;
-    out.frame = tags.frame;
-    if (!mesh.labels.empty() && out.mesh.labels.empty()) {
-      PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
-                                " is written without them"));
-    }
-    written = WriteMeshReported(s, progress, s.output_path, out);
+    add_file(result.mesh, result.tet_iteration, result.tet_quality);
   }
+  if (!mesh.labels.empty() && !files.empty() && files[0].mesh.labels.empty()) {
+    PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
+                              " is written without them"));
+  }
+  absl::Status written = s.pvtu ? WritePiecesReported(s, progress, files, out_tets)
+                                : WriteMeshReported(s, progress, s.output_path, files[0]);
   if (!written.ok()) return Fail(written, kExitUsage);
   if (!s.stats_json_path.empty()) {
     progress.Begin(absl::StrCat("writing ", s.stats_json_path));

@@ -20,6 +20,7 @@
 #include "gtest/gtest.h"
 #include "tests/sharding/refinement_compare.h"
 #include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
 #include "tests/support/result_compare.h"
 #include "tests/support/server_process.h"
 
@@ -428,15 +429,6 @@ void AddKeyed(const Mesh& mesh, const std::vector<int32_t>& iteration,
   }
 }
 
-double TotalVolume(const Mesh& mesh) {
-  double volume = 0.0;
-  for (const Tet& t : mesh.tets) {
-    const auto& p = mesh.points;
-    volume += SignedVolume6(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) / 6.0;
-  }
-  return volume;
-}
-
 // keep_pieces: the parts' own meshes are the result, never merged, and together they are
 // exactly the merged result; the statistics are those of the merged run.
 TEST_F(ShardedRefineTest, KeptPiecesHoldExactlyTheMergedResult) {
@@ -475,10 +467,11 @@ TEST_F(ShardedRefineTest, KeptPiecesHoldExactlyTheMergedResult) {
       ASSERT_EQ(piece.mesh.labels.size(), piece.mesh.tets.size());
       ASSERT_EQ(piece.tet_parent.size(), piece.mesh.tets.size());
       AddKeyed(piece.mesh, piece.tet_iteration, piece.tet_quality, piece.tet_parent, &got);
-      pieces_volume += TotalVolume(piece.mesh);
+      pieces_volume += Measure(piece.mesh).volume;
     }
     EXPECT_EQ(got, want);
-    EXPECT_NEAR(pieces_volume, TotalVolume(m.mesh), 1e-9 * TotalVolume(m.mesh));
+    const double volume = Measure(m.mesh).volume;
+    EXPECT_NEAR(pieces_volume, volume, 1e-9 * volume);
   }
 }
 
