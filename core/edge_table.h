@@ -24,12 +24,7 @@ struct EdgeTable {
 // Lists the unique edges (first, second) in O(T) work plus small per-vertex sorts, in parallel
 // on the current arena. Indices must be valid (the mesh validated). tet_edges is left empty:
 // evaluating edges does not need it, and the last evaluation of a run subdivides nothing.
-//
-// `scratch` (or null): where the unsorted buckets go, 6 entries a tet; its memory is reused
-// when it has room (ResizeForRefill, core/fill_later.h). A refinement passes the same one every
-// iteration.
-EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points,
-                         FillLater<uint32_t>* scratch = nullptr);
+EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points);
 
 // Fills table->tet_edges for the tets it was built from. Whatever the array holds on entry is
 // overwritten; its memory is reused when it has room (pass the previous iteration's array).

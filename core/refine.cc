@@ -221,7 +221,6 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   // The tet-edge array of the iteration before, kept for its memory: AddTetEdges fills it again
   // (see there).
   FillLater<std::array<uint32_t, 6>> spare_tet_edges;
-  FillLater<uint32_t> edge_buckets;  // BuildEdgeTable's scratch, for the same reason
   const auto add_tet_edges = [&](EdgeTable& table) {
     table.tet_edges = std::move(spare_tet_edges);
     AddTetEdges(*state.tets, &table);
@@ -233,8 +232,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       result.stop_reason = StopReason::kCancelled;
       break;
     }
-    EdgeTable edges =
-        BuildEdgeTable(*state.tets, static_cast<int64_t>(state.points->size()), &edge_buckets);
+    EdgeTable edges = BuildEdgeTable(*state.tets, static_cast<int64_t>(state.points->size()));
     EdgeErrors errors =
         EvaluateEdges(volume, state, edges, params, known ? &*known : nullptr, cancel);
     known.reset();

@@ -96,21 +96,6 @@ TEST(EdgeTableTest, TetEdgesReuseAStaleArray) {
   }
 }
 
-// The bucket scratch a refinement passes every iteration: stale contents, larger or smaller,
-// leave no trace in the table.
-TEST(EdgeTableTest, BucketScratchReusedWithStaleContents) {
-  const Mesh m = RefinedMesh(testing::Seeds(1)[0], 2);
-  const int64_t nv = static_cast<int64_t>(m.points.size());
-  const EdgeTable fresh = BuildEdgeTable(m.tets, nv);
-  for (const size_t stale_size : {m.tets.size(), 6 * m.tets.size(), 20 * m.tets.size()}) {
-    FillLater<uint32_t> scratch;
-    scratch.assign(stale_size, 3);
-    const EdgeTable reused = BuildEdgeTable(m.tets, nv, &scratch);
-    EXPECT_EQ(reused.first, fresh.first) << "stale scratch of " << stale_size;
-    EXPECT_EQ(reused.second, fresh.second) << "stale scratch of " << stale_size;
-  }
-}
-
 TEST(EdgeTableTest, SameTableForEveryThreadCount) {
   const Mesh m = RefinedMesh(testing::Seeds(1)[0], 3);
   EdgeTable one;
