@@ -47,7 +47,8 @@ struct EdgeErrors {
 // and segment error. The next evaluation reads those instead of sampling the volume again: the
 // same bits, and most of a late iteration's edges are such edges.
 struct KnownEdges {
-  EdgeTable edges;  // without tet_edges
+  EdgeTable edges;           // without tet_edges
+  FillLater<uint8_t> split;  // the marks the subdivision applied (UpdateEdgeTable)
   FillLater<double> mid_value;
   FillLater<double> segment_error;  // empty unless the test was kSegment
 };

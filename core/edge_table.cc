@@ -44,6 +44,23 @@ uint32_t* SortUnique(uint32_t* b, uint32_t* e, std::vector<uint32_t>& seen) {
   return out;
 }
 
+// Sorts and deduplicates each of the num_points buckets of `raw` in place; returns how many
+// distinct entries each keeps at its start.
+FillLater<uint32_t> SortUniqueBuckets(uint32_t* raw, const BucketLayout& layout,
+                                      int64_t num_points) {
+  const auto& start = layout.start;
+  FillLater<uint32_t> unique_count(num_points);
+  ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
+    std::vector<uint32_t> seen;
+    for (int64_t v = begin; v < end; ++v) {
+      uint32_t* b = raw + start[v];
+      uint32_t* e = raw + start[v + 1];
+      unique_count[v] = static_cast<uint32_t>(SortUnique(b, e, seen) - b);
+    }
+  });
+  return unique_count;
+}
+
 }  // namespace
 
 EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
@@ -79,15 +96,7 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
         }
       });
   const auto& start = layout.start;
-  FillLater<uint32_t> unique_count(num_points);
-  ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
-    std::vector<uint32_t> seen;
-    for (int64_t v = begin; v < end; ++v) {
-      uint32_t* b = raw + start[v];
-      uint32_t* e = raw + start[v + 1];
-      unique_count[v] = static_cast<uint32_t>(SortUnique(b, e, seen) - b);
-    }
-  });
+  const FillLater<uint32_t> unique_count = SortUniqueBuckets(raw, layout, num_points);
   EdgeTable table;
   table.first.resize(num_points + 1);
   uint32_t edges = 0;
@@ -100,6 +109,82 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
   ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t v = begin; v < end; ++v) {
       std::copy_n(raw + start[v], unique_count[v], table.second.data() + table.first[v]);
+    }
+  });
+  return table;
+}
+
+EdgeTable UpdateEdgeTable(const EdgeTable& before, const FillLater<uint8_t>& split,
+                          const std::vector<Tet>& tets, const std::vector<int32_t>& tet_iteration,
+                          int32_t made_in, int64_t num_points) {
+  const int64_t num_tets = static_cast<int64_t>(tets.size());
+  const int64_t old_points = static_cast<int64_t>(before.first.size()) - 1;
+  const uint32_t first_new = static_cast<uint32_t>(old_points);
+  // The children's edges that have a new vertex, bucketed by their smaller endpoint. In a sorted
+  // tet the new vertices are a suffix, from index `from`: vertex v[i] starts the edges to
+  // v[max(i + 1, from)..3].
+  const auto new_from = [first_new](const SortedTet& s) {
+    int from = 4;
+    while (from > 0 && s.v[from - 1] >= first_new) --from;
+    return from;
+  };
+  FillLater<uint32_t> buckets;
+  uint32_t* raw = nullptr;
+  const BucketLayout layout = CountingSort(
+      num_tets, num_points,
+      [&](int64_t t, auto add) {
+        if (tet_iteration[t] != made_in) return;
+        const SortedTet s = SortTet(tets[t]);
+        const int from = new_from(s);
+        for (int i = 0; i < 3; ++i) {
+          const int j0 = std::max(i + 1, from);
+          if (j0 < 4) add(s.v[i], static_cast<uint32_t>(4 - j0));
+        }
+      },
+      [&](uint64_t total) {
+        buckets.resize(total);
+        raw = buckets.data();
+      },
+      [&](int64_t t, auto slot) {
+        if (tet_iteration[t] != made_in) return;
+        const SortedTet s = SortTet(tets[t]);
+        const int from = new_from(s);
+        for (int i = 0; i < 3; ++i) {
+          const int j0 = std::max(i + 1, from);
+          if (j0 >= 4) continue;
+          uint32_t* out = raw + slot(s.v[i], static_cast<uint32_t>(4 - j0));
+          for (int j = j0; j < 4; ++j) *out++ = s.v[j];
+        }
+      });
+  const auto& start = layout.start;
+  const FillLater<uint32_t> unique_count = SortUniqueBuckets(raw, layout, num_points);
+  // The edges of the mesh before that were not split, per old vertex.
+  FillLater<uint32_t> kept(old_points);
+  ForEachBlock(old_points, [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t v = begin; v < end; ++v) {
+      uint32_t k = 0;
+      for (uint32_t e = before.first[v]; e < before.first[v + 1]; ++e) k += split[e] == 0;
+      kept[v] = k;
+    }
+  });
+  EdgeTable table;
+  table.first.resize(num_points + 1);
+  uint32_t edges = 0;
+  for (int64_t v = 0; v < num_points; ++v) {
+    table.first[v] = edges;
+    edges += (v < old_points ? kept[v] : 0) + unique_count[v];
+  }
+  table.first[num_points] = edges;
+  table.second.resize(edges);
+  ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
+    for (int64_t v = begin; v < end; ++v) {
+      uint32_t* out = table.second.data() + table.first[v];
+      if (v < old_points) {
+        for (uint32_t e = before.first[v]; e < before.first[v + 1]; ++e) {
+          if (split[e] == 0) *out++ = before.second[e];
+        }
+      }
+      std::copy_n(raw + start[v], unique_count[v], out);
     }
   });
   return table;

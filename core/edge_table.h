@@ -26,6 +26,21 @@ struct EdgeTable {
 // evaluating edges does not need it, and the last evaluation of a run subdivides nothing.
 EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points);
 
+// The edge table of a refined mesh, built from the table of the mesh it was refined from
+// (`before`, for its first before.first.size() - 1 vertices) and what the refinement changed:
+//   split          before.size() entries, nonzero for the edges that were split;
+//   tet_iteration  T entries; the tets with `made_in` are this refinement's children, every
+//                  other tet is a tet of the mesh before, unchanged.
+// Equal to BuildEdgeTable(tets, num_points), entry for entry, since (subdivision table, every
+// configuration) an edge the refinement made has a new vertex at one end at least, and every edge
+// that was not split survives: the kept edges of an old vertex come first in its bucket, in
+// their order, and the new ones after them. Only the children's edges are sorted, so an
+// iteration that changes a few tets of a large mesh pays a copy of the table instead of a sort of
+// every tet's edges. tet_edges is left empty, as by BuildEdgeTable.
+EdgeTable UpdateEdgeTable(const EdgeTable& before, const FillLater<uint8_t>& split,
+                          const std::vector<Tet>& tets, const std::vector<int32_t>& tet_iteration,
+                          int32_t made_in, int64_t num_points);
+
 // Fills table->tet_edges for the tets it was built from. Whatever the array holds on entry is
 // overwritten; its memory is reused when it has room (pass the previous iteration's array).
 void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table);

@@ -65,6 +65,65 @@ TEST(EdgeTableTest, ListsEachEdgeOnceInOrderOnRefinedMeshes) {
   }
 }
 
+// UpdateEdgeTable against BuildEdgeTable: the mesh after k iterations, and after k + 1, of every
+// scheme; the split edges are the table's edges the mesh after no longer has.
+TEST(EdgeTableTest, UpdateFromTheMeshBeforeIsTheBuiltTable) {
+  GridGeometry g;
+  g.dims = {20, 20, 20};
+  int updates = 0;
+  for (uint64_t seed : testing::Seeds(3)) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const double fx = 0.3 + u(rng), fy = 0.3 + u(rng), fz = 0.3 + u(rng);
+    const Volume v = testing::AnalyticVolume(g, [&](const Vec3& p) {
+      return std::sin(fx * p[0]) * std::cos(fy * p[1]) + std::sin(fz * p[2]);
+    });
+    const Mesh input = testing::FiveTetMesh({0, 0, 0}, {19, 19, 19}, {4, 4, 4});
+    for (const auto& [scheme, certify] :
+         {std::pair{RefineScheme::kPaper, false}, std::pair{RefineScheme::kLongestEdge, false},
+          std::pair{RefineScheme::kLongestEdge, true}}) {
+      RefineOptions o;
+      o.epsilon = 0.01;
+      o.lattice_n = certify ? 4 : 0;  // certify samples a lattice in every tet
+      o.scheme = scheme;
+      o.certify = certify;
+      o.max_iterations = 0;
+      auto before = Refine(v, input, o);
+      ASSERT_TRUE(before.ok()) << before.status();
+      for (int k = 1; k <= 3; ++k) {
+        o.max_iterations = k;
+        auto after = Refine(v, input, o);
+        ASSERT_TRUE(after.ok()) << after.status();
+        if (after->iterations.size() < static_cast<size_t>(k)) break;
+        const Mesh& m0 = before->mesh;
+        const Mesh& m1 = after->mesh;
+        const EdgeTable old_table = BuildEdgeTable(m0.tets, static_cast<int64_t>(m0.points.size()));
+        const auto now = testing::UniqueEdges(m1.tets);
+        FillLater<uint8_t> split(old_table.size());
+        for (uint32_t a = 0; a + 1 < old_table.first.size(); ++a) {
+          for (uint32_t e = old_table.first[a]; e < old_table.first[a + 1]; ++e) {
+            split[e] = now.count({a, old_table.second[e]}) == 0;
+          }
+        }
+        const EdgeTable built = BuildEdgeTable(m1.tets, static_cast<int64_t>(m1.points.size()));
+        for (int threads : {1, 3}) {
+          EdgeTable updated;
+          tbb::task_arena(threads).execute([&] {
+            updated = UpdateEdgeTable(old_table, split, m1.tets, after->tet_iteration, k,
+                                      static_cast<int64_t>(m1.points.size()));
+          });
+          ASSERT_EQ(updated.first, built.first) << "seed " << seed << " iteration " << k;
+          ASSERT_EQ(updated.second, built.second) << "seed " << seed << " iteration " << k;
+          EXPECT_TRUE(updated.tet_edges.empty());
+        }
+        ++updates;
+        before = std::move(after);
+      }
+    }
+  }
+  EXPECT_GE(updates, 20);
+}
+
 TEST(EdgeTableTest, TetEdgesNameTheTetsOwnEdges) {
   const Mesh m = RefinedMesh(testing::Seeds(1)[0], 2);
   EdgeTable table = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size()));
