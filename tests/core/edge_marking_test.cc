@@ -95,5 +95,58 @@ TEST(EdgeMarkingTest, SharedLongestEdgeCacheChangesNoMark) {
   }
 }
 
+// The closure's rounds after the first visit only the tets around the edges the round before
+// added; the marks must be those of the rule read plainly: each round, every tet with a split
+// edge (as the round before left them) splits its longest edge. Random jittered meshes, random
+// marks, 1 to 6 rounds; the reference visits every tet in every round.
+TEST(EdgeMarkingTest, ClosureMarksWhatEveryTetRoundByRoundMarks) {
+  const std::function<bool()> never = [] { return false; };
+  int multi_round_cases = 0;
+  for (uint32_t seed = 1; seed <= 16; ++seed) {
+    Mesh mesh = testing::FiveTetMesh({0.0, 0.0, 0.0}, {8.0, 7.0, 6.0}, {8, 7, 6});
+    uint32_t state = seed * 2246822519u;
+    auto next = [&state] {
+      state = state * 1664525u + 1013904223u;
+      return static_cast<double>(state >> 8) / static_cast<double>(1u << 24);
+    };
+    for (Vec3& p : mesh.points) {
+      for (double& x : p) x += 0.2 * (next() - 0.5);
+    }
+    EdgeTable edges = BuildEdgeTable(mesh.tets, static_cast<int64_t>(mesh.points.size()));
+    AddTetEdges(mesh.tets, &edges);
+    FillLater<uint8_t> marks(static_cast<size_t>(edges.size()), 0);
+    for (int64_t e = 0; e < edges.size(); ++e) marks[e] = next() < 0.01 ? 1 : 0;
+    for (int rounds = 1; rounds <= 6; ++rounds) {
+      FillLater<uint8_t> expected = marks;
+      int64_t expected_added = 0;
+      for (int r = 0; r < rounds; ++r) {
+        FillLater<uint8_t> after = expected;
+        for (size_t t = 0; t < mesh.tets.size(); ++t) {
+          const auto& te = edges.tet_edges[t];
+          bool any = false;
+          for (int k = 0; k < 6; ++k) any |= expected[te[k]] != 0;
+          if (!any) continue;
+          const Tet& tet = mesh.tets[t];
+          after[te[LongestEdge({mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]],
+                                mesh.points[tet[3]]})]] = 1;
+        }
+        int64_t added = 0;
+        for (int64_t e = 0; e < edges.size(); ++e) added += after[e] != expected[e];
+        expected = after;
+        expected_added += added;
+        if (added == 0) break;
+        if (r >= 1) ++multi_round_cases;
+      }
+      FillLater<uint8_t> got = marks;
+      CancelFlag running(never);
+      EXPECT_EQ(CloseToLongestEdges(mesh.points, mesh.tets, edges, rounds, got, running),
+                expected_added)
+          << "seed " << seed << ", " << rounds << " rounds";
+      EXPECT_TRUE(got == expected) << "seed " << seed << ", " << rounds << " rounds";
+    }
+  }
+  EXPECT_GT(multi_round_cases, 20) << "the later rounds were never exercised";
+}
+
 }  // namespace
 }  // namespace tetrefine::refine_internal
