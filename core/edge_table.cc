@@ -116,7 +116,7 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points) {
 
 EdgeTable UpdateEdgeTable(const EdgeTable& before, const FillLater<uint8_t>& split,
                           const std::vector<Tet>& tets, const std::vector<int32_t>& tet_iteration,
-                          int32_t made_in, int64_t num_points) {
+                          int32_t made_in, int64_t num_points, FillLater<uint32_t>* remap) {
   const int64_t num_tets = static_cast<int64_t>(tets.size());
   const int64_t old_points = static_cast<int64_t>(before.first.size()) - 1;
   const uint32_t first_new = static_cast<uint32_t>(old_points);
@@ -176,12 +176,15 @@ EdgeTable UpdateEdgeTable(const EdgeTable& before, const FillLater<uint8_t>& spl
   }
   table.first[num_points] = edges;
   table.second.resize(edges);
+  if (remap != nullptr) remap->resize(before.second.size());
   ForEachBlock(num_points, [&](int64_t, int64_t begin, int64_t end) {
     for (int64_t v = begin; v < end; ++v) {
       uint32_t* out = table.second.data() + table.first[v];
       if (v < old_points) {
         for (uint32_t e = before.first[v]; e < before.first[v + 1]; ++e) {
-          if (split[e] == 0) *out++ = before.second[e];
+          if (split[e] != 0) continue;
+          if (remap != nullptr) (*remap)[e] = static_cast<uint32_t>(out - table.second.data());
+          *out++ = before.second[e];
         }
       }
       std::copy_n(raw + start[v], unique_count[v], out);
@@ -190,6 +193,34 @@ EdgeTable UpdateEdgeTable(const EdgeTable& before, const FillLater<uint8_t>& spl
   return table;
 }
 
+namespace {
+
+// The ids of a tet's six edges, in kTetEdges order.
+inline void LookUpTetEdges(const Tet& tet, const uint32_t* first, const uint32_t* second,
+                           std::array<uint32_t, 6>& out) {
+  // The bucket of v[i] is sorted and holds v[i+1..3]: the id of edge (v[i], v[j]) is the
+  // bucket's start plus the number of its entries below v[j]. Counting over the whole bucket,
+  // without a branch on the data, took 0.35 s where stopping at each target took 0.45 s (3.95 M
+  // tets of a refined T1 brain mesh, one thread, 2026-11-24): the early exits were
+  // mispredicted, and a bucket holds about seven entries.
+  const SortedTet s = SortTet(tet);
+  for (int i = 0; i < 3; ++i) {
+    const uint32_t b = first[s.v[i]];
+    const uint32_t e = first[s.v[i] + 1];
+    uint32_t below1 = 0, below2 = 0, below3 = 0;
+    for (uint32_t k = b; k < e; ++k) {
+      const uint32_t x = second[k];
+      below1 += x < s.v[1];
+      below2 += x < s.v[2];
+      below3 += x < s.v[3];
+    }
+    const uint32_t below[4] = {0, below1, below2, below3};
+    for (int j = i + 1; j < 4; ++j) out[EdgeIndex(s.local[i], s.local[j])] = b + below[j];
+  }
+}
+
+}  // namespace
+
 void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table) {
   const int64_t num_tets = static_cast<int64_t>(tets.size());
   // An array passed in (refine.cc passes the iteration before's) is refilled in place.
@@ -197,26 +228,58 @@ void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table) {
   const uint32_t* first = table->first.data();
   const uint32_t* second = table->second.data();
   ForEachBlock(num_tets, [&](int64_t, int64_t begin, int64_t end) {
-    for (int64_t t = begin; t < end; ++t) {
-      // The bucket of v[i] is sorted and holds v[i+1..3]: the id of edge (v[i], v[j]) is the
-      // bucket's start plus the number of its entries below v[j]. Counting over the whole
-      // bucket, without a branch on the data, took 0.35 s where stopping at each target took
-      // 0.45 s (3.95 M tets of a refined T1 brain mesh, one thread, 2026-11-24): the early exits
-      // were mispredicted, and a bucket holds about seven entries.
-      const SortedTet s = SortTet(tets[t]);
-      std::array<uint32_t, 6>& out = table->tet_edges[t];
-      for (int i = 0; i < 3; ++i) {
-        const uint32_t b = first[s.v[i]];
-        const uint32_t e = first[s.v[i] + 1];
-        uint32_t below1 = 0, below2 = 0, below3 = 0;
-        for (uint32_t k = b; k < e; ++k) {
-          const uint32_t x = second[k];
-          below1 += x < s.v[1];
-          below2 += x < s.v[2];
-          below3 += x < s.v[3];
-        }
-        const uint32_t below[4] = {0, below1, below2, below3};
-        for (int j = i + 1; j < 4; ++j) out[EdgeIndex(s.local[i], s.local[j])] = b + below[j];
+    for (int64_t t = begin; t < end; ++t)
+      LookUpTetEdges(tets[t], first, second, table->tet_edges[t]);
+  });
+}
+
+void UpdateTetEdges(const std::vector<Tet>& tets, const TetSuccession& succession,
+                    const FillLater<uint32_t>& remap, EdgeTable* table) {
+  auto& te = table->tet_edges;
+  const int64_t old_tets = static_cast<int64_t>(succession.children.size());
+  const int64_t new_tets = static_cast<int64_t>(tets.size());
+  if (static_cast<int64_t>(te.size()) != old_tets || new_tets - old_tets > old_tets / 8 ||
+      te.capacity() < static_cast<size_t>(new_tets)) {
+    return AddTetEdges(tets, table);
+  }
+  // Old tet t's entries move to its new position, at or after t: walked backwards, each chunk
+  // of old tets overwrites only entries it has read already, except the first entries of its
+  // own range, which the chunks before it may overwrite (they write below the chunk's first new
+  // position). Those are saved first; there are at most as many as the mesh grew by.
+  const int64_t blocks = BlockCount(old_tets);
+  const int chunks = ChunkCount(old_tets);
+  const int64_t blocks_per_chunk = (blocks + chunks - 1) / std::max(chunks, 1);
+  const auto chunk_begin = [&](int64_t c) {
+    return std::min(blocks, c * blocks_per_chunk) * kBlockSize;
+  };
+  const auto new_position = [&](int64_t old_begin) {
+    return old_begin >= old_tets ? new_tets : succession.block_start[old_begin / kBlockSize];
+  };
+  std::vector<std::vector<std::array<uint32_t, 6>>> saved(chunks);
+  for (int c = 0; c < chunks; ++c) {
+    const int64_t a = std::min(chunk_begin(c), old_tets);
+    const int64_t b = std::min(chunk_begin(c + 1), old_tets);
+    const int64_t until = std::min(b, new_position(a));
+    if (until > a) saved[c].assign(te.begin() + a, te.begin() + until);
+  }
+  te.resize(static_cast<size_t>(new_tets));  // within capacity: the entries stay where they are
+  const uint32_t* first = table->first.data();
+  const uint32_t* second = table->second.data();
+  ForEachChunk(chunks, chunks, [&](int c, int64_t, int64_t) {
+    const int64_t a = std::min(chunk_begin(c), old_tets);
+    const int64_t b = std::min(chunk_begin(c + 1), old_tets);
+    const int64_t saved_until = a + static_cast<int64_t>(saved[c].size());
+    int64_t out = new_position(b);
+    for (int64_t t = b - 1; t >= a; --t) {
+      const int children = succession.children[t];
+      if (children == 0) {
+        --out;
+        const std::array<uint32_t, 6> old = t < saved_until ? saved[c][t - a] : te[t];
+        for (int k = 0; k < 6; ++k) te[out][k] = remap[old[k]];
+      } else {
+        out -= children;
+        for (int i = 0; i < children; ++i)
+          LookUpTetEdges(tets[out + i], first, second, te[out + i]);
       }
     }
   });

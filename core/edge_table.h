@@ -37,12 +37,31 @@ EdgeTable BuildEdgeTable(const std::vector<Tet>& tets, int64_t num_points);
 // their order, and the new ones after them. Only the children's edges are sorted, so an
 // iteration that changes a few tets of a large mesh pays a copy of the table instead of a sort of
 // every tet's edges. tet_edges is left empty, as by BuildEdgeTable.
+// remap (optional): resized to before.size(); remap[e] is the new id of each edge e that was not
+// split (UpdateTetEdges reads it), and unspecified for split edges.
 EdgeTable UpdateEdgeTable(const EdgeTable& before, const FillLater<uint8_t>& split,
                           const std::vector<Tet>& tets, const std::vector<int32_t>& tet_iteration,
-                          int32_t made_in, int64_t num_points);
+                          int32_t made_in, int64_t num_points,
+                          FillLater<uint32_t>* remap = nullptr);
+
+// Where a subdivision put the tets of the mesh before (Subdivide fills it): old tet t became
+// children[t] new tets in a row (0: it was kept as it was, as one tet), and the first old tet of
+// block b (kBlockSize tets) went to new position block_start[b]. Old tets keep their order.
+struct TetSuccession {
+  FillLater<uint8_t> children;       // T_before
+  std::vector<int64_t> block_start;  // BlockCount(T_before)
+};
 
 // Fills table->tet_edges for the tets it was built from. Whatever the array holds on entry is
 // overwritten; its memory is reused when it has room (pass the previous iteration's array).
 void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table);
+
+// AddTetEdges for a mesh that a subdivision made (`succession`) from the mesh whose tet edges
+// `table->tet_edges` holds on entry, when `table` came from UpdateEdgeTable with `remap`: a kept
+// tet's edges are its old edges renamed, and only the children's are looked up. The same array
+// as AddTetEdges gives. The array is rewritten in place when the mesh grew by at most an eighth
+// (the late iterations this is for) and its capacity allows; otherwise AddTetEdges runs.
+void UpdateTetEdges(const std::vector<Tet>& tets, const TetSuccession& succession,
+                    const FillLater<uint32_t>& remap, EdgeTable* table);
 
 }  // namespace tetrefine

@@ -15,7 +15,8 @@
 namespace tetrefine::refine_internal {
 StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& errors,
                       int iteration, const StepLimits& limits, CancelFlag& cancel, State& state,
-                      IterationStats& stats, int64_t* next_tets, double* next_quality) {
+                      IterationStats& stats, int64_t* next_tets, double* next_quality,
+                      TetSuccession* succession) {
   const struct {
     const std::vector<Vec3>& points;
     const std::vector<Tet>& tets;
@@ -29,6 +30,8 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
 
   // Pass 1: each tet's subdivision key and child counts, per block.
   FillLater<uint16_t> keys(nt);
+  FillLater<uint8_t> children_of;
+  if (succession != nullptr) children_of.resize(nt);
   const int64_t tet_blocks = BlockCount(nt);
   std::vector<int64_t> child_offset(tet_blocks), steiner_offset(tet_blocks);
   std::vector<ConfigurationCounts> config_counts(tet_blocks);
@@ -54,6 +57,7 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
       }
       keys[t] = static_cast<uint16_t>(key);
       const SubdivisionEntry& entry = table[key];
+      if (succession != nullptr) children_of[t] = key == 0 ? 0 : entry.tet_count;
       children += entry.tet_count;
       steiner += entry.steiner;
       ++counts[static_cast<int>(patterns[pattern].configuration)];
@@ -202,6 +206,10 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
   }
   state = std::move(next);
   state.UseOwnMesh();
+  if (succession != nullptr) {
+    succession->children = std::move(children_of);
+    succession->block_start = std::move(child_offset);
+  }
   return StepOutcome::kApplied;
 }
 

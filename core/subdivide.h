@@ -27,8 +27,11 @@ struct StepLimits {
 // Children inherit their parent's label and input tet; new tets are not certified.
 // Output order: old vertices keep their ids, then midpoints in edge order, then Steiner points
 // in tet order; children in parent order.
+// `succession` (optional) is filled when it returns kApplied: where each old tet's children went
+// (UpdateTetEdges reads it).
 StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeErrors& errors,
                       int iteration, const StepLimits& limits, CancelFlag& cancel, State& state,
-                      IterationStats& stats, int64_t* next_tets, double* next_quality);
+                      IterationStats& stats, int64_t* next_tets, double* next_quality,
+                      TetSuccession* succession = nullptr);
 
 }  // namespace tetrefine::refine_internal

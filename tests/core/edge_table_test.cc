@@ -13,6 +13,7 @@
 
 #include "core/counting_sort.h"
 #include "core/refine.h"
+#include "core/subdivide.h"
 #include "core/tet_topology.h"
 #include "tests/support/geometry.h"
 
@@ -122,6 +123,71 @@ TEST(EdgeTableTest, UpdateFromTheMeshBeforeIsTheBuiltTable) {
     }
   }
   EXPECT_GE(updates, 20);
+}
+
+// UpdateTetEdges after a real subdivision (random marks on a refined mesh, from a few edges to a
+// third of them) gives AddTetEdges' array; when the mesh grew by at most an eighth it rewrote
+// the old array in place, for 1 and 3 threads (different chunks, different saved entries).
+TEST(EdgeTableTest, UpdatedTetEdgesAreTheLookedUpOnes) {
+  GridGeometry g;
+  g.dims = {20, 20, 20};
+  const Volume volume = testing::AnalyticVolume(
+      g, [](const Vec3& p) { return std::sin(0.7 * p[0]) + std::cos(0.5 * p[1] * p[2]); });
+  int in_place = 0;
+  for (uint64_t seed : testing::Seeds(3)) {
+    const Mesh m = RefinedMesh(seed, 2);
+    for (const double fraction : {0.0005, 0.005, 0.02, 0.3}) {
+      for (int threads : {1, 3}) {
+        tbb::task_arena(threads).execute([&] {
+          refine_internal::State state;
+          state.points = &m.points;
+          state.tets = &m.tets;
+          for (const Vec3& p : m.points) state.mesh.values.push_back(volume.Sample(p));
+          state.tet_iteration.assign(m.tets.size(), 0);
+          state.tet_quality.assign(m.tets.size(), 1.0f);
+          EdgeTable before = BuildEdgeTable(m.tets, static_cast<int64_t>(m.points.size()));
+          AddTetEdges(m.tets, &before);
+          refine_internal::EdgeErrors errors;
+          std::mt19937_64 rng(seed);
+          std::uniform_real_distribution<double> u(0.0, 1.0);
+          errors.split.resize(before.size());
+          errors.mid_value.assign(before.size(), 0.0);
+          for (int64_t e = 0; e < before.size(); ++e) errors.split[e] = u(rng) < fraction;
+          const std::function<bool()> never = [] { return false; };
+          refine_internal::CancelFlag cancel(never);
+          refine_internal::StepLimits limits;
+          limits.max_tets = 1 << 30;
+          IterationStats stats;
+          int64_t next_tets = 0;
+          double next_quality = 0.0;
+          TetSuccession succession;
+          ASSERT_EQ(refine_internal::Subdivide(volume, before, errors, 1, limits, cancel, state,
+                                               stats, &next_tets, &next_quality, &succession),
+                    refine_internal::StepOutcome::kApplied);
+          const Mesh& after = state.mesh;
+          FillLater<uint32_t> remap;
+          EdgeTable updated = UpdateEdgeTable(before, errors.split, after.tets, state.tet_iteration,
+                                              1, static_cast<int64_t>(after.points.size()), &remap);
+          EdgeTable looked_up =
+              BuildEdgeTable(after.tets, static_cast<int64_t>(after.points.size()));
+          AddTetEdges(after.tets, &looked_up);
+          const auto* old_array = before.tet_edges.data();
+          updated.tet_edges = std::move(before.tet_edges);
+          UpdateTetEdges(after.tets, succession, remap, &updated);
+          ASSERT_EQ(updated.tet_edges.size(), after.tets.size());
+          EXPECT_TRUE(std::equal(updated.tet_edges.begin(), updated.tet_edges.end(),
+                                 looked_up.tet_edges.begin()))
+              << "seed " << seed << ", split fraction " << fraction << ", " << threads
+              << " threads";
+          if (after.tets.size() <= m.tets.size() + m.tets.size() / 8) {
+            EXPECT_EQ(updated.tet_edges.data(), old_array) << "not rewritten in place";
+            ++in_place;
+          }
+        });
+      }
+    }
+  }
+  EXPECT_GE(in_place, 6);
 }
 
 TEST(EdgeTableTest, TetEdgesNameTheTetsOwnEdges) {
