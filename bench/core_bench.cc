@@ -89,7 +89,12 @@ BENCHMARK(BM_OneIteration)
 // late iteration costs what its whole input costs (edge table, tet edges, closure passes,
 // copies), not what it changes. At epsilon 0.01 (6 iterations, 10.97 M tets): 0.47 M/s.
 // With huge pages for the edge table and the subdivision's arrays (2026-11-24, side by side
-// with the commit before on a slower day): 6.35-7.17 s -> 4.61-4.77 s.
+// with the commit before on a slower day): 6.35-7.17 s -> 4.61-4.77 s. With the edge table and
+// the tet edges updated from the iteration before (core/edge_table.h UpdateEdgeTable,
+// UpdateTetEdges), 3.56-4.39 s -> 3.31-3.47 s (1.0-1.17 M/s): here the last iteration follows
+// one that made most of the tets, so it gains little; runs with several late iterations gain
+// more (the T1 brain `--block 4` mesh at eps 0.05, 8 iterations: whole CLI run 9.1-11.9 s ->
+// 5.8-8.5 s, one thread).
 void BM_ToConvergence(benchmark::State& state) {
   const Fixture& f = Setup(static_cast<int>(state.range(0)));
   RefineOptions o;
