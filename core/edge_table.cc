@@ -238,9 +238,31 @@ void UpdateTetEdges(const std::vector<Tet>& tets, const TetSuccession& successio
   auto& te = table->tet_edges;
   const int64_t old_tets = static_cast<int64_t>(succession.children.size());
   const int64_t new_tets = static_cast<int64_t>(tets.size());
-  if (static_cast<int64_t>(te.size()) != old_tets || new_tets - old_tets > old_tets / 8 ||
-      te.capacity() < static_cast<size_t>(new_tets)) {
-    return AddTetEdges(tets, table);
+  if (static_cast<int64_t>(te.size()) != old_tets) return AddTetEdges(tets, table);
+  const uint32_t* first = table->first.data();
+  const uint32_t* second = table->second.data();
+  if (new_tets - old_tets > old_tets / 8 || te.capacity() < static_cast<size_t>(new_tets)) {
+    // Into a new array, as AddTetEdges would allocate one here anyway (it keeps an eighth more
+    // room than it needs); the old array lives until the new one is written.
+    FillLater<std::array<uint32_t, 6>> out_array;
+    out_array.reserve(static_cast<size_t>(new_tets + new_tets / 8));
+    out_array.resize(static_cast<size_t>(new_tets));
+    ForEachBlock(old_tets, [&](int64_t b, int64_t begin, int64_t end) {
+      int64_t out = succession.block_start[b];
+      for (int64_t t = begin; t < end; ++t) {
+        const int children = succession.children[t];
+        if (children == 0) {
+          for (int k = 0; k < 6; ++k) out_array[out][k] = remap[te[t][k]];
+          ++out;
+          continue;
+        }
+        for (int i = 0; i < children; ++i, ++out) {
+          LookUpTetEdges(tets[out], first, second, out_array[out]);
+        }
+      }
+    });
+    te = std::move(out_array);
+    return;
   }
   // Old tet t's entries move to its new position, at or after t: walked backwards, each chunk
   // of old tets overwrites only entries it has read already, except the first entries of its
@@ -263,8 +285,6 @@ void UpdateTetEdges(const std::vector<Tet>& tets, const TetSuccession& successio
     if (until > a) saved[c].assign(te.begin() + a, te.begin() + until);
   }
   te.resize(static_cast<size_t>(new_tets));  // within capacity: the entries stay where they are
-  const uint32_t* first = table->first.data();
-  const uint32_t* second = table->second.data();
   ForEachChunk(chunks, chunks, [&](int c, int64_t, int64_t) {
     const int64_t a = std::min(chunk_begin(c), old_tets);
     const int64_t b = std::min(chunk_begin(c + 1), old_tets);

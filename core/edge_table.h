@@ -60,7 +60,8 @@ void AddTetEdges(const std::vector<Tet>& tets, EdgeTable* table);
 // `table->tet_edges` holds on entry, when `table` came from UpdateEdgeTable with `remap`: a kept
 // tet's edges are its old edges renamed, and only the children's are looked up. The same array
 // as AddTetEdges gives. The array is rewritten in place when the mesh grew by at most an eighth
-// (the late iterations this is for) and its capacity allows; otherwise AddTetEdges runs.
+// (late iterations) and its capacity allows, else written anew (AddTetEdges would reallocate
+// there too); AddTetEdges runs when the array on entry is not the mesh before's.
 void UpdateTetEdges(const std::vector<Tet>& tets, const TetSuccession& succession,
                     const FillLater<uint32_t>& remap, EdgeTable* table);
 
