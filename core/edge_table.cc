@@ -120,41 +120,35 @@ EdgeTable UpdateEdgeTable(const EdgeTable& before, const FillLater<uint8_t>& spl
   const int64_t num_tets = static_cast<int64_t>(tets.size());
   const int64_t old_points = static_cast<int64_t>(before.first.size()) - 1;
   const uint32_t first_new = static_cast<uint32_t>(old_points);
-  // The children's edges that have a new vertex, bucketed by their smaller endpoint. In a sorted
-  // tet the new vertices are a suffix, from index `from`: vertex v[i] starts the edges to
-  // v[max(i + 1, from)..3].
-  const auto new_from = [first_new](const SortedTet& s) {
+  // The children's edges that have a new vertex, bucketed by their smaller endpoint: calls
+  // f(v, ends, n) for each vertex v of child tet t that starts such edges, to the n vertices
+  // ends[0..n). In a sorted tet the new vertices are a suffix, from index `from`: vertex v[i]
+  // starts the edges to v[max(i + 1, from)..3].
+  const auto new_edges_of = [&](int64_t t, auto f) {
+    if (tet_iteration[t] != made_in) return;
+    const SortedTet s = SortTet(tets[t]);
     int from = 4;
     while (from > 0 && s.v[from - 1] >= first_new) --from;
-    return from;
+    for (int i = 0; i < 3; ++i) {
+      const int j0 = std::max(i + 1, from);
+      if (j0 < 4) f(s.v[i], s.v.data() + j0, static_cast<uint32_t>(4 - j0));
+    }
   };
   FillLater<uint32_t> buckets;
   uint32_t* raw = nullptr;
   const BucketLayout layout = CountingSort(
       num_tets, num_points,
       [&](int64_t t, auto add) {
-        if (tet_iteration[t] != made_in) return;
-        const SortedTet s = SortTet(tets[t]);
-        const int from = new_from(s);
-        for (int i = 0; i < 3; ++i) {
-          const int j0 = std::max(i + 1, from);
-          if (j0 < 4) add(s.v[i], static_cast<uint32_t>(4 - j0));
-        }
+        new_edges_of(t, [&](uint32_t v, const uint32_t*, uint32_t n) { add(v, n); });
       },
       [&](uint64_t total) {
         buckets.resize(total);
         raw = buckets.data();
       },
       [&](int64_t t, auto slot) {
-        if (tet_iteration[t] != made_in) return;
-        const SortedTet s = SortTet(tets[t]);
-        const int from = new_from(s);
-        for (int i = 0; i < 3; ++i) {
-          const int j0 = std::max(i + 1, from);
-          if (j0 >= 4) continue;
-          uint32_t* out = raw + slot(s.v[i], static_cast<uint32_t>(4 - j0));
-          for (int j = j0; j < 4; ++j) *out++ = s.v[j];
-        }
+        new_edges_of(t, [&](uint32_t v, const uint32_t* ends, uint32_t n) {
+          std::copy_n(ends, n, raw + slot(v, n));
+        });
       });
   const auto& start = layout.start;
   const FillLater<uint32_t> unique_count = SortUniqueBuckets(raw, layout, num_points);
@@ -241,24 +235,30 @@ void UpdateTetEdges(const std::vector<Tet>& tets, const TetSuccession& successio
   if (static_cast<int64_t>(te.size()) != old_tets) return AddTetEdges(tets, table);
   const uint32_t* first = table->first.data();
   const uint32_t* second = table->second.data();
+  // Writes old tet t's entries from new position `out` of `dest`: a kept tet's edges renamed
+  // (`old` gives them; read only for a kept tet), or its children's looked up.
+  const auto place = [&](int64_t t, int64_t out, auto old,
+                         FillLater<std::array<uint32_t, 6>>& dest) {
+    const int children = succession.children[t];
+    if (children == 0) {
+      const std::array<uint32_t, 6> edges = old();
+      for (int k = 0; k < 6; ++k) dest[out][k] = remap[edges[k]];
+      return;
+    }
+    for (int i = 0; i < children; ++i) LookUpTetEdges(tets[out + i], first, second, dest[out + i]);
+  };
+  const auto new_count = [&](int64_t t) { return std::max<int64_t>(1, succession.children[t]); };
   if (new_tets - old_tets > old_tets / 8 || te.capacity() < static_cast<size_t>(new_tets)) {
-    // Into a new array, as AddTetEdges would allocate one here anyway (it keeps an eighth more
-    // room than it needs); the old array lives until the new one is written.
+    // Into a new array, as AddTetEdges would allocate one here anyway; the old array lives until
+    // the new one is written.
     FillLater<std::array<uint32_t, 6>> out_array;
-    out_array.reserve(static_cast<size_t>(new_tets + new_tets / 8));
-    out_array.resize(static_cast<size_t>(new_tets));
+    ResizeForRefill(out_array, static_cast<size_t>(new_tets));
     ForEachBlock(old_tets, [&](int64_t b, int64_t begin, int64_t end) {
       int64_t out = succession.block_start[b];
       for (int64_t t = begin; t < end; ++t) {
-        const int children = succession.children[t];
-        if (children == 0) {
-          for (int k = 0; k < 6; ++k) out_array[out][k] = remap[te[t][k]];
-          ++out;
-          continue;
-        }
-        for (int i = 0; i < children; ++i, ++out) {
-          LookUpTetEdges(tets[out], first, second, out_array[out]);
-        }
+        const auto old = [&] { return te[t]; };
+        place(t, out, old, out_array);
+        out += new_count(t);
       }
     });
     te = std::move(out_array);
@@ -291,16 +291,9 @@ void UpdateTetEdges(const std::vector<Tet>& tets, const TetSuccession& successio
     const int64_t saved_until = a + static_cast<int64_t>(saved[c].size());
     int64_t out = new_position(b);
     for (int64_t t = b - 1; t >= a; --t) {
-      const int children = succession.children[t];
-      if (children == 0) {
-        --out;
-        const std::array<uint32_t, 6> old = t < saved_until ? saved[c][t - a] : te[t];
-        for (int k = 0; k < 6; ++k) te[out][k] = remap[old[k]];
-      } else {
-        out -= children;
-        for (int i = 0; i < children; ++i)
-          LookUpTetEdges(tets[out + i], first, second, te[out + i]);
-      }
+      out -= new_count(t);
+      const auto old = [&] { return t < saved_until ? saved[c][t - a] : te[t]; };
+      place(t, out, old, te);
     }
   });
 }

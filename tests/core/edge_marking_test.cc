@@ -4,6 +4,7 @@
 
 #include "core/edge_marking.h"
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -19,6 +20,32 @@ namespace {
 // of this file reported a dangling pointer to the argument temporaries (-Wdangling-pointer, a
 // false positive: FiveTetMesh copies them).
 Mesh SmallBox() { return testing::FiveTetMesh({0.0, 0.0, 0.0}, {6.0, 5.0, 4.0}, {6, 5, 4}); }
+
+// Uniform numbers in [0, 1) from a linear congruential generator: the same on every platform.
+struct Lcg {
+  uint32_t state;
+  double operator()() {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<double>(state >> 8) / static_cast<double>(1u << 24);
+  }
+};
+
+// A box [0, hi] of 5-tet cells whose points are each moved by up to 0.1 per axis (interior
+// jitter keeps tets positive), with its edge table and tet edges. `next` is left where the jitter
+// stopped, for the test's random marks.
+struct Jittered {
+  Mesh mesh;
+  EdgeTable edges;
+};
+Jittered JitteredBox(const Vec3& hi, const std::array<int, 3>& cells, Lcg& next) {
+  Jittered j{testing::FiveTetMesh({0.0, 0.0, 0.0}, hi, cells), {}};
+  for (Vec3& p : j.mesh.points) {
+    for (double& x : p) x += 0.2 * (next() - 0.5);
+  }
+  j.edges = BuildEdgeTable(j.mesh.tets, static_cast<int64_t>(j.mesh.points.size()));
+  AddTetEdges(j.mesh.tets, &j.edges);
+  return j;
+}
 
 struct Marked {
   Mesh mesh = SmallBox();
@@ -60,17 +87,8 @@ TEST(EdgeMarkingTest, ClosureAndGuardMarkNothingOnceCancelled) {
 TEST(EdgeMarkingTest, SharedLongestEdgeCacheChangesNoMark) {
   const std::function<bool()> never = [] { return false; };
   for (uint32_t seed = 1; seed <= 12; ++seed) {
-    Mesh mesh = testing::FiveTetMesh({0.0, 0.0, 0.0}, {6.0, 5.0, 4.0}, {6, 5, 4});
-    uint32_t state = seed * 2654435761u;
-    auto next = [&state] {
-      state = state * 1664525u + 1013904223u;
-      return static_cast<double>(state >> 8) / static_cast<double>(1u << 24);
-    };
-    for (Vec3& p : mesh.points) {
-      for (double& x : p) x += 0.2 * (next() - 0.5);  // interior jitter keeps tets positive
-    }
-    EdgeTable edges = BuildEdgeTable(mesh.tets, static_cast<int64_t>(mesh.points.size()));
-    AddTetEdges(mesh.tets, &edges);
+    Lcg next{seed * 2654435761u};
+    const auto [mesh, edges] = JitteredBox({6.0, 5.0, 4.0}, {6, 5, 4}, next);
     FillLater<uint8_t> fresh(static_cast<size_t>(edges.size()), 0);
     for (int64_t e = 0; e < edges.size(); ++e) fresh[e] = next() < 0.03 ? 1 : 0;
     FillLater<uint8_t> cached = fresh;
@@ -100,25 +118,15 @@ TEST(EdgeMarkingTest, SharedLongestEdgeCacheChangesNoMark) {
   }
 }
 
-// The closure's rounds after the first visit only the tets around the edges the round before
-// added; the marks must be those of the rule read plainly: each round, every tet with a split
-// edge (as the round before left them) splits its longest edge. Random jittered meshes, random
-// marks, 1 to 6 rounds; the reference visits every tet in every round.
+// The closure marks what its rule read plainly marks: each round, every tet with a split edge
+// (as the round before left them) splits its longest edge. Random jittered meshes, random marks,
+// 1 to 6 rounds; the reference visits every tet in every round.
 TEST(EdgeMarkingTest, ClosureMarksWhatEveryTetRoundByRoundMarks) {
   const std::function<bool()> never = [] { return false; };
   int multi_round_cases = 0;
   for (uint32_t seed = 1; seed <= 16; ++seed) {
-    Mesh mesh = testing::FiveTetMesh({0.0, 0.0, 0.0}, {8.0, 7.0, 6.0}, {8, 7, 6});
-    uint32_t state = seed * 2246822519u;
-    auto next = [&state] {
-      state = state * 1664525u + 1013904223u;
-      return static_cast<double>(state >> 8) / static_cast<double>(1u << 24);
-    };
-    for (Vec3& p : mesh.points) {
-      for (double& x : p) x += 0.2 * (next() - 0.5);
-    }
-    EdgeTable edges = BuildEdgeTable(mesh.tets, static_cast<int64_t>(mesh.points.size()));
-    AddTetEdges(mesh.tets, &edges);
+    Lcg next{seed * 2246822519u};
+    const auto [mesh, edges] = JitteredBox({8.0, 7.0, 6.0}, {8, 7, 6}, next);
     FillLater<uint8_t> marks(static_cast<size_t>(edges.size()), 0);
     for (int64_t e = 0; e < edges.size(); ++e) marks[e] = next() < 0.01 ? 1 : 0;
     for (int rounds = 1; rounds <= 6; ++rounds) {
