@@ -49,6 +49,23 @@ class PendingMarks {
   std::vector<std::vector<uint32_t>> blocks_;
 };
 
+// The local edges of each face (kTetFaces order), and the same as EdgeBit masks.
+constexpr std::array<std::array<int, 3>, 4> kFaceEdges = [] {
+  std::array<std::array<int, 3>, 4> edges{};
+  for (int f = 0; f < 4; ++f) {
+    const auto& c = kTetFaces[f];
+    edges[f] = {EdgeIndex(c[0], c[1]), EdgeIndex(c[0], c[2]), EdgeIndex(c[1], c[2])};
+  }
+  return edges;
+}();
+constexpr std::array<uint32_t, 4> kFaceEdgeBits = [] {
+  std::array<uint32_t, 4> bits{};
+  for (int f = 0; f < 4; ++f) {
+    for (int e : kFaceEdges[f]) bits[f] |= EdgeBit(e);
+  }
+  return bits;
+}();
+
 }  // namespace
 
 EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& edges,
@@ -156,16 +173,47 @@ int LongestEdge(const std::array<Vec3, 4>& p) {
   return best;
 }
 
+uint32_t ClosureTargets(const std::array<Vec3, 4>& p) {
+  std::array<double, 6> length;
+  for (int k = 0; k < 6; ++k) length[k] = SquaredDistance(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+  // Edge a is longer than edge b: by length, equal lengths as LongestEdge breaks them.
+  const auto longer = [&](int a, int b) {
+    if (length[a] != length[b]) return length[a] > length[b];
+    const Vec3& a0 = p[kTetEdges[a][0]];
+    const Vec3& a1 = p[kTetEdges[a][1]];
+    const Vec3& b0 = p[kTetEdges[b][0]];
+    const Vec3& b1 = p[kTetEdges[b][1]];
+    const Vec3& a_lo = LexLess(a1, a0) ? a1 : a0;
+    const Vec3& a_hi = LexLess(a1, a0) ? a0 : a1;
+    const Vec3& b_lo = LexLess(b1, b0) ? b1 : b0;
+    const Vec3& b_hi = LexLess(b1, b0) ? b0 : b1;
+    return LexLess(a_lo, b_lo) || (a_lo == b_lo && LexLess(a_hi, b_hi));
+  };
+  int tet_longest = 0;
+  for (int k = 1; k < 6; ++k) {
+    if (longer(k, tet_longest)) tet_longest = k;
+  }
+  uint32_t targets = static_cast<uint32_t>(tet_longest);
+  for (int f = 0; f < 4; ++f) {
+    const std::array<int, 3>& e = kFaceEdges[f];
+    int face_longest = e[0];
+    if (longer(e[1], face_longest)) face_longest = e[1];
+    if (longer(e[2], face_longest)) face_longest = e[2];
+    targets |= static_cast<uint32_t>(face_longest) << (3 + 3 * f);
+  }
+  return targets;
+}
+
 int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                             const EdgeTable& edges, int rounds, FillLater<uint8_t>& split,
-                            CancelFlag& cancel, FillLater<uint8_t>* longest) {
+                            CancelFlag& cancel, FillLater<uint16_t>* targets) {
   const int64_t nt = static_cast<int64_t>(tets.size());
-  FillLater<uint8_t> own;
-  if (longest == nullptr) {
-    own.assign(static_cast<size_t>(nt), kLongestUnknown);
-    longest = &own;
+  FillLater<uint16_t> own;
+  if (targets == nullptr) {
+    own.assign(static_cast<size_t>(nt), kTargetsUnknown);
+    targets = &own;
   }
-  FillLater<uint8_t>& cache = *longest;
+  FillLater<uint16_t>& cache = *targets;
   // Every round visits every tet. Tried 2026-11-24: from the second round on, visiting only the
   // tets with two vertices at the ends of an edge the round before added (a byte per vertex,
   // found in a pass over the edge table) - the same marks (tests/core/edge_marking_test.cc
@@ -179,17 +227,23 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
       if (cancel.Check()) return;
       for (int64_t t = begin; t < end; ++t) {
         const auto& te = edges.tet_edges[t];
-        bool any = false;
-        for (int k = 0; k < 6; ++k) any |= split[te[k]] != 0;
-        if (!any) continue;
+        uint32_t pattern = 0;
+        for (int k = 0; k < 6; ++k) pattern |= split[te[k]] != 0 ? EdgeBit(k) : 0u;
+        if (pattern == 0) continue;
         // Only this block reads or writes cache[t]: no two threads share an entry.
-        if (cache[t] == kLongestUnknown) {
+        if (cache[t] == kTargetsUnknown) {
           const Tet& tet = tets[t];
-          cache[t] = static_cast<uint8_t>(
-              LongestEdge({points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]}));
+          cache[t] = static_cast<uint16_t>(
+              ClosureTargets({points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]}));
         }
-        const uint32_t e = te[cache[t]];
-        if (split[e] == 0) next.Add(b, e);
+        const uint32_t r = cache[t];
+        const auto add = [&](uint32_t k) {
+          if ((pattern & EdgeBit(static_cast<int>(k))) == 0) next.Add(b, te[k]);
+        };
+        add(r & 7u);
+        for (int f = 0; f < 4; ++f) {
+          if ((pattern & kFaceEdgeBits[f]) != 0) add((r >> (3 + 3 * f)) & 7u);
+        }
       }
     });
     if (cancel.IsSet()) return added;

@@ -62,20 +62,28 @@ EdgeErrors EvaluateEdges(const Volume& volume, const State& state, const EdgeTab
 // smallest), never by numbering, so every tet sharing the edge agrees and shards agree.
 int LongestEdge(const std::array<Vec3, 4>& p);
 
+// The edges the closure marks for a tet with corners p, as local indices (kTetEdges), 3 bits
+// each: bits 0-2 its longest edge (LongestEdge(p)), bits 3 + 3f .. 5 + 3f the longest edge of
+// face f (kTetFaces order). Equal lengths are broken as LongestEdge breaks them, by geometry, so
+// the two tets of a face agree on its longest edge.
+uint32_t ClosureTargets(const std::array<Vec3, 4>& p);
+
 // Longest-edge closure, `rounds` times: every tet with a split edge also splits its longest
-// edge. Each round reads the marks of the round before (never marks made in the same round), so
-// the result does not depend on the order tets are visited in. Needs edges.tet_edges. Returns
-// the number of edges the closure added. Polls `cancel` per block: once it is set the marks are
-// incomplete and the caller must stop.
+// edge, and every face with a split edge its longest edge (Plaza's rule; see SchemeRules in
+// core/refine.cc for why both). Each round reads the marks of the round before (never marks made
+// in the same round), so the result does not depend on the order tets are visited in. Needs
+// edges.tet_edges. Returns the number of edges the closure added. Polls `cancel` per block: once
+// it is set the marks are incomplete and the caller must stop.
 //
-// `longest` (T entries, or null): a cache of each tet's LongestEdge, kLongestUnknown where not
-// yet computed, shared by the closure calls of one iteration. The closure passes of an
-// iteration (up to 12 in the longest-edge scheme) met the same tets again and again, and
-// LongestEdge was 6.6% of a whole call (bench/core_bench BM_ToConvergence, 2026-11-24).
-inline constexpr uint8_t kLongestUnknown = 0xff;
+// `targets` (T entries, or null): a cache of each tet's ClosureTargets, kTargetsUnknown where not
+// yet computed, shared by the closure calls of one iteration. The closure passes of an iteration
+// (up to 24 in the longest-edge scheme) meet the same tets again and again; LongestEdge alone was
+// 6.6% of a whole call when each pass recomputed it (bench/core_bench BM_ToConvergence,
+// 2026-11-24).
+inline constexpr uint16_t kTargetsUnknown = 0xffff;
 int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                             const EdgeTable& edges, int rounds, FillLater<uint8_t>& split,
-                            CancelFlag& cancel, FillLater<uint8_t>* longest = nullptr);
+                            CancelFlag& cancel, FillLater<uint16_t>* targets = nullptr);
 
 // One round of the quality guard: every tet whose split (by the paper's table) would make a
 // child of mean-ratio quality below `ratio` times its own splits all six edges instead (regular

@@ -4,12 +4,16 @@
 
 #include "core/edge_marking.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <vector>
 
 #include "core/edge_table.h"
+#include "core/tet_topology.h"
+#include "core/vec3_ops.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
 
@@ -92,7 +96,7 @@ TEST(EdgeMarkingTest, SharedLongestEdgeCacheChangesNoMark) {
     FillLater<uint8_t> fresh(static_cast<size_t>(edges.size()), 0);
     for (int64_t e = 0; e < edges.size(); ++e) fresh[e] = next() < 0.03 ? 1 : 0;
     FillLater<uint8_t> cached = fresh;
-    FillLater<uint8_t> cache(mesh.tets.size(), kLongestUnknown);
+    FillLater<uint16_t> cache(mesh.tets.size(), kTargetsUnknown);
     CancelFlag running(never);
     for (int call = 0; call < 3; ++call) {
       if (call > 0) {
@@ -107,20 +111,91 @@ TEST(EdgeMarkingTest, SharedLongestEdgeCacheChangesNoMark) {
     }
     int64_t filled = 0;
     for (size_t t = 0; t < mesh.tets.size(); ++t) {
-      if (cache[t] == kLongestUnknown) continue;
+      if (cache[t] == kTargetsUnknown) continue;
       ++filled;
       const Tet& tet = mesh.tets[t];
-      EXPECT_EQ(cache[t], LongestEdge({mesh.points[tet[0]], mesh.points[tet[1]],
-                                       mesh.points[tet[2]], mesh.points[tet[3]]}))
-          << "seed " << seed << ", tet " << t;
+      const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]],
+                                     mesh.points[tet[3]]};
+      EXPECT_EQ(cache[t], ClosureTargets(p)) << "seed " << seed << ", tet " << t;
     }
     EXPECT_GT(filled, 0) << "seed " << seed << ": the closure had no tet to look at";
   }
 }
 
+// The longest of the tet's local edges whose EdgeBit is in `among`, found plainly: by length,
+// equal lengths by the smaller (lexicographically ordered) endpoint pair.
+int PlainLongest(const std::array<Vec3, 4>& p, uint32_t among) {
+  int best = -1;
+  double best_length = -1.0;
+  std::array<Vec3, 2> best_pair{};
+  for (int k = 0; k < 6; ++k) {
+    if ((among & EdgeBit(k)) == 0) continue;
+    const Vec3& a = p[kTetEdges[k][0]];
+    const Vec3& b = p[kTetEdges[k][1]];
+    const double length = SquaredDistance(a, b);
+    const std::array<Vec3, 2> pair = {std::min(a, b), std::max(a, b)};
+    if (best < 0 || length > best_length || (length == best_length && pair < best_pair)) {
+      best = k;
+      best_length = length;
+      best_pair = pair;
+    }
+  }
+  return best;
+}
+
+// The local edges of face f (opposite corner f) as EdgeBit masks.
+uint32_t FaceEdges(int f) {
+  uint32_t bits = 0;
+  for (int k = 0; k < 6; ++k) {
+    if (kTetEdges[k][0] != f && kTetEdges[k][1] != f) bits |= EdgeBit(k);
+  }
+  return bits;
+}
+
+// ClosureTargets names the edges plain comparison names: the tet's longest edge is LongestEdge,
+// each face's longest edge is the longest of its three, and the two tets of a face name the same
+// edge. A regular box (many equal lengths: the tie-break decides) and jittered ones.
+TEST(EdgeMarkingTest, ClosureTargetsAgreeWithPlainComparisonAndAcrossFaces) {
+  for (uint32_t seed = 0; seed <= 6; ++seed) {
+    Lcg next{seed * 2654435761u + 7u};
+    Jittered box = JitteredBox({5.0, 4.0, 3.0}, {5, 4, 3}, next);
+    if (seed == 0) box.mesh = testing::FiveTetMesh({0.0, 0.0, 0.0}, {5.0, 4.0, 3.0}, {5, 4, 3});
+    const Mesh& mesh = box.mesh;
+    // Each face (its sorted global corners) to the global edge its first tet called longest.
+    std::map<std::array<uint32_t, 3>, std::array<uint32_t, 2>> face_longest;
+    int shared_faces = 0;
+    for (size_t t = 0; t < mesh.tets.size(); ++t) {
+      const Tet& tet = mesh.tets[t];
+      const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]],
+                                     mesh.points[tet[3]]};
+      const uint32_t targets = ClosureTargets(p);
+      EXPECT_EQ(static_cast<int>(targets & 7u), LongestEdge(p)) << "seed " << seed << ", tet " << t;
+      EXPECT_EQ(static_cast<int>(targets & 7u), PlainLongest(p, 63)) << "seed " << seed;
+      for (int f = 0; f < 4; ++f) {
+        const int k = static_cast<int>((targets >> (3 + 3 * f)) & 7u);
+        EXPECT_EQ(k, PlainLongest(p, FaceEdges(f))) << "seed " << seed << ", tet " << t;
+        std::array<uint32_t, 3> face;
+        for (int i = 0, c = 0; c < 4; ++c) {
+          if (c != f) face[i++] = tet[c];
+        }
+        std::sort(face.begin(), face.end());
+        std::array<uint32_t, 2> edge = {tet[kTetEdges[k][0]], tet[kTetEdges[k][1]]};
+        std::sort(edge.begin(), edge.end());
+        const auto [it, inserted] = face_longest.emplace(face, edge);
+        if (!inserted) {
+          ++shared_faces;
+          EXPECT_EQ(it->second, edge) << "seed " << seed << ": the tets of a face disagree";
+        }
+      }
+    }
+    EXPECT_GT(shared_faces, 100) << "seed " << seed;
+  }
+}
+
 // The closure marks what its rule read plainly marks: each round, every tet with a split edge
-// (as the round before left them) splits its longest edge. Random jittered meshes, random marks,
-// 1 to 6 rounds; the reference visits every tet in every round.
+// (as the round before left them) splits its longest edge, and every face with a split edge its
+// longest edge. Random jittered meshes, random marks, 1 to 6 rounds; the reference visits every
+// tet in every round.
 TEST(EdgeMarkingTest, ClosureMarksWhatEveryTetRoundByRoundMarks) {
   const std::function<bool()> never = [] { return false; };
   int multi_round_cases = 0;
@@ -140,8 +215,16 @@ TEST(EdgeMarkingTest, ClosureMarksWhatEveryTetRoundByRoundMarks) {
           for (int k = 0; k < 6; ++k) any |= expected[te[k]] != 0;
           if (!any) continue;
           const Tet& tet = mesh.tets[t];
-          after[te[LongestEdge({mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]],
-                                mesh.points[tet[3]]})]] = 1;
+          const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]],
+                                         mesh.points[tet[2]], mesh.points[tet[3]]};
+          after[te[PlainLongest(p, 63)]] = 1;
+          for (int f = 0; f < 4; ++f) {
+            bool face_any = false;
+            for (int k = 0; k < 6; ++k) {
+              face_any |= (FaceEdges(f) & EdgeBit(k)) != 0 && expected[te[k]] != 0;
+            }
+            if (face_any) after[te[PlainLongest(p, FaceEdges(f))]] = 1;
+          }
         }
         int64_t added = 0;
         for (int64_t e = 0; e < edges.size(); ++e) added += after[e] != expected[e];

@@ -52,6 +52,10 @@ void ExpectSameKeys(const std::vector<Key>& expected, const std::vector<Key>& ac
 
 }  // namespace
 
+bool SameTets(const RefineResult& a, const RefineResult& b) {
+  return SortedTets(a) == SortedTets(b);
+}
+
 void ExpectSameRefinement(const Mesh& input, const RefineResult& unsharded,
                           const RefineResult& sharded) {
   ASSERT_EQ(sharded.mesh.values.size(), sharded.mesh.points.size());

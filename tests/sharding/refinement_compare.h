@@ -14,4 +14,8 @@ namespace tetrefine::testing {
 void ExpectSameRefinement(const Mesh& input, const RefineResult& unsharded,
                           const RefineResult& sharded);
 
+// Whether the two results have the same tets (as ExpectSameRefinement compares them), for
+// tests that need a refinement to differ.
+bool SameTets(const RefineResult& a, const RefineResult& b);
+
 }  // namespace tetrefine::testing
