@@ -107,8 +107,9 @@ float TetQuality(const std::vector<Vec3>& p, const Tet& t) {
 //    tets and no guard misses 0.5x in 16 runs; four rounds leave a worst tet of 0.27x, sixteen
 //    rounds change nothing more than eight. Certified mode gains the same quality (7 runs below
 //    0.5x instead of 16) for 1% more tets, and keeps the same rules. On six meshes outside the
-//    reproduction four come out better in tets and quality; the anatomical volume's 2-voxel
-//    block mesh takes 2.7x the tets (the guard's 1:8 promotions cascade on its regular cells).
+//    reproduction three come out better in tets and quality, two T1 block meshes take 17-32%
+//    more tets for an equal or better worst tet, and the anatomical volume's 2-voxel block mesh
+//    takes 2.7x the tets (the guard's 1:8 promotions cascade on its regular cells).
 //    BM_ToConvergence: about the same time for 6% fewer tets.
 // Every rule reads only the tets around an edge, a bounded number of times per iteration
 // (closure and guard: at most 8 + 2 * (1 + 8) = 26 rings of tets), so decisions stay local.
