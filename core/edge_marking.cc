@@ -66,6 +66,43 @@ constexpr std::array<uint32_t, 4> kFaceEdgeBits = [] {
   return bits;
 }();
 
+// The order of a tet's six edges by length, equal lengths broken by geometry: the edge whose
+// lexicographically smaller endpoint, then larger endpoint, is smaller counts as longer. Every
+// tet sharing an edge (or a face) orders it the same way, so shards agree.
+class EdgeOrder {
+ public:
+  explicit EdgeOrder(const std::array<Vec3, 4>& p) : p_(p) {
+    for (int k = 0; k < 6; ++k) {
+      length_[k] = SquaredDistance(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+    }
+  }
+  // Whether local edge a is longer than local edge b != a.
+  bool Longer(int a, int b) const {
+    if (length_[a] != length_[b]) return length_[a] > length_[b];
+    const Vec3& a0 = p_[kTetEdges[a][0]];
+    const Vec3& a1 = p_[kTetEdges[a][1]];
+    const Vec3& b0 = p_[kTetEdges[b][0]];
+    const Vec3& b1 = p_[kTetEdges[b][1]];
+    const Vec3& a_lo = LexLess(a1, a0) ? a1 : a0;
+    const Vec3& a_hi = LexLess(a1, a0) ? a0 : a1;
+    const Vec3& b_lo = LexLess(b1, b0) ? b1 : b0;
+    const Vec3& b_hi = LexLess(b1, b0) ? b0 : b1;
+    return LexLess(a_lo, b_lo) || (a_lo == b_lo && LexLess(a_hi, b_hi));
+  }
+  // The longest of the six.
+  int Longest() const {
+    int best = 0;
+    for (int k = 1; k < 6; ++k) {
+      if (Longer(k, best)) best = k;
+    }
+    return best;
+  }
+
+ private:
+  const std::array<Vec3, 4>& p_;
+  std::array<double, 6> length_;
+};
+
 }  // namespace
 
 EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& edges,
@@ -148,57 +185,16 @@ EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& 
   return out;
 }
 
-int LongestEdge(const std::array<Vec3, 4>& p) {
-  int best = 0;
-  double best_length = SquaredDistance(p[0], p[1]);
-  for (int k = 1; k < 6; ++k) {
-    const Vec3& a = p[kTetEdges[k][0]];
-    const Vec3& b = p[kTetEdges[k][1]];
-    const double length = SquaredDistance(a, b);
-    if (length < best_length) continue;
-    if (length == best_length) {
-      // Exact tie: compare the edges as point pairs, each ordered lexicographically.
-      const Vec3& ba = p[kTetEdges[best][0]];
-      const Vec3& bb = p[kTetEdges[best][1]];
-      const Vec3& lo = LexLess(b, a) ? b : a;
-      const Vec3& hi = LexLess(b, a) ? a : b;
-      const Vec3& best_lo = LexLess(bb, ba) ? bb : ba;
-      const Vec3& best_hi = LexLess(bb, ba) ? ba : bb;
-      const bool smaller = LexLess(lo, best_lo) || (lo == best_lo && LexLess(hi, best_hi));
-      if (!smaller) continue;
-    }
-    best = k;
-    best_length = length;
-  }
-  return best;
-}
+int LongestEdge(const std::array<Vec3, 4>& p) { return EdgeOrder(p).Longest(); }
 
 uint32_t ClosureTargets(const std::array<Vec3, 4>& p) {
-  std::array<double, 6> length;
-  for (int k = 0; k < 6; ++k) length[k] = SquaredDistance(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
-  // Edge a is longer than edge b: by length, equal lengths as LongestEdge breaks them.
-  const auto longer = [&](int a, int b) {
-    if (length[a] != length[b]) return length[a] > length[b];
-    const Vec3& a0 = p[kTetEdges[a][0]];
-    const Vec3& a1 = p[kTetEdges[a][1]];
-    const Vec3& b0 = p[kTetEdges[b][0]];
-    const Vec3& b1 = p[kTetEdges[b][1]];
-    const Vec3& a_lo = LexLess(a1, a0) ? a1 : a0;
-    const Vec3& a_hi = LexLess(a1, a0) ? a0 : a1;
-    const Vec3& b_lo = LexLess(b1, b0) ? b1 : b0;
-    const Vec3& b_hi = LexLess(b1, b0) ? b0 : b1;
-    return LexLess(a_lo, b_lo) || (a_lo == b_lo && LexLess(a_hi, b_hi));
-  };
-  int tet_longest = 0;
-  for (int k = 1; k < 6; ++k) {
-    if (longer(k, tet_longest)) tet_longest = k;
-  }
-  uint32_t targets = static_cast<uint32_t>(tet_longest);
+  const EdgeOrder order(p);
+  uint32_t targets = static_cast<uint32_t>(order.Longest());
   for (int f = 0; f < 4; ++f) {
     const std::array<int, 3>& e = kFaceEdges[f];
     int face_longest = e[0];
-    if (longer(e[1], face_longest)) face_longest = e[1];
-    if (longer(e[2], face_longest)) face_longest = e[2];
+    if (order.Longer(e[1], face_longest)) face_longest = e[1];
+    if (order.Longer(e[2], face_longest)) face_longest = e[2];
     targets |= static_cast<uint32_t>(face_longest) << (3 + 3 * f);
   }
   return targets;
