@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -51,6 +52,8 @@ class BlockCompressor {
   VtkCompressor compressor_;
   int level_;
   ::libdeflate_compressor* deflate_ = nullptr;
+  struct LzmaCoder;  // an lzma_stream kept between blocks
+  std::unique_ptr<LzmaCoder> lzma_;
   // Where a block is compressed before its compressed bytes are appended to `out`: sized to the
   // coder's worst case once and reused. Resizing `out` to that bound for every block zeroed the
   // bound and faulted in fresh pages for it, a quarter of the page faults of a whole
