@@ -56,8 +56,12 @@ absl::Status ValidateRefineOptions(const RefineOptions& o) {
   if (o.lattice_n < 0 || o.lattice_n > 64) {
     return Invalid("lattice_n", o.lattice_n, "must be in [0, 64]");
   }
-  if (o.certify && o.lattice_n < 1) {
-    return Invalid("lattice_n", o.lattice_n, "certify needs a lattice (lattice_n >= 1)");
+  // Order 1 is the tet's four corners, where the discrepancy is 0 by construction (vertex values
+  // are samples): it would certify 0 for any mesh. Order 2 adds the edge midpoints.
+  if (o.certify && o.lattice_n < 2) {
+    return Invalid("lattice_n", o.lattice_n,
+                   "certify needs a lattice with points inside the tets (lattice_n >= 2; order 1 "
+                   "is the corners, where the discrepancy is always 0)");
   }
   if (o.scheme != RefineScheme::kPaper && o.scheme != RefineScheme::kLongestEdge) {
     return Invalid("scheme", static_cast<int>(o.scheme), "not a scheme");

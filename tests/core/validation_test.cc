@@ -111,6 +111,15 @@ TEST(Validation, OptionLimitsNameTheFieldAndTheValue) {
        "options.lattice_n: must be in [0, 64], got 65"},
       {[](RefineOptions& o, bool out) { o.lattice_max_tets = out ? -1 : 0; },
        "options.lattice_max_tets: must be >= 0, got -1"},
+      // Order 1 is the corners, where the discrepancy is 0: a certificate of nothing (found by a
+      // sweep of the CLI: `--certify --lattice-n 1` reported a certified maximum of 0 below the
+      // result's own midpoint maximum).
+      {[](RefineOptions& o, bool out) {
+         o.certify = true;
+         o.lattice_n = out ? 1 : 2;
+       },
+       "options.lattice_n: certify needs a lattice with points inside the tets (lattice_n >= 2; "
+       "order 1 is the corners, where the discrepancy is always 0), got 1"},
   };
   EXPECT_TRUE(ValidateRefineOptions(RefineOptions{}).ok());
   for (const Bound& b : bounds) {
