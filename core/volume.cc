@@ -188,9 +188,13 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
   v.data_ = std::move(data);
   if (type == VoxelType::kFloat32 || type == VoxelType::kFloat64) {
     for (int64_t i = 0; i < count; ++i) {
-      if (!std::isfinite(LoadAs(type, v.data_.data(), i))) {
+      const double value = LoadAs(type, v.data_.data(), i);
+      if (!std::isfinite(value)) {
+        // Named by its grid index, as a user's viewer shows it, not by its place in the slab.
+        const int64_t nx = hi[0] - lo[0], ny = hi[1] - lo[1];
         return absl::InvalidArgumentError(
-            absl::StrCat("volume voxel ", i, " of the slab is not finite"));
+            absl::StrCat("volume voxel (", lo[0] + i % nx, ", ", lo[1] + (i / nx) % ny, ", ",
+                         lo[2] + i / (nx * ny), ") is not finite (", value, ")"));
       }
     }
   }

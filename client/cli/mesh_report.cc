@@ -24,9 +24,16 @@ double TriangleArea(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
-void CountDuplicates(const Mesh& mesh, MeshReport* report) {
-  std::vector<uint32_t> order(mesh.points.size());
-  std::iota(order.begin(), order.end(), 0u);
+// Among the vertices some tet uses: two used vertices at one position are a crack (or two
+// meshes glued without merging), while an unused copy is inert. refine carries unused vertices
+// through to its output unchanged, so counting them made verify refuse refine's own result for
+// an input it had accepted (found by a CLI sweep).
+void CountDuplicates(const Mesh& mesh, const std::vector<bool>& used, MeshReport* report) {
+  std::vector<uint32_t> order;
+  order.reserve(mesh.points.size());
+  for (uint32_t v = 0; v < mesh.points.size(); ++v) {
+    if (used[v]) order.push_back(v);
+  }
   std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
     return mesh.points[a] != mesh.points[b] ? mesh.points[a] < mesh.points[b] : a < b;
   });
@@ -117,7 +124,7 @@ MeshReport AnalyzeMesh(const Mesh& mesh) {
   if (!mesh.tets.empty()) quality_sum /= static_cast<double>(mesh.tets.size());
   report.quality_mean = quality_sum;
   report.unused_vertices = std::count(used.begin(), used.end(), false);
-  CountDuplicates(mesh, &report);
+  CountDuplicates(mesh, used, &report);
   // With degenerate tets left out their neighbours' faces would look like boundary, and the
   // conformity check would report what is really the degenerate tets, already reported.
   report.faces = report.degenerate_tets > 0 ? CheckFaces(mesh.points, oriented)

@@ -19,7 +19,8 @@ struct MeshReport {
   int64_t first_degenerate = -1;
   int64_t inverted_tets = 0;  // negative volume, not degenerate
   int64_t first_inverted = -1;
-  int64_t duplicate_vertices = 0;  // vertices with the coordinates of an earlier vertex
+  // Used vertices (some tet has them) with the coordinates of an earlier used vertex.
+  int64_t duplicate_vertices = 0;
   std::array<int64_t, 2> first_duplicate = {-1, -1};
   int64_t unused_vertices = 0;
   // core CheckConformity (the face check, then no hanging node and a closed boundary) on the tets

@@ -211,11 +211,25 @@ absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const
             "is oblique, and its %s only bounds the rotated grid",
             u[0], u[1], u[2], d[0] - 1, d[1] - 1, d[2] - 1, where);
       }
-      return absl::InvalidArgumentError(
-          absl::StrCat(s.mesh_path, ": vertex ", out, " at (", p[0], ", ", p[1], ", ", p[2],
-                       ") lies outside the volume ", s.volume_path, " (", where,
-                       "); use --fit-mesh-to-volume to place the mesh inside it, or --clamp"));
+      // The service samples every vertex, used or not; an unused one outside is most likely
+      // left over from an editor, and the fix is then different.
+      const bool used = std::any_of(mesh.tets.begin(), mesh.tets.end(), [&](const Tet& t) {
+        return std::find(t.begin(), t.end(), static_cast<uint32_t>(out)) != t.end();
+      });
+      return absl::InvalidArgumentError(absl::StrCat(
+          s.mesh_path, ": vertex ", out, " at (", p[0], ", ", p[1], ", ", p[2],
+          ") lies outside the volume ", s.volume_path, " (", where, "); ",
+          used ? "use --fit-mesh-to-volume to place the mesh inside it, or --clamp"
+               : "no tet uses it: remove the unused vertices from the mesh, or use --clamp"));
     }
+  }
+  if (s.options.refine.outside == OutsidePolicy::kClamp &&
+      std::none_of(mesh.points.begin(), mesh.points.end(),
+                   [&](const Vec3& p) { return volume.Contains(volume.ContinuousIndex(p)); })) {
+    // Allowed (the flag says so), but every value then comes from the volume's boundary: most
+    // likely a mesh in another frame or unit. Found by a CLI sweep: it "converged" in silence.
+    PrintWarning(absl::StrCat("no vertex of ", s.mesh_path, " lies inside the volume ",
+                              s.volume_path, ": --clamp samples every vertex on its boundary"));
   }
   if (s.options.refine.orientation != OrientationPolicy::kNormalize) {
     for (size_t t = 0; t < mesh.tets.size(); ++t) {
@@ -368,6 +382,15 @@ int RunRefinement(const RefineSettings& s) {
   }
   absl::Status placement = CheckPlacement(s, volume->volume, mesh);
   if (!placement.ok()) return Fail(placement, kExitUsage);
+  // The service refuses this too, but after the upload and in its own words
+  // ("mesh_header.tet_count: ... exceeds options.max_tets"); the flag is the user's.
+  if (s.options.send_max_tets &&
+      static_cast<int64_t>(mesh.tets.size()) > s.options.refine.max_tets) {
+    return Fail(absl::StrCat("--max-tets ", s.options.refine.max_tets, " is below the ",
+                             mesh.tets.size(), " tets of ", s.mesh_path,
+                             ": the budget counts the output's tets, at least the input's"),
+                kExitUsage);
+  }
 
   absl::StatusOr<std::unique_ptr<RefineBackend>> backend = ChooseBackend(
       {.server = s.server,

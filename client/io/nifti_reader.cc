@@ -1,5 +1,6 @@
 #include "client/io/nifti_reader.h"
 
+#include <cmath>
 #include <optional>
 #include <utility>
 
@@ -150,7 +151,25 @@ absl::StatusOr<VolumeFile> ReadNifti(const std::string& path) {
   absl::StatusOr<DecodedVoxels> voxels = DecodeVoxels(
       image.substr(offset, need), *type, header->order, header->scl_slope, header->scl_inter);
   if (!voxels.ok()) return WithPath(path, voxels.status());
-  return PlaceOnGrid(path, NiftiAffine(*header), *dims, voxels->type, std::move(voxels->data));
+  NiftiTransform transform;
+  const Affine affine = NiftiAffine(*header, &transform);
+  absl::StatusOr<VolumeFile> placed =
+      PlaceOnGrid(path, affine, *dims, voxels->type, std::move(voxels->data));
+  if (placed.ok() && transform == NiftiTransform::kPixdimOnly) {
+    // Without qform or sform the spacing is pixdim; a zero or non-finite one is read as 1 (as
+    // nibabel does). Said, since every distance in the result then depends on it.
+    for (int a = 0; a < 3; ++a) {
+      const double size = std::abs(header->pixdim[a + 1]);
+      if (!(size > 0.0) || !std::isfinite(size)) {
+        placed->warnings.push_back(absl::StrCat(path, ": pixdim[", a + 1, "] is ",
+                                                header->pixdim[a + 1],
+                                                " and the file has no qform or sform: voxel size 1 "
+                                                "used along axis ",
+                                                a));
+      }
+    }
+  }
+  return placed;
 }
 
 }  // namespace tetrefine::io

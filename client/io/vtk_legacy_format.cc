@@ -127,7 +127,6 @@ absl::Status LegacyParser::ReadDoubles(int64_t count, absl::string_view type,
     absl::StatusOr<absl::string_view> bytes = BinaryBlock(count, VtkScalarSize(*scalar), what);
     if (!bytes.ok()) return bytes.status();
     ReserveHuge(out, count);
-    ReserveHuge(out, count);
     out.resize(count);
     ScalarsToDoubles(*bytes, *scalar, ByteOrder::kBig, count, out.data());
     return absl::OkStatus();
@@ -152,11 +151,13 @@ absl::Status LegacyParser::ReadInts(int64_t count, absl::string_view type, absl:
     absl::StatusOr<absl::string_view> bytes = BinaryBlock(count, VtkScalarSize(*scalar), what);
     if (!bytes.ok()) return bytes.status();
     ReserveHuge(out, count);
-    ReserveHuge(out, count);
     out.resize(count);
     const size_t bad = ScalarsToInt64s(*bytes, *scalar, ByteOrder::kBig, count, out.data());
     if (bad != static_cast<size_t>(count)) {
-      return in_.Error(absl::StrCat(what, ": value ", bad, " is not an integer"));
+      const size_t size = VtkScalarSize(*scalar);
+      double value = 0.0;
+      ScalarsToDoubles(bytes->substr(bad * size, size), *scalar, ByteOrder::kBig, 1, &value);
+      return in_.Error(absl::StrCat(what, ": value ", bad, " is ", value, ", not an integer"));
     }
     return absl::OkStatus();
   }

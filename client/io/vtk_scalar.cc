@@ -102,6 +102,14 @@ std::optional<VtkScalar> VtkScalarFromLegacy(absl::string_view name) {
       {"unsigned_int", VtkScalar::kUInt32},
       {"long", VtkScalar::kInt64},
       {"unsigned_long", VtkScalar::kUInt64},
+      // VTK's fixed-size names (vtkDataReader reads all eight; meshio writes vtktypeint32 and
+      // friends for int32/int16/uint8 cell data, which were refused until a CLI sweep found it).
+      {"vtktypeint8", VtkScalar::kInt8},
+      {"vtktypeuint8", VtkScalar::kUInt8},
+      {"vtktypeint16", VtkScalar::kInt16},
+      {"vtktypeuint16", VtkScalar::kUInt16},
+      {"vtktypeint32", VtkScalar::kInt32},
+      {"vtktypeuint32", VtkScalar::kUInt32},
       {"vtktypeint64", VtkScalar::kInt64},
       {"vtktypeuint64", VtkScalar::kUInt64},
       {"vtkidtype", VtkScalar::kInt32},

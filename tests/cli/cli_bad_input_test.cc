@@ -69,6 +69,9 @@ class CliBadInput : public ::testing::TestWithParam<BadCase> {
     Mesh outside = grid;
     for (Vec3& p : outside.points) p[0] += 100.0;
     WriteMeshFile(dir_->File("outside.vtu"), outside);
+    Mesh unused_outside = grid;
+    unused_outside.points.push_back({100.0, 100.0, 100.0});
+    WriteMeshFile(dir_->File("unused_outside.vtu"), unused_outside);
     Mesh inverted = grid;
     std::swap(inverted.tets[3][2], inverted.tets[3][3]);
     WriteMeshFile(dir_->File("inverted.vtu"), inverted);
@@ -163,6 +166,11 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"MaxIterationsNegative", Refine({"--epsilon", "0.1", "--max-iterations", "-1"}),
                 "--max-iterations"},
         BadCase{"MaxTetsZero", Refine({"--epsilon", "0.1", "--max-tets", "0"}), "--max-tets"},
+        BadCase{"MaxTetsBelowTheInput", Refine({"--epsilon", "0.1", "--max-tets", "3"}),
+                "--max-tets 3 is below the 40 tets of $D/m.vtu"},
+        BadCase{"CertifyOnTheCorners",
+                Refine({"--epsilon", "0.1", "--certify", "--lattice-n", "1"}),
+                "--lattice-n: certify needs a lattice with points inside the tets"},
         BadCase{"ThreadsText", Refine({"--epsilon", "0.1", "--threads", "many"}), "--threads"},
         BadCase{"NormCoeffZero", Refine({"--epsilon", "0.1", "--norm-coeff", "0"}), "--norm-coeff"},
         BadCase{"UnknownFlag", Refine({"--epsilon", "0.1", "--shards", "4"}), "--shards"},
@@ -184,6 +192,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"MeshUnknownExtension", RefineWith("--mesh", "$D/m.obj"), "$D/m.obj"},
         BadCase{"MeshIsAVolume", RefineWith("--mesh", "$D/v.nii"), "$D/v.nii"},
         BadCase{"MeshOutsideVolume", RefineWith("--mesh", "$D/outside.vtu"), "$D/outside.vtu"},
+        BadCase{"UnusedVertexOutsideVolume", RefineWith("--mesh", "$D/unused_outside.vtu"),
+                "no tet uses it: remove the unused vertices"},
         BadCase{"MeshInverted", RefineWith("--mesh", "$D/inverted.vtu"), "--fix-orientation"},
         BadCase{"MeshWithoutTets", RefineWith("--mesh", "$D/no_tets.vtu"), "$D/no_tets.vtu"},
         BadCase{"OutputUnknownExtension", RefineWith("--output", "$D/out.obj"), "$D/out.obj"},

@@ -223,6 +223,16 @@ TEST_F(CliRefine, ClampAcceptsAMeshReachingOutsideTheVolume) {
       RunTetrefine({"refine", "--volume", volume_, "--mesh", outside, "--epsilon", "0.1",
                     "--output", dir_.File("c.vtu"), "--clamp"});
   EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_FALSE(absl::StrContains(run.err, "no vertex")) << run.err;
+  // A mesh wholly outside is still allowed under --clamp, with a warning.
+  const std::string far = dir_.File("far.vtu");
+  WriteMeshFile(far, testing::FiveTetMesh({101, 101, 101}, {107, 107, 107}, {2, 2, 2}));
+  const ProcessResult far_run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", far, "--epsilon", "0.1", "--output",
+                    dir_.File("far_out.vtu"), "--clamp"});
+  EXPECT_EQ(far_run.exit_code, 0) << far_run.err;
+  EXPECT_TRUE(absl::StrContains(far_run.err, "no vertex of " + far + " lies inside the volume"))
+      << far_run.err;
 }
 
 // The README's example: the bundled MRI and unit cube, the cube fitted into the volume.

@@ -1,6 +1,7 @@
 // Unit tests of the pieces of the tetrefine command line: argument parsing, JSON, the grid
 // mesher, mesh fitting and the mesh report. Suites are named Cli* (`ctest -R '^Cli'`).
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -266,8 +267,20 @@ TEST(CliMeshReport, FindsDuplicatesInvertedTetsAndOverusedFaces) {
   EXPECT_FALSE(r.faces.ok());
   EXPECT_FALSE(r.valid());
 
+  // An unused copy of a vertex is inert (refine carries it through): valid, and counted as
+  // unused. A used copy is a crack.
   Mesh duplicate = good;
   duplicate.points.push_back(duplicate.points[4]);
+  r = AnalyzeMesh(duplicate);
+  EXPECT_EQ(r.duplicate_vertices, 0);
+  EXPECT_EQ(r.unused_vertices, 1);
+  EXPECT_EQ(r.valid(), AnalyzeMesh(good).valid());
+  // The first tet with vertex 4 takes the copy instead.
+  const auto with4 = std::find_if(duplicate.tets.begin(), duplicate.tets.end(), [](const Tet& t) {
+    return std::find(t.begin(), t.end(), 4u) != t.end();
+  });
+  ASSERT_NE(with4, duplicate.tets.end());
+  *std::find(with4->begin(), with4->end(), 4u) = static_cast<uint32_t>(duplicate.points.size() - 1);
   r = AnalyzeMesh(duplicate);
   EXPECT_EQ(r.duplicate_vertices, 1);
   EXPECT_EQ(r.first_duplicate[0], 4);

@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <numeric>
 #include <set>
 #include <utility>
@@ -365,6 +367,22 @@ TEST_P(RefineEveryScheme, SlabGivesTheSameBitsAsTheWholeVolume) {
   ASSERT_FALSE(refused.ok());
   EXPECT_NE(refused.status().message().find("mesh.points[0]"), std::string::npos)
       << refused.status();
+}
+
+// A non-finite voxel is named by its grid index, as a viewer shows it: a slab's voxel
+// (5, 6, 7) of the whole grid, not its place in the slab's data (the message said "voxel 2105
+// of the slab" until a CLI sweep found it).
+TEST(VolumeCreate, NonFiniteVoxelIsNamedByItsGridIndex) {
+  GridGeometry g;
+  g.dims = {10, 10, 10};
+  const Index3 lo = {2, 3, 4}, hi = {8, 9, 10};
+  std::vector<double> values(6 * 6 * 6, 1.0);
+  values[(5 - 2) + 6 * ((6 - 3) + 6 * (7 - 4))] = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::byte> bytes(values.size() * sizeof(double));
+  std::memcpy(bytes.data(), values.data(), bytes.size());
+  auto volume = Volume::Create(g, lo, hi, VoxelType::kFloat64, bytes);
+  ASSERT_FALSE(volume.ok());
+  EXPECT_EQ(volume.status().message(), "volume voxel (5, 6, 7) is not finite (nan)");
 }
 
 TEST_P(RefineEveryScheme, StopsBeforeExceedingTheTetBudget) {

@@ -71,7 +71,8 @@ std::vector<FixtureCase> AllFixtures() {
     all.push_back({name, "region"});
   }
   all.push_back({"slicer_lps.vtk", "region", MeshFrame::kLps});
-  for (const char* name : {"meshio.vtu", "meshio_ascii.vtk", "meshio_binary.vtk"}) {
+  for (const char* name : {"meshio.vtu", "meshio_ascii.vtk", "meshio_binary.vtk",
+                           "meshio_int32_ascii.vtk", "meshio_int32_binary.vtk"}) {
     all.push_back({name, "region"});
   }
   for (const char* name : {"meshio_22_ascii.msh", "meshio_22_binary.msh", "meshio_41_ascii.msh",

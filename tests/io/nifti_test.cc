@@ -1,10 +1,12 @@
 // NIfTI reading and writing: real files, the RAS frame, byte order, versions, scaling, errors.
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "client/io/nifti_reader.h"
 #include "client/io/nifti_writer.h"
@@ -156,6 +158,30 @@ TEST(IoNiftiFrameTest, QformWithQfacIsWorldRas) {
   EXPECT_TRUE(file->warnings.empty());
   ExpectWorldSamplesMatchVoxels(*file, values, n,
                                 {{{-2, 0, 0, 7}, {0, 2.5, 0, -3}, {0, 0, 4, 11}}});
+}
+
+// Without qform and sform the spacing is pixdim; a zero or NaN one is read as 1, and said (it
+// was silent until a CLI sweep found it). A good pixdim gives no warning.
+TEST(IoNiftiFrameTest, ZeroOrNanPixdimWithoutTransformsIsOneAndWarned) {
+  ScratchDir dir;
+  NiftiSpec spec;
+  spec.pixdim = {1, 0, 2, std::numeric_limits<double>::quiet_NaN(), 0, 0, 0, 0};
+  const std::string path = dir.File("pixdim.nii");
+  WriteBytes(path, NiftiHeaderBytes(spec) + FloatSamples(Ramp(8), false));
+  absl::StatusOr<VolumeFile> file = ReadNifti(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->volume.grid().spacing, (Vec3{1, 2, 1}));
+  ASSERT_EQ(file->warnings.size(), 2u);
+  EXPECT_EQ(file->warnings[0],
+            path +
+                ": pixdim[1] is 0 and the file has no qform or sform: voxel size 1 used along "
+                "axis 0");
+  EXPECT_TRUE(absl::StrContains(file->warnings[1], "pixdim[3] is nan")) << file->warnings[1];
+  spec.pixdim = {1, 3, 2, 1, 0, 0, 0, 0};
+  WriteBytes(path, NiftiHeaderBytes(spec) + FloatSamples(Ramp(8), false));
+  file = ReadNifti(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_TRUE(file->warnings.empty());
 }
 
 TEST(IoNiftiFrameTest, ObliqueSformBecomesTheDirection) {

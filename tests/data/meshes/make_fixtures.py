@@ -113,11 +113,11 @@ def write_legacy():
     writer.Write()
 
 
-def meshio_mesh(label_key):
+def meshio_mesh(label_key, label_dtype=np.int64):
     # Same cell order as vtk_grid: tets 0-2, a triangle, tets 3-5, a vertex.
     cells = [("tetra", np.array(TETS[:3])), ("triangle", np.array([[0, 1, 3]])),
              ("tetra", np.array(TETS[3:])), ("vertex", np.array([[5]]))]
-    labels = [np.array(LABELS[:3]), np.array([9]), np.array(LABELS[3:]), np.array([9])]
+    labels = [np.array(l, dtype=label_dtype) for l in (LABELS[:3], [9], LABELS[3:], [9])]
     cell_data = {label_key: labels}
     if label_key == "gmsh:physical":
         cell_data["gmsh:geometrical"] = [np.array([1, 1, 1]), np.array([1]), np.array([2, 2, 2]),
@@ -135,6 +135,9 @@ def write_meshio():
     meshio.write("meshio.vtu", meshio_mesh("region"))
     meshio.write("meshio_ascii.vtk", meshio_mesh("region"), binary=False)
     meshio.write("meshio_binary.vtk", meshio_mesh("region"), binary=True)
+    # int32 labels: legacy VTK names them vtktypeint32.
+    meshio.write("meshio_int32_ascii.vtk", meshio_mesh("region", np.int32), binary=False)
+    meshio.write("meshio_int32_binary.vtk", meshio_mesh("region", np.int32), binary=True)
     for fmt, name in (("gmsh22", "meshio_22"), ("gmsh", "meshio_41")):
         for binary in (False, True):
             meshio.write(f"{name}_{'binary' if binary else 'ascii'}.msh",
