@@ -85,14 +85,15 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   if (!epsilon.ok()) return epsilon.status();
   s->options.refine.epsilon = *epsilon;
   if (auto text = args.Get("max-iterations")) {
-    absl::StatusOr<int64_t> n = ParseInteger(
-        "max-iterations", *text, std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
+    // The ranges are the core's (ValidateRefineOptions): an out-of-range number then reads the
+    // same bound the core would give, not the integer type's.
+    absl::StatusOr<int64_t> n =
+        ParseInteger("max-iterations", *text, 0, std::numeric_limits<int>::max());
     if (!n.ok()) return n.status();
     s->options.refine.max_iterations = static_cast<int>(*n);
   }
   if (auto text = args.Get("max-tets")) {
-    absl::StatusOr<int64_t> n = ParseInteger("max-tets", *text, std::numeric_limits<int64_t>::min(),
-                                             std::numeric_limits<int64_t>::max());
+    absl::StatusOr<int64_t> n = ParseInteger("max-tets", *text, 1, kMaxTetsCeiling);
     if (!n.ok()) return n.status();
     s->options.SetMaxTets(*n);
   }
