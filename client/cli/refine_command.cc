@@ -16,6 +16,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/string_view.h"
 #include "client/cli/command_support.h"
 #include "client/cli/commands.h"
@@ -372,6 +373,14 @@ int RunRefinement(const RefineSettings& s) {
   progress.End(absl::StrCat(
       FormatCount(static_cast<int64_t>(mesh_file->mesh.points.size())), " vertices, ",
       MeshFileSummary(s.mesh_path, static_cast<int64_t>(mesh_file->mesh.tets.size()))));
+  if (!mesh_file->dropped_arrays.empty()) {
+    // The refined file has the sampled values, iteration, quality and the region labels; other
+    // arrays of the input have no meaning on new vertices and tets, but their loss must not be
+    // silent (found by a CLI sweep).
+    PrintWarning(absl::StrCat(s.mesh_path, ": not carried to the output: ",
+                              absl::StrJoin(mesh_file->dropped_arrays, ", "),
+                              " (refine writes value, iteration, quality and the region labels)"));
+  }
   const InputTags tags{.label_name = mesh_file->label_name, .frame = mesh_file->frame};
   // Region labels (mesh.labels) go in with the mesh; every child tet inherits its parent's.
   Mesh mesh = std::move(mesh_file->mesh);

@@ -21,6 +21,10 @@ absl::string_view FrameTag(MeshFrame frame) {
   return "";
 }
 
+std::string DroppedArray(bool point_data, absl::string_view name) {
+  return absl::StrCat(point_data ? "point" : "cell", " data \"", name, "\"");
+}
+
 std::string LabelArrayName(const MeshFile& file) {
   return file.label_name.empty() ? std::string("label") : file.label_name;
 }

@@ -37,6 +37,9 @@ absl::string_view FrameTag(MeshFrame frame);
 //                  Writers of VTK formats use it as the array name ("label" when empty); Gmsh
 //                  and Medit store labels in their own slots whatever the name.
 //   frame:         the frame tag of the file read, and the one to write.
+//   dropped_arrays: what a reader saw and did not keep, e.g. `point data "temperature"` or
+//                  `cell data "density"` (VTK formats), in file order; writers ignore it. The
+//                  CLI says so, since a refined file will not have them.
 struct MeshFile {
   tetrefine::Mesh mesh;
   std::vector<int32_t> tet_iteration;
@@ -45,7 +48,11 @@ struct MeshFile {
   // {.mesh = m, .tet_iteration = {}, .tet_quality = {}}) stay warning-free.
   std::string label_name{};
   MeshFrame frame = MeshFrame::kUntagged;
+  std::vector<std::string> dropped_arrays{};
 };
+
+// "point data \"name\"" or "cell data \"name\"": an entry of MeshFile::dropped_arrays.
+std::string DroppedArray(bool point_data, absl::string_view name);
 
 // Name of the label array VTK writers use: label_name, or "label" when that is empty.
 std::string LabelArrayName(const MeshFile& file);

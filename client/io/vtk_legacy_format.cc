@@ -109,6 +109,7 @@ class LegacyParser {
   std::vector<double> values_;
   VtkCellData cell_data_;
   MeshFrame frame_ = MeshFrame::kUntagged;
+  std::vector<std::string> dropped_;  // MeshFile::dropped_arrays
 };
 
 absl::StatusOr<absl::string_view> LegacyParser::BinaryBlock(int64_t count, size_t width,
@@ -300,12 +301,16 @@ absl::Status LegacyParser::ReadArray(absl::string_view raw_name, int64_t compone
       return ReadDoubles(n, type, name, *out);
     }
     if (IsLabel(point_section, name)) {
+      // A label array the file prefers (LabelNameRank) replaces one read before.
+      if (cell_data_.label_rank >= 0)
+        dropped_.push_back(DroppedArray(false, cell_data_.label_name));
       if (absl::Status s = ReadInts(n, type, name, cell_data_.label); !s.ok()) return s;
       cell_data_.label_name = name;
       cell_data_.label_rank = LabelNameRank(name);
       return absl::OkStatus();
     }
   }
+  dropped_.push_back(DroppedArray(point_section, name));
   return SkipValues(n * components, type, name);
 }
 
@@ -387,13 +392,17 @@ absl::Status LegacyParser::ReadAttribute(const std::string& keyword, int64_t n,
   if (keyword == "tensors") width = 9;
   if (keyword == "tensors6") width = 6;
   if (width > 0) {
-    if (absl::Status s = in_.Token("the attribute name").status(); !s.ok()) return s;
+    absl::StatusOr<absl::string_view> name = in_.Token("the attribute name");
+    if (!name.ok()) return name.status();
+    dropped_.push_back(DroppedArray(point_section, Unescape(*name)));
     absl::StatusOr<absl::string_view> type = in_.Token("the attribute type");
     if (!type.ok()) return type.status();
     return SkipValues(n * width, std::string(*type), keyword);
   }
   if (keyword == "texture_coordinates") {
-    if (absl::Status s = in_.Token("the attribute name").status(); !s.ok()) return s;
+    absl::StatusOr<absl::string_view> name = in_.Token("the attribute name");
+    if (!name.ok()) return name.status();
+    dropped_.push_back(DroppedArray(point_section, Unescape(*name)));
     absl::StatusOr<int64_t> dim = in_.IntIn("the attribute width", 1, 16);
     if (!dim.ok()) return dim.status();
     absl::StatusOr<absl::string_view> type = in_.Token("the attribute type");
@@ -402,7 +411,9 @@ absl::Status LegacyParser::ReadAttribute(const std::string& keyword, int64_t n,
   }
   if (keyword == "color_scalars") {
     // Floats in ASCII files, unsigned chars in binary ones.
-    if (absl::Status s = in_.Token("the attribute name").status(); !s.ok()) return s;
+    absl::StatusOr<absl::string_view> name = in_.Token("the attribute name");
+    if (!name.ok()) return name.status();
+    dropped_.push_back(DroppedArray(point_section, Unescape(*name)));
     absl::StatusOr<int64_t> dim = in_.IntIn("the attribute width", 1, 16);
     if (!dim.ok()) return dim.status();
     return SkipValues(n * *dim, binary_ ? "unsigned_char" : "float", keyword);
@@ -503,6 +514,7 @@ absl::StatusOr<MeshFile> LegacyParser::Parse() {
     file.mesh.points[i] = {points_[3 * i], points_[3 * i + 1], points_[3 * i + 2]};
   }
   file.mesh.values = std::move(values_);
+  file.dropped_arrays = std::move(dropped_);
   if (absl::Status s = CellsToTets(cells_, cell_data_, v, path_, file); !s.ok()) return s;
   FrameToRas(file);
   if (absl::Status s = ValidateMeshFile(file, path_); !s.ok()) return s;

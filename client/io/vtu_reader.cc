@@ -236,7 +236,10 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
   VtkCellData cell_data;
   for (pugi::xml_node child : piece.child("CellData").children("DataArray")) {
     const std::string name = child.attribute("Name").value();
-    if (Components(child) != 1) continue;
+    if (Components(child) != 1) {
+      file.dropped_arrays.push_back(DroppedArray(false, name));
+      continue;
+    }
     if (name == "iteration" || name == "quality") {
       absl::StatusOr<std::vector<double>> values = arrays.Doubles(child, n);
       if (!values.ok()) return values.status();
@@ -244,15 +247,23 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
       continue;
     }
     const int rank = LabelNameRank(name);
-    if (rank < 0 || (cell_data.label_rank >= 0 && rank >= cell_data.label_rank)) continue;
+    if (rank < 0 || (cell_data.label_rank >= 0 && rank >= cell_data.label_rank)) {
+      file.dropped_arrays.push_back(DroppedArray(false, name));
+      continue;
+    }
     absl::StatusOr<std::vector<int64_t>> labels = arrays.Int64s(child, n);
     if (!labels.ok()) return labels.status();
+    // A label array the file prefers (LabelNameRank) replaces one read before.
+    if (cell_data.label_rank >= 0) {
+      file.dropped_arrays.push_back(DroppedArray(false, cell_data.label_name));
+    }
     cell_data.label = *std::move(labels);
     cell_data.label_name = name;
     cell_data.label_rank = rank;
   }
   for (pugi::xml_node child : piece.child("PointData").children("DataArray")) {
     if (absl::string_view(child.attribute("Name").value()) != "value" || Components(child) != 1) {
+      file.dropped_arrays.push_back(DroppedArray(true, child.attribute("Name").value()));
       continue;
     }
     absl::StatusOr<std::vector<double>> values = arrays.Doubles(child, v);

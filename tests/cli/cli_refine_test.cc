@@ -235,6 +235,25 @@ TEST_F(CliRefine, ClampAcceptsAMeshReachingOutsideTheVolume) {
       << far_run.err;
 }
 
+// Arrays the output will not have are named, not dropped in silence (found by a CLI sweep).
+TEST_F(CliRefine, ArraysNotCarriedToTheOutputAreNamed) {
+  const std::string mesh = dir_.File("arrays.vtk");
+  io::iotest::WriteBytes(mesh,
+                         "# vtk DataFile Version 4.2\nby hand\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                         "POINTS 4 double\n1 1 1 7 1 1 1 7 1 1 1 7\nCELLS 1 5\n4 0 1 2 3\n"
+                         "CELL_TYPES 1\n10\nCELL_DATA 1\nSCALARS density double 1\n"
+                         "LOOKUP_TABLE default\n0.5\nPOINT_DATA 4\nSCALARS temperature float 1\n"
+                         "LOOKUP_TABLE default\n1 2 3 4\n");
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh, "--epsilon", "0.1", "--output",
+                    dir_.File("arrays_out.vtu")});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(absl::StrContains(
+      run.err,
+      mesh + R"(: not carried to the output: cell data "density", point data "temperature")"))
+      << run.err;
+}
+
 // The README's example: the bundled MRI and unit cube, the cube fitted into the volume.
 TEST(CliRefineExample, BundledExampleWithFitMeshToVolume) {
   ScratchDir dir;

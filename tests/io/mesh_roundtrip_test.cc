@@ -220,6 +220,9 @@ TEST(IoMeshTest, ReadsAsciiVtuWithOtherCells) {
       </PointData>
       <CellData>
         <DataArray type="Int32" Name="iteration" format="ascii">7 8 9</DataArray>
+        <DataArray type="Int32" Name="region" format="ascii">1 1 1</DataArray>
+        <DataArray type="Int32" Name="CellEntityIds" format="ascii">2 3 4</DataArray>
+        <DataArray type="Float64" Name="density" format="ascii">0.5 0.5 0.5</DataArray>
       </CellData>
       <Points>
         <DataArray type="Float64" NumberOfComponents="3" format="ascii">
@@ -241,6 +244,12 @@ TEST(IoMeshTest, ReadsAsciiVtuWithOtherCells) {
   EXPECT_EQ(file->mesh.values, (std::vector<double>{1, 2, 3, 4, 5}));
   EXPECT_EQ(file->tet_iteration, (std::vector<int32_t>{7, 9}));
   EXPECT_TRUE(file->tet_quality.empty());
+  // CellEntityIds is preferred to region (LabelNameRank); what is not kept is listed.
+  EXPECT_EQ(file->mesh.labels, (std::vector<int32_t>{2, 4}));
+  EXPECT_EQ(file->label_name, "CellEntityIds");
+  EXPECT_EQ(file->dropped_arrays,
+            (std::vector<std::string>{R"(cell data "region")", R"(cell data "density")",
+                                      R"(point data "other")"}));
 }
 
 TEST(IoMeshTest, ReadsLegacyVtk51AndFieldData) {
@@ -260,6 +269,8 @@ TEST(IoMeshTest, ReadsLegacyVtk51AndFieldData) {
   EXPECT_EQ(file->mesh.tets, (std::vector<Tet>{{0, 1, 2, 3}}));
   EXPECT_EQ(file->mesh.values, (std::vector<double>{-1, -2, -3, -4}));
   EXPECT_EQ(file->tet_quality, (std::vector<float>{0.25f}));
+  EXPECT_EQ(file->dropped_arrays,
+            (std::vector<std::string>{R"(cell data "junk")", R"(point data "v")"}));
 }
 
 TEST(IoMeshTest, FailedWriteLeavesOldFileAndNoTemporary) {
