@@ -135,6 +135,28 @@ def test_a_meshio_mesh_in():
         tetrefine.mesh_from_meshio(meshio.Mesh(points, [("triangle", triangles)]))
 
 
+@pytest.mark.parametrize("labels, message", [
+    # A cast alone wrapped 2**32 + 7 to 7, merging two regions, and truncated 2.7 to 2.
+    (np.array([2**32 + 7]), "do not fit int32"),
+    (np.array([2.7]), "holds 2.7, not a whole number"),
+    (np.array([np.nan]), "not a whole number"),
+    (np.array([[1, 2]]), r"has shape \(1, 2\) on a block of 1 tetra"),
+    (np.array(["a"]), "expected integers"),
+])
+def test_meshio_labels_that_are_not_int32_are_refused(labels, message):
+    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    mesh = meshio.Mesh(points, [("tetra", np.array([[0, 1, 2, 3]]))],
+                       cell_data={"gmsh:physical": [labels]})
+    with pytest.raises(tetrefine.TetrefineError, match=message):
+        tetrefine.mesh_from_meshio(mesh)
+    # Whole floats are labels.
+    whole = meshio.Mesh(points, [("tetra", np.array([[0, 1, 2, 3]]))],
+                        cell_data={"gmsh:physical": [np.array([3.0])]})
+    assert tetrefine.mesh_from_meshio(whole).labels.tolist() == [3]
+    with pytest.raises(tetrefine.TetrefineError, match="expected a meshio.Mesh"):
+        tetrefine.mesh_from_meshio(points)
+
+
 def test_a_meshio_mesh_out_reads_back_in_the_cli(server, cli_binary, tmp_path):
     volume = np.random.default_rng(5).uniform(0, 10, size=(10, 10, 10))
     points, tets = box_mesh((1, 1, 1), (8, 8, 8), (2, 2, 2))

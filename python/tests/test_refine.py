@@ -248,6 +248,26 @@ def test_the_servers_message_for_bad_input(server):
     (dict(spacing=(1, 0, 1)), "spacing: must be > 0 on every axis, got 0.0 on axis y"),
     (dict(origin=(0, 0)), "origin: expected 3 numbers, got 2"),
     (dict(direction=np.eye(2)), r"direction: expected a 3x3 matrix"),
+    # Found by a sweep of the API (2026-11-25): these raised numpy's, protobuf's or Python's own
+    # exceptions, or were coerced.
+    (dict(tets=[[0, 1, 2, 3], [0, 1, 2]]), "tets: not an array of numbers"),
+    (dict(points=[[1, 1, 1], [2, 2]]), "points: not an array of numbers"),
+    (dict(tets=np.array([[0, 1, 2, np.inf]])), "tets: tet 0 corner 3 is inf, not a vertex index"),
+    (dict(tets=np.array([[0, 1, 2, 2.5]])), "tets: tet 0 corner 3 is 2.5"),
+    (dict(epsilon="0.1"), "epsilon: expected a number, got '0.1'"),
+    (dict(epsilon=True), "epsilon: expected a number"),
+    (dict(epsilon=None), "epsilon: expected a number"),
+    (dict(max_iterations=2.7), "max_iterations: expected a whole number, got 2.7"),
+    (dict(max_iterations=2**40), r"max_iterations: must be in \[0, 2147483647\]"),
+    (dict(max_tets=float("inf")), "max_tets: expected a whole number, got inf"),
+    (dict(norm_coeff="x"), "norm_coeff: expected a number"),
+    (dict(certify="no"), "certify: expected True or False, got 'no'"),
+    (dict(timeout="5"), "timeout: expected a number"),
+    (dict(timeout=-1), "timeout: must be >= 0"),
+    (dict(timeout=float("nan")), "timeout: must be >= 0"),
+    (dict(spacing=np.array([1, 1, 1j])), "spacing: expected 3 real numbers"),
+    (dict(volume=np.full((4, 4, 4), np.longdouble(1) + np.longdouble(2)**-60)),
+     "volume: float128 values would round in float64"),
 ])
 def test_input_refused_before_sending(server, arguments, message):
     points, tets = box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1))
@@ -258,6 +278,58 @@ def test_input_refused_before_sending(server, arguments, message):
         with pytest.raises(tetrefine.TetrefineError, match=message) as error:
             client.refine(**call)
     assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+
+
+def test_an_infinite_timeout_is_no_limit(server):
+    points, tets = box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1))
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(smooth_volume((8, 8, 8)), (1, 1, 1), (0, 0, 0), points, tets, 0.1,
+                               timeout=float("inf"))
+        assert result.stop_reason == "converged"
+        assert client.server_info(timeout=1e12).version
+
+
+def test_client_misuse_is_a_tetrefine_error(server):
+    with pytest.raises(tetrefine.TetrefineError, match="target: expected"):
+        tetrefine.Client(None)
+    with pytest.raises(tetrefine.TetrefineError, match="token: must be a string of printable"):
+        tetrefine.Client(server.target, token="a\nb")
+    closed = tetrefine.Client(server.target)
+    closed.close()
+    with pytest.raises(tetrefine.TetrefineError) as error:
+        closed.refine(smooth_volume((8, 8, 8)), (1, 1, 1), (0, 0, 0),
+                      *box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1)), 0.1)
+    assert error.value.code == grpc.StatusCode.FAILED_PRECONDITION
+
+
+def test_nested_statistics_are_plain_records(server):
+    points, tets = box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1))
+    with tetrefine.Client(server.target) as client:
+        stats = client.refine(smooth_volume((8, 8, 8)), (1, 1, 1), (0, 0, 0), points, tets,
+                              0.05).iterations[0]
+    assert type(stats.quality) is tetrefine.Record
+    assert stats.quality.count == stats.final_tets
+
+
+def test_the_readme_example_prints_what_the_readme_says(server):
+    """The README's Python block, run against the test server: its printed line is the comment
+    under it (it had drifted from what the server gives)."""
+    import contextlib
+    import io
+    import re
+
+    readme = open(os.path.join(os.path.dirname(__file__), "..", "..", "README.md")).read()
+    section = readme[readme.index("## Python"):]
+    block = section[section.index("```python") + len("```python"):]
+    block = block[:block.index("```")]
+    expected = re.search(r"^# (converged .*)$", block, re.M).group(1)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(block.replace("localhost:50051", server.target), {})
+    printed = out.getvalue().strip().splitlines()[-1]
+    # The line ends with the lattice maximum, which the README gives to 4 digits and "...".
+    prefix = expected.rstrip(".")
+    assert printed.startswith(prefix), (printed, expected)
 
 
 def test_no_server_is_unavailable():

@@ -49,12 +49,54 @@ def _wire_voxel_type(volume):
         raise invalid("volume", f"{volume.dtype} values up to {max(abs(lo), abs(hi))} do not "
                       "fit int32 and would round in float64; rescale them first")
     if kind == "f":
+        if size > 8 and volume.size:
+            # longdouble: float64 when that keeps every value, as for the integers.
+            finite = volume[np.isfinite(volume)]
+            if not np.array_equal(finite.astype(np.float64).astype(volume.dtype), finite):
+                raise invalid("volume", f"{volume.dtype} values would round in float64, the "
+                              "widest wire type; convert them first")
         return "VOXEL_TYPE_FLOAT64" if size > 4 else "VOXEL_TYPE_FLOAT32"
     raise invalid("volume", f"dtype {volume.dtype} is not a scalar number type; expected "
                   "uint8, int16, uint16, int32, float32, float64 or another integer or float")
 
 
+def real_number(name, value):
+    """`value` as a float: a Python or numpy real number (not bool, not a string)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer,
+                                                                       np.floating)):
+        raise invalid(name, f"expected a number, got {value!r}")
+    return float(value)
+
+
+def integer(name, value, lo, hi):
+    """`value` as an int in [lo, hi]: a Python or numpy integer, or a float holding one."""
+    if isinstance(value, (float, np.floating)) and np.isfinite(value) and value == int(value):
+        value = int(value)
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise invalid(name, f"expected a whole number, got {value!r}")
+    if not lo <= value <= hi:
+        raise invalid(name, f"must be in [{lo}, {hi}], got {value}")
+    return int(value)
+
+
+def flag(name, value):
+    """`value` as a bool: True, False (or numpy's), nothing else ("no" is not False)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise invalid(name, f"expected True or False, got {value!r}")
+    return bool(value)
+
+
+def as_array(name, value):
+    """np.asarray(value), refusing ragged nested lists with a message naming the argument."""
+    try:
+        return np.asarray(value)
+    except (TypeError, ValueError) as error:
+        raise invalid(name, f"not an array of numbers ({error})") from None
+
+
 def _vector3(name, value, positive=False):
+    if np.iscomplexobj(value):
+        raise invalid(name, f"expected 3 real numbers, got {value!r}")
     try:
         v = np.asarray(value, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError):
@@ -78,7 +120,7 @@ class Inputs:
     """
 
     def __init__(self, volume, spacing, origin, points, tets, direction=None, labels=None):
-        volume = np.asarray(volume)
+        volume = as_array("volume", volume)
         if volume.ndim != 3:
             raise invalid("volume", f"expected a 3-d array indexed [x, y, z], got shape "
                           f"{volume.shape}")
@@ -95,7 +137,7 @@ class Inputs:
         self.origin = _vector3("origin", origin)
         self.direction = _direction(direction)
 
-        points = np.asarray(points)
+        points = as_array("points", points)
         if points.ndim != 2 or points.shape[1] != 3:
             raise invalid("points", f"expected shape (n, 3), got {points.shape}")
         if points.dtype.kind not in "iuf":
@@ -109,14 +151,21 @@ class Inputs:
         if n >= 2**32:
             raise invalid("points", f"{n} vertices; tet indices on the wire are 32-bit")
 
-        tets = np.asarray(tets)
+        tets = as_array("tets", tets)
         if tets.ndim != 2 or tets.shape[1] != 4:
             raise invalid("tets", f"expected shape (m, 4), got {tets.shape}")
         if tets.dtype.kind not in "iu":
-            if tets.dtype.kind == "f" and np.array_equal(tets, np.floor(tets)):
-                tets = tets.astype(np.int64)
-            else:
+            if tets.dtype.kind != "f":
                 raise invalid("tets", f"expected integer vertex indices, got dtype {tets.dtype}")
+            # Float indices are taken when they are whole numbers; inf or 1e20 would wrap in
+            # the integer cast (and read as a negative vertex).
+            whole = np.isfinite(tets) & (np.abs(tets) < 2**53)
+            whole[whole] = tets[whole] == np.floor(tets[whole])
+            if not whole.all():
+                t, corner = np.argwhere(~whole)[0]
+                raise invalid("tets", f"tet {t} corner {corner} is {tets[t, corner]}, not a "
+                              "vertex index")
+            tets = tets.astype(np.int64)
         if len(tets):
             out_of_range = (tets < 0) | (tets >= n)
             if out_of_range.any():
@@ -127,7 +176,7 @@ class Inputs:
 
         self.labels = None
         if labels is not None:
-            labels = np.asarray(labels)
+            labels = as_array("labels", labels)
             if labels.shape != (len(self.tets),):
                 raise invalid("labels", f"expected one label per tet, shape ({len(self.tets)},),"
                               f" got {labels.shape}")
@@ -160,16 +209,20 @@ def build_options(pb, protocol, epsilon, *, max_iterations=None, max_tets=None, 
                   certify=False, norm_coeff=None, clamp=False, fix_orientation=False,
                   track_parents=False):
     """The RefineOptions message; an unset argument leaves the server's default."""
-    options = pb.RefineOptions(epsilon=float(epsilon))
+    # Types are checked here (a string epsilon, a float iteration count, certify="no" were
+    # coerced or raised numpy's and protobuf's own exceptions); ranges are the server's.
+    options = pb.RefineOptions(epsilon=real_number("epsilon", epsilon))
     if max_iterations is not None:
-        options.max_iterations = int(max_iterations)
+        options.max_iterations = integer("max_iterations", max_iterations, 0, 2**31 - 1)
     if max_tets is not None:
-        options.max_tets = int(max_tets)
+        options.max_tets = integer("max_tets", max_tets, 1, 2**63 - 1)
     if norm_coeff is not None:
-        options.norm_coeff = float(norm_coeff)
-    if clamp:
+        options.norm_coeff = real_number("norm_coeff", norm_coeff)
+    certify = flag("certify", certify)
+    track_parents = flag("track_parents", track_parents)
+    if flag("clamp", clamp):
         options.outside_policy = pb.OUTSIDE_POLICY_CLAMP
-    if fix_orientation:
+    if flag("fix_orientation", fix_orientation):
         options.orientation_policy = pb.ORIENTATION_POLICY_NORMALIZE
     if scheme is not None:
         if protocol.scheme_field is None:

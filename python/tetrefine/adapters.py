@@ -162,6 +162,8 @@ def mesh_from_meshio(mesh, label_name=None):
     """A TetMesh from a meshio.Mesh: every "tetra" cell block in order (other cells, e.g.
     boundary triangles, are skipped). labels from cell data `label_name`, or when None the first
     of LABEL_NAMES the tetra blocks carry; None when there is none."""
+    if not all(hasattr(mesh, a) for a in ("points", "cells", "cell_data", "point_data")):
+        raise invalid("mesh", f"expected a meshio.Mesh, got {type(mesh).__name__}")
     points = np.asarray(mesh.points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3:
         raise invalid("mesh", f"expected 3-d points, got shape {points.shape}")
@@ -175,8 +177,8 @@ def mesh_from_meshio(mesh, label_name=None):
     for name in names:
         arrays = mesh.cell_data.get(name)
         if arrays is not None:
-            labels = np.concatenate([np.asarray(arrays[i]).reshape(-1) for i in blocks])
-            labels = labels.astype(np.int32)
+            labels = np.concatenate([_labels_of_block(name, mesh.cells[i], arrays[i])
+                                     for i in blocks])
             break
     else:
         if label_name is not None:
@@ -184,8 +186,34 @@ def mesh_from_meshio(mesh, label_name=None):
                           f"{', '.join(sorted(mesh.cell_data)) or 'none'})")
     values = mesh.point_data.get("value")
     if values is not None:
-        values = np.asarray(values, dtype=np.float64).reshape(-1)
+        values = np.asarray(values, dtype=np.float64)
+        if values.shape not in ((len(points),), (len(points), 1)):
+            raise invalid("mesh", f"point data 'value' has shape {values.shape}, expected one "
+                          f"number per point ({len(points)},)")
+        values = values.reshape(-1)
     return TetMesh(points, tets, labels, values)
+
+
+def _labels_of_block(name, block, array):
+    """One tetra block's labels as int32: one whole number per cell that int32 holds. A cast
+    alone wrapped 2**32 + 7 to 7 (merging regions) and truncated 2.7 to 2."""
+    labels = np.asarray(array)
+    if labels.ndim == 2 and labels.shape[1] == 1:
+        labels = labels.reshape(-1)
+    if labels.shape != (len(block.data),):
+        raise invalid("mesh", f"cell data {name!r} has shape {labels.shape} on a block of "
+                      f"{len(block.data)} tetra, expected one label per cell")
+    if labels.dtype.kind == "f":
+        whole = np.isfinite(labels)
+        whole[whole] = labels[whole] == np.floor(labels[whole])
+        if not whole.all():
+            raise invalid("mesh", f"cell data {name!r} holds {labels[np.argmin(whole)]}, not a "
+                          "whole number")
+    elif labels.dtype.kind not in "iub":
+        raise invalid("mesh", f"cell data {name!r} has dtype {labels.dtype}, expected integers")
+    if len(labels) and (labels.min() < -2**31 or labels.max() >= 2**31):
+        raise invalid("mesh", f"cell data {name!r} holds values that do not fit int32")
+    return labels.astype(np.int32)
 
 
 def result_to_meshio(result, label_name="labels"):

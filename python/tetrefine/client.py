@@ -60,6 +60,21 @@ def _credentials(tls):
                   f"grpc.ChannelCredentials, got {type(tls).__name__}")
 
 
+# Timeouts beyond this many seconds (about 31 years) are no limit: gRPC fails a call at once
+# when the deadline overflows its clock (a timeout of 1e12 or inf gave DEADLINE_EXCEEDED).
+_NO_LIMIT_SECONDS = 1e9
+
+
+def _timeout(value):
+    """`timeout` as seconds or None (no limit); refuses NaN, negatives and non-numbers."""
+    if value is None:
+        return None
+    seconds = _requests.real_number("timeout", value)
+    if not seconds >= 0:
+        raise invalid("timeout", f"must be >= 0 seconds (None: no limit), got {value!r}")
+    return None if seconds > _NO_LIMIT_SECONDS else seconds
+
+
 class Client:
     """A connection to one tetrefine_server.
 
@@ -76,6 +91,13 @@ class Client:
     """
 
     def __init__(self, target, *, tls=None, token=None):
+        if not isinstance(target, str) or not target:
+            raise invalid("target", f"expected a \"host:port\" string, got {target!r}")
+        if token is not None and (not isinstance(token, str) or
+                                  not all(" " <= c <= "~" for c in token)):
+            # gRPC refuses such metadata only when a call starts, with a ValueError.
+            raise invalid("token", "must be a string of printable ASCII characters (no line "
+                          "breaks)")
         credentials, options = _credentials(tls)
         options = options + [("grpc.max_receive_message_length", _MAX_RECEIVE_BYTES)]
         if credentials is None:
@@ -101,11 +123,14 @@ class Client:
     def server_info(self, timeout=10.0):
         """The server's version and limits: Record(version, limits=Record(max_voxels,
         max_input_tets, max_output_tets, max_concurrent_refinements, max_message_bytes))."""
+        timeout = _timeout(timeout)
         try:
             info = self._stub.GetServerInfo(pb.GetServerInfoRequest(), timeout=timeout,
                                             metadata=self._metadata)
         except grpc.RpcError as error:
             raise TetrefineError.from_rpc_error(error) from None
+        except ValueError as error:  # grpc's own refusal, e.g. a closed channel
+            raise TetrefineError(grpc.StatusCode.FAILED_PRECONDITION, str(error)) from None
         return Record.from_message(info)
 
     def _request_chunk_bytes(self, timeout):
@@ -153,7 +178,8 @@ class Client:
           max_tets: stop before an iteration that would exceed this many tets.
           on_iteration: called with each IterationStats as soon as that iteration has finished
             on the server. If it raises, the call is cancelled and the exception propagates.
-          timeout: seconds for the whole call (DEADLINE_EXCEEDED after that); None: no limit.
+          timeout: seconds for the whole call (DEADLINE_EXCEEDED after that); None (or inf):
+            no limit.
           norm_coeff: normCoeff of eq. 3 (default: the volume's max - min).
           clamp: sample vertices outside the volume at the nearest point of its box.
           fix_orientation: flip inverted tets instead of refusing them.
@@ -173,13 +199,17 @@ class Client:
             pb, self._protocol, epsilon, max_iterations=max_iterations, max_tets=max_tets,
             scheme=scheme, certify=certify, norm_coeff=norm_coeff, clamp=clamp,
             fix_orientation=fix_orientation, track_parents=track_parents)
+        timeout = _timeout(timeout)
         # One deadline for the whole call, the server-info round trip included.
         deadline = None if timeout is None else time.monotonic() + timeout
         chunk_bytes = self._request_chunk_bytes(timeout)
         remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
         stream = _requests.requests(pb, self._protocol, options, inputs, chunk_bytes)
         reader = ResponseReader(self._protocol, on_iteration)
-        call = self._stub.Refine(stream, timeout=remaining, metadata=self._metadata)
+        try:
+            call = self._stub.Refine(stream, timeout=remaining, metadata=self._metadata)
+        except ValueError as error:  # grpc's own refusal, e.g. a closed channel
+            raise TetrefineError(grpc.StatusCode.FAILED_PRECONDITION, str(error)) from None
         try:
             for response in call:
                 reader.add(response)

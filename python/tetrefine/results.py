@@ -25,8 +25,10 @@ class Record:
             value = getattr(message, field.name)
             repeated = field.label == _descriptor.FieldDescriptor.LABEL_REPEATED
             if field.message_type is not None:
-                value = ([cls.from_message(v) for v in value] if repeated else
-                         cls.from_message(value))
+                # Nested messages are plain Records: a subclass's own fields and properties
+                # (IterationStats.configurations) would not apply to them.
+                value = ([Record.from_message(v) for v in value] if repeated else
+                         Record.from_message(value))
             elif field.enum_type is not None:
                 value = ([_enum_name(field.enum_type, v) for v in value] if repeated else
                          _enum_name(field.enum_type, value))
