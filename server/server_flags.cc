@@ -95,7 +95,7 @@ ABSL_FLAG(int64_t, memory_budget_bytes, 0,
           "2 x --max_message_bytes when it opens, its declared input as it arrives, and its "
           "output at its tet budget x --bytes_per_output_tet before it refines");
 ABSL_FLAG(int64_t, bytes_per_output_tet, tetrefine::server::kDefaultBytesPerOutputTet,
-          "Peak bytes of a refinement per tet of its budget (measured: 78-92; 160 leaves room "
+          "Peak bytes of a refinement per tet of its budget (measured: 77-92; 160 leaves room "
           "for fragmentation)");
 
 // --- process ---------------------------------------------------------------------------------

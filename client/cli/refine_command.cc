@@ -631,7 +631,8 @@ const CommandSpec& RefineSpec() {
                               std::string(RefineSchemeName(RefineOptions{}.scheme)))},
                 {"certify", "",
                  "also refine until every lattice point of every tet is within epsilon; the "
-                 "report gives the certified maximum (about 4x the time)"},
+                 "report gives the certified maximum (about 2.5x the CPU time: the demo at "
+                 "epsilon 0.05)"},
                 {"lattice-n", "N",
                  absl::StrCat("order of the verification lattice, (N+1)(N+2)(N+3)/6 points a "
                               "tet; 0 skips the check (default ",
