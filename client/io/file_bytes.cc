@@ -43,6 +43,14 @@ absl::StatusOr<std::string> ReadFileBytes(const std::string& path) {
   if (std::filesystem::is_directory(path, ec)) return FileError(path, "is a directory");
   std::FILE* file = std::fopen(path.c_str(), "rb");
   if (file == nullptr) return ErrnoError(path, "cannot open", errno);
+  // Devices never end: /dev/zero (or a link to it named .nii) grew memory without bound until a
+  // CLI sweep tried it. Regular files and pipes (process substitution, <(zcat ...)) are read.
+  struct stat st;
+  if (::fstat(::fileno(file), &st) == 0 &&
+      (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) || S_ISSOCK(st.st_mode))) {
+    std::fclose(file);
+    return FileError(path, "is a device or socket, not a file");
+  }
   // One buffer of the file's size read in place: growing a string chunk by chunk copied a
   // large mesh several times over. The loop still reads to the end, for files that grow or
   // report no size (pipes).

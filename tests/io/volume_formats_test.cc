@@ -1,9 +1,11 @@
 // NRRD and MetaImage (LPS files converted to RAS) and ReadVolume's dispatch.
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "client/io/mesh_io.h"
 #include "client/io/read_volume.h"
 #include "client/io/zlib_codec.h"
 #include "gmock/gmock.h"
@@ -234,6 +236,21 @@ TEST(IoReadVolumeTest, UnknownExtensionNamesTheFile) {
     EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
     EXPECT_THAT(std::string(status.message()), HasSubstr(name));
     EXPECT_THAT(std::string(status.message()), HasSubstr("unknown extension"));
+  }
+}
+
+// A device never ends: /dev/zero behind a volume or mesh name grew memory without bound until
+// a CLI sweep tried it. It is refused at once, naming the file.
+TEST(IoReadVolumeTest, DevicesAreRefusedNotReadForever) {
+  ScratchDir dir;
+  for (const char* name : {"zero.nii", "zero.nii.gz", "zero.vtu", "zero.msh", "zero.meshb"}) {
+    const std::string path = dir.File(name);
+    std::filesystem::create_symlink("/dev/zero", path);
+    const absl::Status status = absl::string_view(name).find(".nii") != absl::string_view::npos
+                                    ? ReadVolume(path).status()
+                                    : ReadMesh(path).status();
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << name;
+    EXPECT_EQ(status.message(), path + ": is a device or socket, not a file") << name;
   }
 }
 
