@@ -67,8 +67,9 @@ std::string DescribeStop(const RefineResult& result) {
     case StopReason::kMaxIterations:
       return absl::StrCat(name, ": --max-iterations reached with edges still above epsilon");
     case StopReason::kTetBudget:
-      return absl::StrCat(name, ": the next iteration would have made ", result.next_iteration_tets,
-                          " tets, more than --max-tets");
+      return absl::StrCat(
+          name, ": the next iteration would have made ", result.next_iteration_tets,
+          " tets, more than the tet budget (--max-tets, or the service's own limit)");
     case StopReason::kQualityFloor:
       return absl::StrCat(name, ": the next iteration would have made a tet of quality ",
                           absl::StrFormat("%.3g", result.next_iteration_min_quality),

@@ -14,7 +14,9 @@
 #include <tuple>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "client/io/mesh_io.h"
+#include "client/io/read_volume.h"
 #include "client/refine_client.h"
 #include "grpcpp/security/credentials.h"
 #include "gtest/gtest.h"
@@ -114,7 +116,7 @@ client::RefineRequestOptions Options(double epsilon, int max_iterations) {
   o.refine.max_iterations = max_iterations;
   o.refine.lattice_max_tets = 100'000'000;  // every tet: the lattice maxima are then exact too
   o.refine.lattice_n = 4;
-  // Sharding needs edge-local decisions: the paper's scheme (ShardedRefine refuses the others).
+  // The paper's scheme, whose parts run to the end in one call; tests of the others set it.
   o.refine.scheme = RefineScheme::kPaper;
   return o;
 }
@@ -207,6 +209,75 @@ TEST_F(ShardedRefineTest, TetBudgetStopsWhereTheWholeStops) {
     const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
     ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
   }
+}
+
+// The server's own tet limit (--max_output_tets) stops a sharded run where it stops the whole
+// one, with the mesh so far. It was an error with no output until a CLI sweep compared them.
+TEST_F(ShardedRefineTest, ServerTetLimitStopsWhereTheWholeStops) {
+  // The sweep's case: the MRI and the cube at eps 0.04, where a part with its halo is the
+  // whole mesh by the third iteration and meets the limit itself.
+  absl::StatusOr<io::VolumeFile> file =
+      io::ReadVolume(std::string(TETREFINE_SHARED_DATA_DIR) + "/anatomical_33x41x25.nii");
+  ASSERT_TRUE(file.ok()) << file.status();
+  ASSERT_TRUE(file->volume.axis_aligned());
+  absl::StatusOr<io::MeshFile> cube =
+      io::ReadMesh(std::string(TETREFINE_SHARED_DATA_DIR) + "/unit_cube_1782tets.mesh");
+  ASSERT_TRUE(cube.ok()) << cube.status();
+  struct {
+    Volume volume;
+    Mesh mesh;
+  } c{std::move(file->volume), std::move(cube->mesh)};
+  c.mesh.values.clear();
+  const GridGeometry& g = c.volume.grid();
+  for (Vec3& p : c.mesh.points) {  // [-0.5, 0.5]^3 onto the grid less a voxel on every side
+    for (int a = 0; a < 3; ++a) {
+      const double lo = g.origin[a] + g.spacing[a];
+      const double hi = g.origin[a] + g.spacing[a] * static_cast<double>(g.dims[a] - 2);
+      p[a] = lo + (p[a] + 0.5) * (hi - lo);
+    }
+  }
+  client::RefineRequestOptions options = Options(0.04, 6);
+  options.refine.scheme = RefineScheme::kLongestEdge;  // parts go one iteration at a time
+  const client::ClientResult free_run = Unsharded(c.volume, c.mesh, options);
+  ASSERT_GE(free_run.result.iterations.size(), 3u);
+  absl::StatusOr<std::unique_ptr<ServerProcess>> limited = ServerProcess::Start(
+      {"--metrics_listen=", "--threads=1", "--max_lattice_points=2000000000",
+       absl::StrCat("--max_output_tets=", free_run.result.iterations[1].final_tets + 1)});
+  ASSERT_TRUE(limited.ok()) << limited.status();
+  const std::vector<std::shared_ptr<grpc::Channel>> channels =
+      sharding::ChannelsFor({(*limited)->target()}, grpc::InsecureChannelCredentials());
+  absl::StatusOr<client::ClientResult> whole =
+      client::RefineViaService(channels[0], c.volume, c.mesh, options);
+  ASSERT_TRUE(whole.ok()) << whole.status();
+  ASSERT_EQ(whole->result.stop_reason, StopReason::kTetBudget);
+  ASSERT_EQ(whole->result.iterations.size(), 2u);
+  // One part is the whole mesh and meets the limit itself; two parts meet it once merged.
+  for (int k : {1, 2}) {
+    SCOPED_TRACE(::testing::Message() << "shards = " << k);
+    sharding::ShardOptions shard;
+    shard.shards = k;
+    absl::StatusOr<sharding::ShardedResult> sharded =
+        sharding::ShardedRefine(channels, c.volume, c.mesh, options, shard);
+    ASSERT_TRUE(sharded.ok()) << sharded.status();
+    ExpectSameRefinement(c.mesh, whole->result, sharded->reply.result);
+  }
+}
+
+// Many more parts than one server lets a client have open at once (--max_calls_per_identity,
+// 16): the client keeps at most 8 open per server and the rest wait. 64 parts against one
+// server were refused with RESOURCE_EXHAUSTED in 7 of 8 runs before (found by a CLI sweep).
+TEST_F(ShardedRefineTest, ManyPartsOnOneServerWaitTheirTurn) {
+  const StructuredCase c;
+  client::RefineRequestOptions options = Options(0.02, 2);
+  options.refine.scheme = RefineScheme::kLongestEdge;  // a round of calls per iteration
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+  const std::vector<std::shared_ptr<grpc::Channel>> one = {channels_[0]};
+  sharding::ShardOptions shard;
+  shard.shards = 64;
+  absl::StatusOr<sharding::ShardedResult> sharded =
+      sharding::ShardedRefine(one, c.volume, c.mesh, options, shard);
+  ASSERT_TRUE(sharded.ok()) << sharded.status();
+  ExpectSameRefinement(c.mesh, whole.result, sharded->reply.result);
 }
 
 // A quality floor met by one part stops every part before that iteration.
