@@ -155,10 +155,9 @@ absl::Status LegacyParser::ReadInts(int64_t count, absl::string_view type, absl:
     out.resize(count);
     const size_t bad = ScalarsToInt64s(*bytes, *scalar, ByteOrder::kBig, count, out.data());
     if (bad != static_cast<size_t>(count)) {
-      const size_t size = VtkScalarSize(*scalar);
-      double value = 0.0;
-      ScalarsToDoubles(bytes->substr(bad * size, size), *scalar, ByteOrder::kBig, 1, &value);
-      return in_.Error(absl::StrCat(what, ": value ", bad, " is ", value, ", not an integer"));
+      return in_.Error(absl::StrCat(what, ": value ", bad, " is ",
+                                    ScalarAt(*bytes, *scalar, ByteOrder::kBig, bad),
+                                    ", not an integer"));
     }
     return absl::OkStatus();
   }
@@ -391,18 +390,18 @@ absl::Status LegacyParser::ReadAttribute(const std::string& keyword, int64_t n,
   if (keyword == "vectors" || keyword == "normals") width = 3;
   if (keyword == "tensors") width = 9;
   if (keyword == "tensors6") width = 6;
-  if (width > 0) {
+  if (width > 0 || keyword == "texture_coordinates" || keyword == "color_scalars") {
+    // A named attribute this reader does not keep.
     absl::StatusOr<absl::string_view> name = in_.Token("the attribute name");
     if (!name.ok()) return name.status();
     dropped_.push_back(DroppedArray(point_section, Unescape(*name)));
+  }
+  if (width > 0) {
     absl::StatusOr<absl::string_view> type = in_.Token("the attribute type");
     if (!type.ok()) return type.status();
     return SkipValues(n * width, std::string(*type), keyword);
   }
   if (keyword == "texture_coordinates") {
-    absl::StatusOr<absl::string_view> name = in_.Token("the attribute name");
-    if (!name.ok()) return name.status();
-    dropped_.push_back(DroppedArray(point_section, Unescape(*name)));
     absl::StatusOr<int64_t> dim = in_.IntIn("the attribute width", 1, 16);
     if (!dim.ok()) return dim.status();
     absl::StatusOr<absl::string_view> type = in_.Token("the attribute type");
@@ -411,9 +410,6 @@ absl::Status LegacyParser::ReadAttribute(const std::string& keyword, int64_t n,
   }
   if (keyword == "color_scalars") {
     // Floats in ASCII files, unsigned chars in binary ones.
-    absl::StatusOr<absl::string_view> name = in_.Token("the attribute name");
-    if (!name.ok()) return name.status();
-    dropped_.push_back(DroppedArray(point_section, Unescape(*name)));
     absl::StatusOr<int64_t> dim = in_.IntIn("the attribute width", 1, 16);
     if (!dim.ok()) return dim.status();
     return SkipValues(n * *dim, binary_ ? "unsigned_char" : "float", keyword);

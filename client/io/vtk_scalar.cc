@@ -133,6 +133,13 @@ void ScalarsToDoubles(absl::string_view bytes, VtkScalar type, ByteOrder order, 
   });
 }
 
+double ScalarAt(absl::string_view bytes, VtkScalar type, ByteOrder order, size_t index) {
+  const size_t size = VtkScalarSize(type);
+  double value = 0.0;
+  ScalarsToDoubles(bytes.substr(index * size, size), type, order, 1, &value);
+  return value;
+}
+
 size_t ScalarsToInt64s(absl::string_view bytes, VtkScalar type, ByteOrder order, size_t count,
                        int64_t* out) {
   return Dispatch(type, [&](auto v) {

@@ -43,6 +43,9 @@ std::optional<VtkScalar> VtkScalarFromLegacy(absl::string_view name);
 void ScalarsToDoubles(absl::string_view bytes, VtkScalar type, ByteOrder order, size_t count,
                       double* out);
 
+// Value `index` of such bytes, as a double (for messages naming a bad value).
+double ScalarAt(absl::string_view bytes, VtkScalar type, ByteOrder order, size_t index);
+
 // Same into int64. Floating-point values must be whole numbers within +-2^62; returns the index
 // of the first value that is not (or that is an unsigned 64-bit value above INT64_MAX), or
 // `count` when all converted.

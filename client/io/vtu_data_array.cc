@@ -258,11 +258,8 @@ absl::StatusOr<std::vector<int64_t>> VtuArrayReader::Int64s(pugi::xml_node array
   const size_t bad = ScalarsToInt64s(*bytes, *type, enc_.order, count, out.data());
   if (bad != count) {
     // The value itself, not only its position: a float label array of 3.5s said "value 0".
-    const size_t size = VtkScalarSize(*type);
-    double value = 0.0;
-    ScalarsToDoubles(absl::string_view(*bytes).substr(bad * size, size), *type, enc_.order, 1,
-                     &value);
-    return Error(array, absl::StrCat("value ", bad, " is ", value, ", not an integer"));
+    return Error(array, absl::StrCat("value ", bad, " is ",
+                                     ScalarAt(*bytes, *type, enc_.order, bad), ", not an integer"));
   }
   return out;
 }

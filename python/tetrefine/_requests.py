@@ -86,6 +86,14 @@ def flag(name, value):
     return bool(value)
 
 
+def whole_numbers(values):
+    """Mask of the entries of a float array that are whole numbers below 2**53 (exact in
+    float64), so that an integer cast keeps them; inf or 1e20 would wrap."""
+    whole = np.isfinite(values) & (np.abs(values) < _FLOAT64_EXACT_INTEGER)
+    whole[whole] = values[whole] == np.floor(values[whole])
+    return whole
+
+
 def as_array(name, value):
     """np.asarray(value), refusing ragged nested lists with a message naming the argument."""
     try:
@@ -157,10 +165,8 @@ class Inputs:
         if tets.dtype.kind not in "iu":
             if tets.dtype.kind != "f":
                 raise invalid("tets", f"expected integer vertex indices, got dtype {tets.dtype}")
-            # Float indices are taken when they are whole numbers; inf or 1e20 would wrap in
-            # the integer cast (and read as a negative vertex).
-            whole = np.isfinite(tets) & (np.abs(tets) < 2**53)
-            whole[whole] = tets[whole] == np.floor(tets[whole])
+            # Float indices are taken when they are whole numbers.
+            whole = whole_numbers(tets)
             if not whole.all():
                 t, corner = np.argwhere(~whole)[0]
                 raise invalid("tets", f"tet {t} corner {corner} is {tets[t, corner]}, not a "

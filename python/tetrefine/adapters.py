@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from tetrefine._requests import whole_numbers
 from tetrefine.errors import invalid
 
 # Relative size below which an off-diagonal affine entry counts as zero; the same rule as the
@@ -204,8 +205,7 @@ def _labels_of_block(name, block, array):
         raise invalid("mesh", f"cell data {name!r} has shape {labels.shape} on a block of "
                       f"{len(block.data)} tetra, expected one label per cell")
     if labels.dtype.kind == "f":
-        whole = np.isfinite(labels)
-        whole[whole] = labels[whole] == np.floor(labels[whole])
+        whole = whole_numbers(labels)
         if not whole.all():
             raise invalid("mesh", f"cell data {name!r} holds {labels[np.argmin(whole)]}, not a "
                           "whole number")
