@@ -68,8 +68,15 @@ absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
   if (iterations == root.end()) return FieldError("iterations", "missing");
   if (!iterations->is_array()) return FieldError("iterations", "expected an array");
   if (iterations->empty()) {
-    return FieldError("iterations",
-                      "empty: the run made no iteration, so there is no convergence to plot");
+    // A run that met epsilon (or its budget) before its first iteration: the input mesh is the
+    // result, one point at iteration 0. A pipeline plotting every run must not fail on it.
+    auto input = root.find("input");
+    if (input == root.end() || !input->is_object()) {
+      return FieldError("input", "missing: with no iteration, the plot needs input.tets");
+    }
+    absl::StatusOr<int64_t> tets = Count(*input, "tets", "input.tets");
+    if (!tets.ok()) return tets.status();
+    run.tets.push_back(*tets);
   }
   for (size_t i = 0; i < iterations->size(); ++i) {
     const Json& it = (*iterations)[i];

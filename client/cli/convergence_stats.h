@@ -17,7 +17,8 @@ struct ConvergenceRun {
   std::string scheme;       // options.scheme; empty when absent
   std::string stop_reason;  // empty when absent
   double epsilon = 0.0;     // options.epsilon, > 0
-  // Index i is iteration i: 0 is the input (iterations[0].initial_tets), i >= 1 the mesh after
+  // Index i is iteration i: 0 is the input (iterations[0].initial_tets, or input.tets when no
+  // iteration ran), i >= 1 the mesh after
   // iteration i (iterations[i - 1].final_tets).
   std::vector<int64_t> tets;
   // The largest edge-midpoint error of those meshes: iteration i's is measured at the start of
@@ -28,8 +29,9 @@ struct ConvergenceRun {
 };
 
 // Parses the JSON text. Errors name the missing or wrong field ("iterations[2].final_tets:
-// expected a whole number >= 0") or the JSON syntax error with its line and column; an empty
-// `iterations` array is an error too (nothing to plot). The caller prefixes the file name.
+// expected a whole number >= 0") or the JSON syntax error with its line and column. With an
+// empty `iterations` array (a run that stopped before its first iteration) the input mesh is the
+// one point: `tets` is {input.tets}. The caller prefixes the file name.
 absl::StatusOr<ConvergenceRun> ParseConvergenceRun(std::string_view json_text);
 
 // Reads and parses the file at `path`; every error starts with the path.

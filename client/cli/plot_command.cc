@@ -79,6 +79,8 @@ std::vector<std::string> Names(const PlotSettings& s, const std::vector<Converge
 }
 
 std::string ErrorText(const ConvergenceRun& run) {
+  // No error at all: a run cancelled before its first iteration.
+  if (run.max_error.empty()) return "unknown";
   return run.max_error.size() == run.tets.size()
              ? absl::StrFormat("%.4g -> %.4g", run.max_error.front(), run.max_error.back())
              : absl::StrFormat("%.4g -> ?", run.max_error.front());

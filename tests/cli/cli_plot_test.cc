@@ -96,7 +96,9 @@ TEST(CliPlotStats, ErrorsNameTheField) {
       {R"({"options": {"epsilon": 0.1, "scheme": 3}})", "options.scheme: expected a string"},
       {R"({"options": {"epsilon": 0.1}})", "iterations: missing"},
       {R"({"options": {"epsilon": 0.1}, "iterations": {}})", "iterations: expected an array"},
-      {R"({"options": {"epsilon": 0.1}, "iterations": []})", "iterations: empty"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": []})", "input: missing"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [], "input": {"tets": -3}})",
+       "input.tets: expected a whole number >= 0, got -3"},
       {R"({"options": {"epsilon": 0.1}, "iterations": [3]})", "iterations[0]: expected an object"},
       {R"({"options": {"epsilon": 0.1}, "iterations": [{"final_tets": 8, "max_error": 1}]})",
        "iterations[0].initial_tets: missing"},
@@ -262,6 +264,52 @@ TEST(CliPlot, ReadsWhatRefineWritesAtTheDefaultSize) {
   EXPECT_LE(stats->max_error.back(), 0.05);  // converged
 }
 
+// A run that met epsilon before its first iteration (epsilon 10 is above any relative error):
+// one point, at iteration 0, in both panels; a cancelled one has no error.
+TEST(CliPlot, ARunWithNoIterationIsOnePoint) {
+  ScratchDir dir;
+  WriteVolume(dir.File("v.nii"), BumpVolume({9, 9, 9}, {0, 0, 0}, {1, 1, 1}));
+  WriteMeshFile(dir.File("m.vtu"), testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
+  const ProcessResult refine = RunTetrefine(
+      {"refine", "--volume", dir.File("v.nii"), "--mesh", dir.File("m.vtu"), "--epsilon", "10",
+       "--output", dir.File("r.vtu"), "--stats-json", dir.File("s.json"), "--quiet"});
+  ASSERT_EQ(refine.exit_code, 0) << refine.err;
+  absl::StatusOr<ConvergenceRun> stats = cli::ReadConvergenceRun(dir.File("s.json"));
+  ASSERT_TRUE(stats.ok()) << stats.status();
+  EXPECT_EQ(stats->tets, (std::vector<int64_t>{40}));
+  ASSERT_EQ(stats->max_error.size(), 1u);
+  EXPECT_GT(stats->max_error[0], 0.0);
+  EXPECT_EQ(stats->stop_reason, "converged");
+
+  const ProcessResult run = RunTetrefine({"plot", "--stats-json", dir.File("s.json"), "--output",
+                                          dir.File("c.png"), "--width", "800", "--height", "360"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.out, "): 0 iterations, tets 40 -> 40, ")) << run.out;
+  absl::StatusOr<Image> image = DecodePng(ReadBytes(dir.File("c.png")));
+  ASSERT_TRUE(image.ok()) << image.status();
+  render::ConvergenceOptions options;
+  options.width = 800;
+  options.height = 360;
+  options.epsilons = {10.0};
+  const std::vector<render::ConvergenceSeries> series = {{"", stats->max_error, {40}}};
+  absl::StatusOr<render::ConvergenceLayout> layout = render::LayoutConvergencePlot(series, options);
+  ASSERT_TRUE(layout.ok()) << layout.status();
+  EXPECT_EQ(image->At(static_cast<int>(std::floor(layout->tets.X(0))),
+                      static_cast<int>(std::floor(layout->tets.Y(40)))),
+            render::SeriesColour(0));
+
+  WriteBytes(dir.File("cancelled.json"),
+             R"({"options": {"epsilon": 0.1}, "input": {"tets": 7}, "iterations": [],
+                 "stop_reason": "cancelled", "final_max_error": 0.3})");
+  const ProcessResult cancelled = RunTetrefine(
+      {"plot", "--stats-json", dir.File("cancelled.json"), "--output", dir.File("d.png")});
+  ASSERT_EQ(cancelled.exit_code, 0) << cancelled.err;
+  EXPECT_TRUE(absl::StrContains(cancelled.out,
+                                "0 iterations, tets 7 -> 7, max edge-midpoint "
+                                "error unknown, cancelled"))
+      << cancelled.out;
+}
+
 struct BadCase {
   std::string name;
   std::vector<std::string> args;  // "$D/" is replaced by the scratch directory
@@ -332,7 +380,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"missing_file", Plot("$D/none.json"), "$D/none.json"},
         BadCase{"bad_json", Plot("$D/bad.json"),
                 "$D/bad.json: not valid JSON: parse error at line 2"},
-        BadCase{"no_iterations", Plot("$D/empty.json"), "$D/empty.json: iterations: empty"},
+        BadCase{"no_iterations_no_input", Plot("$D/empty.json"),
+                "$D/empty.json: input: missing: with no iteration"},
         BadCase{"no_epsilon", Plot("$D/no_eps.json"), "$D/no_eps.json: options.epsilon: missing"},
         BadCase{"second_file_bad", Plot("$D/a.json", {"--stats-json", "$D/bad.json"}),
                 "$D/bad.json: not valid JSON"},
