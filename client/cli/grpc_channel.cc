@@ -1,8 +1,13 @@
 #include "client/cli/grpc_channel.h"
 
+#include <algorithm>
+
 #include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
+#include "absl/strings/strip.h"
 #include "client/io/file_bytes.h"
 #include "grpcpp/create_channel.h"
 #include "grpcpp/security/credentials.h"
@@ -68,9 +73,51 @@ absl::StatusOr<std::string> TokenFromArgs(const ParsedArgs& args) {
   return absl::InvalidArgumentError(absl::StrCat(*path, ": no token in it (--token-file)"));
 }
 
+absl::Status CheckTargetPorts(const std::string& address) {
+  absl::string_view rest = address;
+  // Only the resolvers that take host:port lists; unix:, vsock: and the like have no port.
+  bool list = false;
+  if (absl::ConsumePrefix(&rest, "dns:")) {
+    if (absl::ConsumePrefix(&rest, "//")) {  // dns://authority/host:port
+      const size_t slash = rest.find('/');
+      rest = slash == absl::string_view::npos ? absl::string_view() : rest.substr(slash + 1);
+    }
+  } else if (absl::ConsumePrefix(&rest, "ipv4:") || absl::ConsumePrefix(&rest, "ipv6:")) {
+    list = true;
+  } else if (rest.find("://") != absl::string_view::npos || absl::StartsWith(rest, "unix:") ||
+             absl::StartsWith(rest, "unix-abstract:") || absl::StartsWith(rest, "vsock:")) {
+    return absl::OkStatus();
+  }
+  const std::vector<absl::string_view> host_ports =
+      list ? absl::StrSplit(rest, ',') : std::vector<absl::string_view>{rest};
+  for (absl::string_view host_port : host_ports) {
+    absl::string_view port;
+    if (absl::StartsWith(host_port, "[")) {
+      const size_t close = host_port.find("]:");
+      if (close == absl::string_view::npos) continue;
+      port = host_port.substr(close + 2);
+    } else {
+      const size_t colon = host_port.find(':');
+      // No colon: gRPC's default port; two or more: a bare IPv6 address.
+      if (colon == absl::string_view::npos || host_port.find(':', colon + 1) != host_port.npos) {
+        continue;
+      }
+      port = host_port.substr(colon + 1);
+    }
+    if (port.empty() || !std::all_of(port.begin(), port.end(), absl::ascii_isdigit)) continue;
+    int number = 0;
+    if (port.size() > 5 || !absl::SimpleAtoi(port, &number) || number < 1 || number > 65535) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("--server: port ", port, " of '", address, "' is out of range (1-65535)"));
+    }
+  }
+  return absl::OkStatus();
+}
+
 absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
                                                            const TlsFiles& tls) {
   if (address.empty()) return absl::InvalidArgumentError("--server: empty address");
+  if (absl::Status ports = CheckTargetPorts(address); !ports.ok()) return ports;
   grpc::ChannelArguments args;
   // Response chunks are at most 3 MiB, so the default 4 MiB receive limit suffices; say so
   // explicitly rather than depend on the default.

@@ -31,8 +31,14 @@ FlagSpec TokenFlagSpec();
 // Errors name the file: unreadable (NOT_FOUND), empty or holding spaces (INVALID_ARGUMENT).
 absl::StatusOr<std::string> TokenFromArgs(const ParsedArgs& args);
 
+// Checks the numeric port of each host:port in a gRPC target ("host:port", "[::1]:port",
+// "dns:///host:port", "ipv4:a:p,b:p"): 1-65535. gRPC itself takes 70000 modulo 65536 and
+// connects to port 4464, somebody else's. Targets without a numeric port (unix:/path, a bare
+// IPv6 address, a named port) pass. The error names the target and the port.
+absl::Status CheckTargetPorts(const std::string& address);
+
 // A channel to `address` (host:port, or any gRPC target such as unix:/path), plain or TLS.
-// Errors: an unreadable PEM file, named with its flag.
+// Errors: a port out of range (CheckTargetPorts), an unreadable PEM file, named with its flag.
 absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
                                                            const TlsFiles& tls);
 

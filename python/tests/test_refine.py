@@ -294,6 +294,16 @@ def test_client_misuse_is_a_tetrefine_error(server):
         tetrefine.Client(None)
     with pytest.raises(tetrefine.TetrefineError, match="token: must be a string of printable"):
         tetrefine.Client(server.target, token="a\nb")
+    # gRPC would connect to port 70000 - 65536 = 4464.
+    for target, port in (("127.0.0.1:70000", "70000"), ("localhost:0", "0"),
+                         ("dns:///refiner.local:123456", "123456"),
+                         ("ipv4:10.0.0.1:1,10.0.0.2:99999", "99999"), ("[::1]:65536", "65536")):
+        with pytest.raises(tetrefine.TetrefineError,
+                           match=rf"target: port {port} of .* is out of range \(1-65535\)"):
+            tetrefine.Client(target)
+    for target in ("127.0.0.1:65535", "dns://8.8.8.8/refiner:443", "[::1]:1", "::1",
+                   "unix:/tmp/socket:99999", "refiner.local", "host:http"):
+        tetrefine.Client(target).close()
     closed = tetrefine.Client(server.target)
     closed.close()
     with pytest.raises(tetrefine.TetrefineError) as error:

@@ -75,6 +75,31 @@ def _timeout(value):
     return None if seconds > _NO_LIMIT_SECONDS else seconds
 
 
+def _check_target_ports(target):
+    """Refuses a numeric port outside 1-65535 in a host:port target (also "[v6]:port",
+    "dns:///host:port", "ipv4:a:p,b:p"): gRPC takes 70000 modulo 65536 and connects to port
+    4464, somebody else's. Targets without a numeric port (unix:/path, a bare IPv6 address, a
+    named port) pass. The same rule as the CLI's --server (client/cli/grpc_channel.cc)."""
+    rest, is_list = target, False
+    if rest.startswith("dns:"):
+        rest = rest[4:]
+        if rest.startswith("//"):  # dns://authority/host:port
+            rest = rest[2:].partition("/")[2]
+    elif rest.startswith(("ipv4:", "ipv6:")):
+        rest, is_list = rest[5:], True
+    elif "://" in rest or rest.startswith(("unix:", "unix-abstract:", "vsock:")):
+        return
+    for host_port in rest.split(",") if is_list else [rest]:
+        if host_port.startswith("["):
+            port = host_port.partition("]:")[2]
+        elif host_port.count(":") == 1:
+            port = host_port.partition(":")[2]
+        else:  # no port (gRPC's default), or a bare IPv6 address
+            continue
+        if port and port.isascii() and port.isdigit() and not 1 <= int(port) <= 65535:
+            raise invalid("target", f"port {port} of {target!r} is out of range (1-65535)")
+
+
 class Client:
     """A connection to one tetrefine_server.
 
@@ -93,6 +118,7 @@ class Client:
     def __init__(self, target, *, tls=None, token=None):
         if not isinstance(target, str) or not target:
             raise invalid("target", f"expected a \"host:port\" string, got {target!r}")
+        _check_target_ports(target)
         if token is not None and (not isinstance(token, str) or
                                   not all(" " <= c <= "~" for c in token)):
             # gRPC refuses such metadata only when a call starts, with a ValueError.

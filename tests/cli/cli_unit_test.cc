@@ -12,6 +12,7 @@
 #include "client/cli/arg_parser.h"
 #include "client/cli/file_kind.h"
 #include "client/cli/grid_mesher.h"
+#include "client/cli/grpc_channel.h"
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_report.h"
 #include "client/cli/text_table.h"
@@ -107,6 +108,29 @@ TEST(CliArgParser, Numbers) {
   EXPECT_EQ(*ParseInteger("n", "12", 0, 100), 12);
   for (const char* bad : {"", "1.5", "x", "-1", "101", "99999999999999999999"}) {
     EXPECT_FALSE(ParseInteger("n", bad, 0, 100).ok()) << "'" << bad << "'";
+  }
+}
+
+TEST(CliGrpcChannel, PortsOutsideOneTo65535AreRefusedNamingTheTarget) {
+  for (const std::string target :
+       {"127.0.0.1:50051", "localhost:1", "host:65535", "dns:///refiner.local:50051",
+        "dns://8.8.8.8/refiner:443", "ipv4:10.0.0.1:1,10.0.0.2:2", "[::1]:50051", "::1",
+        "ipv6:[::1]:8080", "unix:/tmp/socket:99999", "unix-abstract:x", "vsock:3:70000",
+        "refiner.local", "host:http"}) {
+    EXPECT_TRUE(cli::CheckTargetPorts(target).ok()) << target;
+  }
+  for (const auto& [target, port] :
+       std::vector<std::pair<std::string, std::string>>{{"127.0.0.1:70000", "70000"},
+                                                        {"localhost:0", "0"},
+                                                        {"host:65536", "65536"},
+                                                        {"host:0050051", "0050051"},
+                                                        {"dns:///refiner.local:123456", "123456"},
+                                                        {"ipv4:10.0.0.1:1,10.0.0.2:99999", "99999"},
+                                                        {"[::1]:65536", "65536"}}) {
+    const absl::Status status = cli::CheckTargetPorts(target);
+    EXPECT_TRUE(absl::IsInvalidArgument(status)) << target;
+    EXPECT_EQ(status.message(),
+              "--server: port " + port + " of '" + target + "' is out of range (1-65535)");
   }
 }
 
