@@ -36,6 +36,21 @@ std::string TemporaryNameFor(const std::string& path) {
   return (target.parent_path() / name).string();
 }
 
+// The file a write to `path` should replace: the end of its chain of symbolic links. Renaming
+// over the link itself would turn it into a regular file and leave its target stale, where
+// `cat > link` or an editor writes through it. A dangling link names the file to create. Loops
+// (more than 40 links, the kernel's own limit) are left to the open to report.
+std::filesystem::path FileBehindLinks(const std::string& path) {
+  std::filesystem::path target(path);
+  std::error_code ec;
+  for (int hops = 0; hops < 40 && std::filesystem::is_symlink(target, ec); ++hops) {
+    std::filesystem::path next = std::filesystem::read_symlink(target, ec);
+    if (ec) break;
+    target = next.is_absolute() ? next : target.parent_path() / next;
+  }
+  return target;
+}
+
 }  // namespace
 
 absl::StatusOr<std::string> ReadFileBytes(const std::string& path) {
@@ -129,7 +144,8 @@ absl::StatusOr<std::string> ReadFileMaybeGzip(const std::string& path) {
 }
 
 absl::Status WriteFileAtomically(const std::string& path, absl::string_view content) {
-  const std::string temporary = TemporaryNameFor(path);
+  const std::string destination = FileBehindLinks(path).string();
+  const std::string temporary = TemporaryNameFor(destination);
   std::FILE* file = std::fopen(temporary.c_str(), "wb");
   if (file == nullptr) return ErrnoError(path, "cannot create temporary file", errno);
   const bool written = std::fwrite(content.data(), 1, content.size(), file) == content.size();
@@ -142,7 +158,7 @@ absl::Status WriteFileAtomically(const std::string& path, absl::string_view cont
     std::remove(temporary.c_str());
     return ErrnoError(path, "write failed", err);
   }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+  if (std::rename(temporary.c_str(), destination.c_str()) != 0) {
     err = errno;
     std::remove(temporary.c_str());
     return ErrnoError(path, "cannot rename temporary file into place", err);

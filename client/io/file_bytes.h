@@ -38,7 +38,8 @@ absl::StatusOr<std::string> ReadFileMaybeGzip(const std::string& path);
 
 // Writes `content` to a temporary file in the same directory as `path`, then renames it over
 // `path`. rename() within a directory is atomic on POSIX, so readers see either the old file or
-// the complete new one, and a failed write never leaves half a file behind.
+// the complete new one, and a failed write never leaves half a file behind. A symbolic link at
+// `path` stays a link: the file it points to (through any chain of links) is the one replaced.
 absl::Status WriteFileAtomically(const std::string& path, absl::string_view content);
 
 }  // namespace tetrefine::io

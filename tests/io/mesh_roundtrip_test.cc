@@ -293,6 +293,39 @@ TEST(IoMeshTest, FailedWriteLeavesOldFileAndNoTemporary) {
   EXPECT_EQ(files, 1);
 }
 
+// A user who keeps `latest.vtu -> runs/7/out.vtu` expects a write to latest.vtu to land in
+// runs/7/out.vtu, as `cat >` or an editor would; renaming over the link replaced it with a
+// regular file and left its target stale. Chains of links, relative and absolute, and a
+// dangling link (the file it names is created) all write through.
+TEST(IoMeshTest, WritingThroughASymbolicLinkKeepsTheLink) {
+  ScratchDir dir;
+  std::filesystem::create_directory(dir.File("runs"));
+  const MeshFile first = RandomMesh(1);
+  const MeshFile second = RandomMesh(2);
+  ASSERT_TRUE(WriteMesh(dir.File("runs/out.vtu"), first).ok());
+  std::filesystem::create_symlink("runs/out.vtu", dir.File("middle.vtu"));          // relative
+  std::filesystem::create_symlink(dir.File("middle.vtu"), dir.File("latest.vtu"));  // absolute
+  ASSERT_TRUE(WriteMesh(dir.File("latest.vtu"), second).ok());
+  EXPECT_TRUE(std::filesystem::is_symlink(dir.File("latest.vtu")));
+  EXPECT_TRUE(std::filesystem::is_symlink(dir.File("middle.vtu")));
+  absl::StatusOr<MeshFile> back = ReadMesh(dir.File("runs/out.vtu"));
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->mesh.tets, second.mesh.tets);
+
+  std::filesystem::create_symlink("runs/new.vtu", dir.File("dangling.vtu"));
+  ASSERT_TRUE(WriteMesh(dir.File("dangling.vtu"), first).ok());
+  EXPECT_TRUE(std::filesystem::is_symlink(dir.File("dangling.vtu")));
+  back = ReadMesh(dir.File("runs/new.vtu"));
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->mesh.tets, first.mesh.tets);
+  // No temporary left beside the link or the target.
+  for (const char* sub : {"", "runs"}) {
+    for (const auto& entry : std::filesystem::directory_iterator(dir.File(sub))) {
+      EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
+    }
+  }
+}
+
 TEST(IoMeshTest, UnknownExtensionNamesTheFile) {
   for (const char* name : {"mesh.obj", "mesh.vtu.bak", "mesh"}) {
     EXPECT_THAT(std::string(ReadMesh(name).status().message()), HasSubstr(name));
