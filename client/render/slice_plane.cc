@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 
 namespace tetrefine::render {
 namespace {
@@ -43,14 +44,20 @@ absl::StatusOr<SlicePlane> MakeSlicePlane(const Volume& volume, int axis, double
   const std::array<Vec3, 2> box = WorldBounds(volume.grid(), index_lo, index_hi);
   const Vec3& lo = box[0];
   const Vec3& hi = box[1];
-  if (!(position >= lo[axis] && position <= hi[axis])) {
-    return absl::InvalidArgumentError(absl::StrCat("--position: ", position,
-                                                   " mm is outside the volume's ", kAxisNames[axis],
-                                                   " range [", lo[axis], ", ", hi[axis], "] mm"));
+  // An oblique grid's box edge is a rounded product (32 - 4e-15 where the user reads 32), so a
+  // position typed from `info` or from the range below must not be refused at the edge: within
+  // a billionth of the coordinates' size it is the edge. Beyond, the range is printed with
+  // enough digits to tell it from the position.
+  const double slack =
+      1e-9 * std::max({std::abs(lo[axis]), std::abs(hi[axis]), hi[axis] - lo[axis], 1e-300});
+  if (!(position >= lo[axis] - slack && position <= hi[axis] + slack)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("--position: %.10g mm is outside the volume's %s range [%.10g, %.10g] mm",
+                        position, kAxisNames[axis], lo[axis], hi[axis]));
   }
   SlicePlane plane;
   plane.axis = axis;
-  plane.position = position;
+  plane.position = std::clamp(position, lo[axis], hi[axis]);
   plane.u_axis = axis == 0 ? 1 : 0;
   plane.v_axis = axis == 2 ? 1 : 2;
   plane.u_lo = lo[plane.u_axis];

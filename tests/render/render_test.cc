@@ -205,6 +205,16 @@ TEST(SampleSlice, AnObliqueGridIsCutInItsWorldBoundsAndBlankOutside) {
   EXPECT_NEAR(plane->u_lo, 3 - 10 * s, 1e-12);
   EXPECT_NEAR(plane->u_hi, 3 + 10 * c, 1e-12);
   EXPECT_NEAR(plane->v_hi, -2 + 10 * (s + c), 1e-12);
+  // The box's edge as a user types it (the rounded value) is on the edge, not outside it; a
+  // position past it is refused with digits enough to see by how much.
+  const double x_hi = 3 + 10 * c;
+  for (double typed : {x_hi, std::nextafter(x_hi, 100.0), x_hi + 1e-12, x_hi - 1e-12}) {
+    absl::StatusOr<SlicePlane> edge = MakeSlicePlane(volume, 0, typed, 60);
+    ASSERT_TRUE(edge.ok()) << edge.status();
+    EXPECT_LE(edge->position, plane->u_hi);
+  }
+  EXPECT_EQ(MakeSlicePlane(volume, 0, x_hi + 1e-6, 60).status().message(),
+            "--position: 11.66025504 mm is outside the volume's x range [-2, 11.66025404] mm");
   const SliceSamples samples = SampleSlice(volume, mesh, *plane, 100.0);
   int inside = 0, outside = 0;
   for (size_t i = 0; i < samples.trilinear.size(); ++i) {
