@@ -51,6 +51,9 @@ struct RefineCallbacks {
   // The summary has arrived: the response is complete (`bytes`: the serialized size of the
   // messages from the final mesh's header to the summary).
   std::function<void(int64_t bytes)> on_result_received;
+  // Something the caller should be told that did not stop the call: a sharded run's part that
+  // failed on one server and was retried on another (client/sharding). One line, no prefix.
+  std::function<void(const std::string& message)> on_warning;
 };
 
 struct CallOptions {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -13,17 +14,27 @@ namespace tetrefine::cli {
 namespace {
 
 // The request chunk size for the servers behind `channels`: what the smallest of their message
-// limits allows. A server without GetServerInfo (UNIMPLEMENTED) gets the default.
+// limits allows. A server without GetServerInfo (UNIMPLEMENTED) gets the default. With
+// `unreachable` set (a sharded run, whose parts move to the next server when one is down), an
+// UNAVAILABLE server is passed to it and skipped, unless no server answers at all.
 absl::StatusOr<size_t> ChunkBytesForServers(
-    const std::vector<std::shared_ptr<grpc::Channel>>& channels, const std::string& token) {
+    const std::vector<std::shared_ptr<grpc::Channel>>& channels, const std::string& token,
+    const std::function<void(size_t index, const absl::Status& status)>& unreachable = nullptr) {
   size_t chunk = client::CallOptions{}.chunk_bytes;
-  for (const std::shared_ptr<grpc::Channel>& channel : channels) {
+  std::vector<std::pair<size_t, absl::Status>> down;
+  for (size_t i = 0; i < channels.size(); ++i) {
     absl::StatusOr<client::ServerInfo> info = client::GetServerInfo(
-        channel, std::chrono::system_clock::now() + std::chrono::seconds(30), token);
+        channels[i], std::chrono::system_clock::now() + std::chrono::seconds(30), token);
+    if (unreachable && absl::IsUnavailable(info.status())) {
+      down.emplace_back(i, info.status());
+      continue;
+    }
     if (absl::IsUnimplemented(info.status())) continue;
     if (!info.ok()) return info.status();
     chunk = std::min(chunk, client::ChunkBytesFor(info->limits.max_message_bytes, chunk));
   }
+  if (!down.empty() && down.size() == channels.size()) return down.back().second;
+  for (const auto& [index, status] : down) unreachable(index, status);
   return chunk;
 }
 
@@ -70,9 +81,13 @@ class EmbeddedBackend : public ChannelBackend {
 // unsharded one (client/sharding/sharded_refine.h).
 class ShardedBackend : public RefineBackend {
  public:
-  ShardedBackend(std::string name, std::vector<std::shared_ptr<grpc::Channel>> channels, int shards,
+  ShardedBackend(std::string name, std::vector<std::string> addresses,
+                 std::vector<std::shared_ptr<grpc::Channel>> channels, int shards,
                  std::string token)
-      : name_(std::move(name)), channels_(std::move(channels)), shards_(shards) {
+      : name_(std::move(name)),
+        addresses_(std::move(addresses)),
+        channels_(std::move(channels)),
+        shards_(shards) {
     call_.bearer_token = std::move(token);
   }
 
@@ -81,24 +96,38 @@ class ShardedBackend : public RefineBackend {
   absl::StatusOr<client::ClientResult> Refine(const Volume& volume, const Mesh& mesh,
                                               const client::RefineRequestOptions& options,
                                               const client::RefineCallbacks& callbacks) override {
-    absl::StatusOr<size_t> chunk = ChunkBytesForServers(channels_, call_.bearer_token);
+    absl::StatusOr<size_t> chunk = AskServers(callbacks);
     if (!chunk.ok()) return chunk.status();
     call_.chunk_bytes = *chunk;
-    return sharding::RefineSharded(channels_, volume, mesh, options, shards_, callbacks, call_);
+    return sharding::RefineSharded(channels_, volume, mesh, options, shards_, callbacks, call_,
+                                   addresses_);
   }
 
   absl::StatusOr<sharding::ShardedResult> RefineInPieces(
       const Volume& volume, const Mesh& mesh, const client::RefineRequestOptions& options,
       const client::RefineCallbacks& callbacks) override {
-    absl::StatusOr<size_t> chunk = ChunkBytesForServers(channels_, call_.bearer_token);
+    absl::StatusOr<size_t> chunk = AskServers(callbacks);
     if (!chunk.ok()) return chunk.status();
     call_.chunk_bytes = *chunk;
     return sharding::RefineShardedInPieces(channels_, volume, mesh, options, shards_, callbacks,
-                                           call_);
+                                           call_, addresses_);
   }
 
  private:
+  // The chunk size every server takes. A replica that is down does not stop the run (its parts
+  // go to the others), but the operator is told which.
+  absl::StatusOr<size_t> AskServers(const client::RefineCallbacks& callbacks) {
+    return ChunkBytesForServers(
+        channels_, call_.bearer_token, [&](size_t i, const absl::Status& status) {
+          if (!callbacks.on_warning) return;
+          callbacks.on_warning(absl::StrCat(addresses_[i], " is unreachable (",
+                                            absl::StatusCodeToString(status.code()), ": ",
+                                            status.message(), "); its parts go to the others"));
+        });
+  }
+
   std::string name_;
+  std::vector<std::string> addresses_;  // parallel to channels_, for messages
   std::vector<std::shared_ptr<grpc::Channel>> channels_;
   int shards_;
   client::CallOptions call_;
@@ -130,10 +159,10 @@ std::unique_ptr<RefineBackend> MakeRemoteBackend(std::string address,
 
 absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice& choice) {
   if (choice.shards > 0) {
+    std::vector<std::string> addresses = absl::StrSplit(choice.server, ',', absl::SkipEmpty());
     std::vector<std::shared_ptr<grpc::Channel>> channels;
-    for (absl::string_view address : absl::StrSplit(choice.server, ',', absl::SkipEmpty())) {
-      absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-          MakeChannel(std::string(address), choice.tls);
+    for (const std::string& address : addresses) {
+      absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(address, choice.tls);
       if (!channel.ok()) return channel.status();
       channels.push_back(*std::move(channel));
     }
@@ -141,7 +170,7 @@ absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice
     return std::make_unique<ShardedBackend>(
         absl::StrCat(choice.shards, " shards over ", channels.size(), " server",
                      channels.size() == 1 ? "" : "s", " (", choice.server, ")"),
-        std::move(channels), choice.shards, choice.token);
+        std::move(addresses), std::move(channels), choice.shards, choice.token);
   }
   if (!choice.server.empty()) {
     absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(choice.server, choice.tls);

@@ -493,6 +493,8 @@ int RunRefinement(const RefineSettings& s) {
                                           WithQuality(m, tags));
     };
   }
+  // Printed even with --quiet: a server that failed mid-run is the operator's to look at.
+  callbacks.on_warning = [](const std::string& message) { PrintWarning(message); };
   InterruptGuard interrupt_guard;
   callbacks.should_cancel = [&] { return g_interrupted != 0 || !iteration_write.ok(); };
 

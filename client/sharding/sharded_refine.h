@@ -43,6 +43,12 @@ struct ShardOptions {
   // part's own tets. The default is what the scheme reads (sharding/halo_parts.h); a narrower
   // halo gives a different mesh, and exists for the test that shows it.
   int halo_rings = kHaloRings;
+  // Halo schemes: an iteration is cut into fewer parts than `shards` when that gives no server
+  // more than 10% more tets than `shards` parts would (HaloPartsFor in sharded_refine.cc). On a
+  // mesh small for `shards`, every halo holds most of the mesh, and K parts were K times the
+  // work of one for the same wall time. The result is the same either way; false always cuts
+  // `shards` parts (for tests of the halo merge).
+  bool fewer_parts_when_halos_overlap = true;
   // The result as the parts' own meshes (ShardedResult::pieces) instead of one merged mesh: a
   // .pvtu is written from them without the whole mesh ever being put together here. Under the
   // paper's scheme no merge happens at all; the halo schemes hold the whole mesh between their
@@ -56,6 +62,10 @@ struct ShardCallbacks {
   std::function<void(int part, int target, const IterationStats& stats)> on_part_iteration;
   // A part's call on targets[target] failed with a retryable `status`; it goes to next_target.
   std::function<void(int part, int target, const absl::Status& status, int next_target)> on_retry;
+  // The whole mesh's statistics of an iteration, on the calling thread: under the halo schemes
+  // as soon as the iteration is merged; under the paper's scheme, whose parts run every
+  // iteration in one call, once all parts are done.
+  std::function<void(const IterationStats& stats)> on_iteration;
   // Polled from several threads at once (it must be thread-safe); true cancels every call and
   // the run returns CANCELLED.
   std::function<bool()> should_cancel;
@@ -93,6 +103,9 @@ struct ShardedResult {
   // input's tets; input vertices used by no tet are in none.
   std::vector<RefinedMesh> pieces;
   std::vector<ShardReport> shards;
+  // Halo schemes: the parts each iteration was cut into (fewer than ShardOptions::shards where
+  // the halos overlapped); empty under the paper's scheme, whose parts run every iteration.
+  std::vector<int> parts_per_iteration;
   double split_seconds = 0.0;  // cutting the mesh into parts (here, before any call)
   double merge_seconds = 0.0;  // merging the parts' meshes and statistics
 };
@@ -131,19 +144,23 @@ absl::StatusOr<ShardedResult> ShardedRefine(
 // The same call shape as client::RefineViaService, for code built around it (the CLI's
 // RefineBackend): `shards` parts over `targets`, default ShardOptions with `call` as every
 // part's call options (chunk size, bearer token). callbacks.should_cancel cancels;
-// callbacks.on_iteration receives the combined statistics of each iteration once every part is
-// done (the parts' own iterations are not forwarded); on_mesh is UNIMPLEMENTED.
+// callbacks.on_iteration receives the whole mesh's statistics of each iteration as
+// ShardCallbacks::on_iteration does (the parts' own iterations are not forwarded);
+// callbacks.on_warning is told of each part retried on another server, naming both by
+// `target_names` (parallel to `targets`; "server k" when empty); on_mesh is UNIMPLEMENTED.
 absl::StatusOr<client::ClientResult> RefineSharded(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
-    const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {});
+    const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {},
+    const std::vector<std::string>& target_names = {});
 
 // As RefineSharded, with ShardOptions::keep_pieces: the whole ShardedResult, whose reply has no
 // mesh and whose pieces hold the result (for a .pvtu written piece by piece).
 absl::StatusOr<ShardedResult> RefineShardedInPieces(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
-    const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {});
+    const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {},
+    const std::vector<std::string>& target_names = {});
 
 // One channel per address ("host:port", or any gRPC target such as "dns:///name:port").
 std::vector<std::shared_ptr<grpc::Channel>> ChannelsFor(

@@ -52,6 +52,19 @@ class CliServer : public ::testing::Test {
 ServerProcess* CliServer::server_ = nullptr;
 std::string* CliServer::start_error_ = nullptr;
 
+// The tets of `m` by their corner positions, each sorted, in sorted order: equal for two meshes
+// with the same tets whatever their vertex numbering (a sharded result's is its own).
+std::vector<std::array<Vec3, 4>> SortedTets(const Mesh& m) {
+  std::vector<std::array<Vec3, 4>> out;
+  for (const Tet& t : m.tets) {
+    std::array<Vec3, 4> q = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
+    std::sort(q.begin(), q.end());
+    out.push_back(q);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 TEST_F(CliServer, RemoteRefineGivesTheEmbeddedResult) {
   const std::string remote = dir_.File("remote.vtu");
   const std::string embedded = dir_.File("embedded.vtu");
@@ -88,16 +101,7 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   ASSERT_EQ(RunTetrefine(args).exit_code, 0);
   absl::StatusOr<io::MeshFile> want = io::ReadMesh(embedded);
   ASSERT_TRUE(want.ok());
-  auto sorted_tets = [](const Mesh& m) {
-    std::vector<std::array<Vec3, 4>> out;
-    for (const Tet& t : m.tets) {
-      std::array<Vec3, 4> q = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
-      std::sort(q.begin(), q.end());
-      out.push_back(q);
-    }
-    std::sort(out.begin(), out.end());
-    return out;
-  };
+  const auto sorted_tets = SortedTets;
   for (const char* shards : {"2", "3"}) {
     const std::string sharded = dir_.File(std::string("sharded") + shards + ".vtu");
     args = common;
@@ -136,6 +140,46 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   const ProcessResult refused = RunTetrefine(args);
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_TRUE(absl::StartsWith(refused.err, "tetrefine: --every-iteration: ")) << refused.err;
+}
+
+// A replica that is down is worked around, and the operator is told, even with --quiet (a CLI
+// sweep found the retry silent). Each iteration's line comes as it is merged.
+TEST_F(CliServer, AShardedRunSaysWhichServerFailedAndWhereThePartWent) {
+  const std::string dead = absl::StrCat("127.0.0.1:", ClosedPort());
+  const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
+                                           mesh_,    "--epsilon", "0.05"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--output", dir_.File("embedded_retry.vtu")});
+  ASSERT_EQ(RunTetrefine(args).exit_code, 0);
+  args = common;
+  args.insert(args.end(), {"--server", server_->target() + "," + dead, "--output",
+                           dir_.File("retried.vtu"), "--quiet"});
+  ProcessResult run = RunTetrefine(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  // Once when the servers are asked for their limits, once per part that went there.
+  EXPECT_TRUE(
+      absl::StartsWith(run.err, "tetrefine: warning: " + dead + " is unreachable (UNAVAILABLE: "))
+      << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "); its parts go to the others\n")) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err,
+                                "tetrefine: warning: part 1 failed on " + dead + " (UNAVAILABLE: "))
+      << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "); retrying it on " + server_->target())) << run.err;
+  for (const std::string& line : SplitLines(run.err)) {
+    EXPECT_TRUE(absl::StartsWith(line, "tetrefine: warning: ")) << line;
+  }
+  absl::StatusOr<io::MeshFile> want = io::ReadMesh(dir_.File("embedded_retry.vtu"));
+  absl::StatusOr<io::MeshFile> got = io::ReadMesh(dir_.File("retried.vtu"));
+  ASSERT_TRUE(want.ok() && got.ok());
+  EXPECT_EQ(SortedTets(got->mesh), SortedTets(want->mesh));
+  // Without --quiet the iterations are reported one by one, before the parts are measured.
+  args.pop_back();
+  run = RunTetrefine(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const size_t first = run.err.find("tetrefine: iteration 1: ");
+  const size_t measured = run.err.find("tetrefine: parts refined and measured");
+  ASSERT_NE(first, std::string::npos) << run.err;
+  EXPECT_LT(first, measured) << run.err;
 }
 
 TEST_F(CliServer, ServerSideValidationErrorNamesTheMesh) {

@@ -61,6 +61,8 @@ class ShardedRefineTest : public ::testing::Test {
     sharding::ShardOptions shard;
     shard.shards = shards;
     shard.retry_backoff = std::chrono::milliseconds(20);
+    // Every iteration in `shards` parts, so that these small cases exercise the halo merge.
+    shard.fewer_parts_when_halos_overlap = false;
     absl::StatusOr<sharding::ShardedResult> r =
         sharding::ShardedRefine(channels_, volume, mesh, options, shard, callbacks);
     EXPECT_TRUE(r.ok()) << r.status();
@@ -107,6 +109,7 @@ class ShardedRefineTest : public ::testing::Test {
 sharding::ShardOptions Shards(int k) {
   sharding::ShardOptions shard;
   shard.shards = k;
+  shard.fewer_parts_when_halos_overlap = false;
   return shard;
 }
 
@@ -440,6 +443,57 @@ TEST_F(ShardedRefineTest, TheHaloIsWideEnoughAndANarrowOneIsNot) {
   } else {
     EXPECT_FALSE(SameTets(narrow->reply.result, whole.result))
         << "a one-ring halo gave the unsharded mesh: this case does not exercise the halo";
+  }
+}
+
+// Where every halo holds most of the mesh, an iteration goes in fewer parts (the largest at most
+// 10% above the largest of the requested cut), with the same result and the statistics of every
+// iteration reported as it is merged. A mesh long against the halo keeps the requested parts.
+TEST_F(ShardedRefineTest, OverlappingHalosAreSentAsFewerPartsWithTheSameResult) {
+  client::RefineRequestOptions options = Options(0.01, 3);
+  options.refine.orientation = OrientationPolicy::kNormalize;
+  options.refine.scheme = RefineScheme::kLongestEdge;
+  const UnitCubeCase cube;
+  const client::ClientResult whole = Unsharded(cube.volume, cube.mesh, options);
+  ASSERT_EQ(whole.result.iterations.size(), 3u);
+  for (const bool fewer : {true, false}) {
+    SCOPED_TRACE(fewer ? "fewer parts allowed" : "always 4 parts");
+    sharding::ShardOptions shard;
+    shard.shards = 4;
+    shard.fewer_parts_when_halos_overlap = fewer;
+    std::vector<IterationStats> reported;
+    sharding::ShardCallbacks callbacks;
+    callbacks.on_iteration = [&](const IterationStats& s) { reported.push_back(s); };
+    absl::StatusOr<sharding::ShardedResult> r =
+        sharding::ShardedRefine(channels_, cube.volume, cube.mesh, options, shard, callbacks);
+    ASSERT_TRUE(r.ok()) << r.status();
+    ExpectSameRefinement(cube.mesh, whole.result, r->reply.result);
+    // 1782 tets of a cube 10 tets across: 27 rings reach everything from any part.
+    const std::vector<int> expected_parts(3, fewer ? 1 : 4);
+    EXPECT_EQ(r->parts_per_iteration, expected_parts);
+    EXPECT_EQ(r->shards.size(), 4u) << "the measuring round keeps the requested parts";
+    ASSERT_EQ(reported.size(), 3u);
+    for (size_t i = 0; i < reported.size(); ++i) {
+      EXPECT_EQ(reported[i].final_tets, r->reply.result.iterations[i].final_tets);
+    }
+  }
+
+  // 200 x 2 x 2 cells (4000 tets): two halves plus 27 rings each hold about 64% of the mesh, and
+  // four quarters 52%; neither is within 10% of a coarser cut.
+  const Volume volume = TestVolume({202, 4, 4}, VoxelType::kInt16);
+  const Mesh mesh = FiveTetMesh({0.5, 0.5, 0.5}, {200.5, 2.5, 2.5}, {200, 2, 2});
+  client::RefineRequestOptions one = Options(0.05, 1);
+  one.refine.scheme = RefineScheme::kLongestEdge;
+  const client::ClientResult reference = Unsharded(volume, mesh, one);
+  for (const int k : {2, 4}) {
+    sharding::ShardOptions shard;
+    shard.shards = k;
+    absl::StatusOr<sharding::ShardedResult> r =
+        sharding::ShardedRefine(channels_, volume, mesh, one, shard);
+    ASSERT_TRUE(r.ok()) << r.status();
+    ExpectSameRefinement(mesh, reference.result, r->reply.result);
+    ASSERT_FALSE(r->parts_per_iteration.empty());
+    EXPECT_EQ(r->parts_per_iteration[0], k);
   }
 }
 
