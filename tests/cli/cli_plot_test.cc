@@ -240,14 +240,19 @@ TEST(CliPlot, TwoRunsMakeTwoPanelsWithTheirLinesAndTheEpsilonLine) {
   EXPECT_NE(centre(tets, 4, 20000), render::SeriesColour(0));
 }
 
-TEST(CliPlot, ReadsWhatRefineWritesAtTheDefaultSize) {
-  ScratchDir dir;
+// refine of the 40-tet grid in the bump volume at `epsilon`, its --stats-json in dir/s.json.
+void RefineWithStats(const ScratchDir& dir, const std::string& epsilon) {
   WriteVolume(dir.File("v.nii"), BumpVolume({9, 9, 9}, {0, 0, 0}, {1, 1, 1}));
   WriteMeshFile(dir.File("m.vtu"), testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
   const ProcessResult refine = RunTetrefine(
-      {"refine", "--volume", dir.File("v.nii"), "--mesh", dir.File("m.vtu"), "--epsilon", "0.05",
+      {"refine", "--volume", dir.File("v.nii"), "--mesh", dir.File("m.vtu"), "--epsilon", epsilon,
        "--output", dir.File("r.vtu"), "--stats-json", dir.File("s.json"), "--quiet"});
   ASSERT_EQ(refine.exit_code, 0) << refine.err;
+}
+
+TEST(CliPlot, ReadsWhatRefineWritesAtTheDefaultSize) {
+  ScratchDir dir;
+  RefineWithStats(dir, "0.05");
   const ProcessResult run =
       RunTetrefine({"plot", "--stats-json", dir.File("s.json"), "--output", dir.File("c.png")});
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -268,12 +273,7 @@ TEST(CliPlot, ReadsWhatRefineWritesAtTheDefaultSize) {
 // one point, at iteration 0, in both panels; a cancelled one has no error.
 TEST(CliPlot, ARunWithNoIterationIsOnePoint) {
   ScratchDir dir;
-  WriteVolume(dir.File("v.nii"), BumpVolume({9, 9, 9}, {0, 0, 0}, {1, 1, 1}));
-  WriteMeshFile(dir.File("m.vtu"), testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
-  const ProcessResult refine = RunTetrefine(
-      {"refine", "--volume", dir.File("v.nii"), "--mesh", dir.File("m.vtu"), "--epsilon", "10",
-       "--output", dir.File("r.vtu"), "--stats-json", dir.File("s.json"), "--quiet"});
-  ASSERT_EQ(refine.exit_code, 0) << refine.err;
+  RefineWithStats(dir, "10");
   absl::StatusOr<ConvergenceRun> stats = cli::ReadConvergenceRun(dir.File("s.json"));
   ASSERT_TRUE(stats.ok()) << stats.status();
   EXPECT_EQ(stats->tets, (std::vector<int64_t>{40}));

@@ -12,6 +12,7 @@
 #include "tests/cli/cli_test_util.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/geometry.h"
+#include "tests/support/mesh_checks.h"
 
 namespace tetrefine::clitest {
 namespace {
@@ -52,19 +53,6 @@ class CliServer : public ::testing::Test {
 ServerProcess* CliServer::server_ = nullptr;
 std::string* CliServer::start_error_ = nullptr;
 
-// The tets of `m` by their corner positions, each sorted, in sorted order: equal for two meshes
-// with the same tets whatever their vertex numbering (a sharded result's is its own).
-std::vector<std::array<Vec3, 4>> SortedTets(const Mesh& m) {
-  std::vector<std::array<Vec3, 4>> out;
-  for (const Tet& t : m.tets) {
-    std::array<Vec3, 4> q = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
-    std::sort(q.begin(), q.end());
-    out.push_back(q);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 TEST_F(CliServer, RemoteRefineGivesTheEmbeddedResult) {
   const std::string remote = dir_.File("remote.vtu");
   const std::string embedded = dir_.File("embedded.vtu");
@@ -101,7 +89,6 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   ASSERT_EQ(RunTetrefine(args).exit_code, 0);
   absl::StatusOr<io::MeshFile> want = io::ReadMesh(embedded);
   ASSERT_TRUE(want.ok());
-  const auto sorted_tets = SortedTets;
   for (const char* shards : {"2", "3"}) {
     const std::string sharded = dir_.File(std::string("sharded") + shards + ".vtu");
     args = common;
@@ -113,7 +100,8 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
         << run.err;
     absl::StatusOr<io::MeshFile> got = io::ReadMesh(sharded);
     ASSERT_TRUE(got.ok());
-    EXPECT_EQ(sorted_tets(got->mesh), sorted_tets(want->mesh)) << shards << " shards";
+    EXPECT_EQ(testing::GeometricTets(got->mesh), testing::GeometricTets(want->mesh))
+        << shards << " shards";
   }
   // The default scheme reads neighbouring tets: sharded one iteration at a time with halos, the
   // same mesh again.
@@ -130,8 +118,8 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   absl::StatusOr<io::MeshFile> want_default = io::ReadMesh(dir_.File("embedded_default.vtu"));
   absl::StatusOr<io::MeshFile> got_default = io::ReadMesh(dir_.File("sharded_default.vtu"));
   ASSERT_TRUE(want_default.ok() && got_default.ok());
-  EXPECT_EQ(sorted_tets(got_default->mesh), sorted_tets(want_default->mesh));
-  EXPECT_NE(sorted_tets(want_default->mesh), sorted_tets(want->mesh))
+  EXPECT_EQ(testing::GeometricTets(got_default->mesh), testing::GeometricTets(want_default->mesh));
+  EXPECT_NE(testing::GeometricTets(want_default->mesh), testing::GeometricTets(want->mesh))
       << "the default scheme gave the paper's mesh: this does not test it";
   // Sharding merges finished parts, so per-iteration meshes cannot be streamed.
   args = common;
@@ -171,7 +159,7 @@ TEST_F(CliServer, AShardedRunSaysWhichServerFailedAndWhereThePartWent) {
   absl::StatusOr<io::MeshFile> want = io::ReadMesh(dir_.File("embedded_retry.vtu"));
   absl::StatusOr<io::MeshFile> got = io::ReadMesh(dir_.File("retried.vtu"));
   ASSERT_TRUE(want.ok() && got.ok());
-  EXPECT_EQ(SortedTets(got->mesh), SortedTets(want->mesh));
+  EXPECT_EQ(testing::GeometricTets(got->mesh), testing::GeometricTets(want->mesh));
   // Without --quiet the iterations are reported one by one, before the parts are measured.
   args.pop_back();
   run = RunTetrefine(args);

@@ -263,18 +263,6 @@ Mesh Renumbered(const Mesh& m, std::mt19937_64& rng) {
   return out;
 }
 
-// Tets as sorted lists of corner positions: the mesh as geometry, free of numbering.
-std::vector<std::array<Vec3, 4>> GeometricTets(const Mesh& m) {
-  std::vector<std::array<Vec3, 4>> out;
-  for (const Tet& t : m.tets) {
-    std::array<Vec3, 4> q = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
-    std::sort(q.begin(), q.end());
-    out.push_back(q);
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 TEST_P(RefineEveryScheme, SameGeometryWhateverTheVertexNumbering) {
   // The structured mesh has many exactly equal diagonals, so the tie-break is exercised.
   const GridGeometry g = HeartGrid();
@@ -291,7 +279,8 @@ TEST_P(RefineEveryScheme, SameGeometryWhateverTheVertexNumbering) {
     std::mt19937_64 rng(seed);
     auto other = Refine(volume, Renumbered(mesh, rng), o);
     ASSERT_TRUE(other.ok());
-    EXPECT_EQ(GeometricTets(base->mesh), GeometricTets(other->mesh)) << "seed " << seed;
+    EXPECT_EQ(testing::GeometricTets(base->mesh), testing::GeometricTets(other->mesh))
+        << "seed " << seed;
     auto sorted_points = [](std::vector<Vec3> p) {
       std::sort(p.begin(), p.end());
       return p;

@@ -104,4 +104,15 @@ Mesh ReadMeditForTest(const std::string& path) {
   return m;
 }
 
+std::vector<std::array<Vec3, 4>> GeometricTets(const Mesh& m) {
+  std::vector<std::array<Vec3, 4>> out;
+  for (const Tet& t : m.tets) {
+    std::array<Vec3, 4> q = {m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]};
+    std::sort(q.begin(), q.end());
+    out.push_back(q);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 }  // namespace tetrefine::testing
