@@ -115,8 +115,13 @@ int Run(ShutdownSignals& signals) {
   }
   std::unique_ptr<grpc::Server> server = StartServer(config, &service, &builder, settings->server);
   if (server == nullptr || port == 0 || (!settings->local_listen.empty() && local_port == 0)) {
-    spdlog::error("cannot listen on {}{}", settings->listen,
-                  settings->local_listen.empty() ? "" : " and " + settings->local_listen);
+    spdlog::error(
+        "cannot listen on {}{}: the port is in use (by another process, or by both listeners), "
+        "the host is not this machine's{}",
+        settings->listen, settings->local_listen.empty() ? "" : " and " + settings->local_listen,
+        tls ? ", or the --tls_cert, --tls_key or --tls_client_ca PEM could not be loaded (gRPC's "
+              "lines above say which)"
+            : "");
     return 1;
   }
   const wire::ServiceLimits& l = config.limits;

@@ -8,7 +8,9 @@
 
 #include "absl/flags/flag.h"
 #include "absl/flags/usage_config.h"
+#include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
@@ -16,6 +18,9 @@
 
 namespace {
 const tetrefine::wire::ServiceLimits kDefaults;
+// Fewest output tets a call must be able to make for the server to start: below it the memory
+// budget is a misconfiguration (a few MiB), not a small server.
+constexpr int64_t kMinOutputTets = 10'000;
 }  // namespace
 
 // --- network -------------------------------------------------------------------------------
@@ -61,7 +66,7 @@ ABSL_FLAG(int64_t, max_input_tets, kDefaults.max_input_tets,
 ABSL_FLAG(int64_t, max_output_tets, 0,
           "Tet budget of a refinement: the default and largest max_tets (0: 50000000, or less "
           "when that many tets at --bytes_per_output_tet would not fit 90% of the memory "
-          "budget)");
+          "budget). A value that one call could not fit in the memory budget is refused");
 ABSL_FLAG(int64_t, max_message_bytes, kDefaults.max_message_bytes,
           "Largest request message accepted, in bytes (GetServerInfo tells clients)");
 ABSL_FLAG(int, max_iterations, kDefaults.max_iterations, "Largest max_iterations of a call");
@@ -99,9 +104,10 @@ ABSL_FLAG(int64_t, bytes_per_output_tet, tetrefine::server::kDefaultBytesPerOutp
           "for fragmentation)");
 
 // --- process ---------------------------------------------------------------------------------
-ABSL_FLAG(double, drain_seconds, 30.0,
-          "On SIGTERM/SIGINT, seconds in-flight calls may take to finish before being cancelled; "
-          "later signals during the drain are logged and ignored");
+ABSL_FLAG(
+    double, drain_seconds, 30.0,
+    "On SIGTERM/SIGINT/SIGHUP, seconds in-flight calls may take to finish before being cancelled; "
+    "later signals during the drain are logged and ignored");
 ABSL_FLAG(std::string, log_level, "info",
           "spdlog level: trace, debug, info, warn, error, off (logs go to stderr)");
 
@@ -116,6 +122,47 @@ bool IsLoopback(const std::string& address) {
 }
 
 bool Positive(double seconds) { return std::isfinite(seconds) && seconds > 0; }
+
+// The longest duration a flag takes: about 31 years. gRPC's and the standard library's clocks
+// count nanoseconds in 64 bits, so about 9.2e9 s overflows and the deadline lands in the past:
+// every call failed at once with DEADLINE_EXCEEDED (found by an operator sweep, with 1e10 meant
+// as "no limit").
+constexpr double kMaxSeconds = 1e9;
+
+absl::Status CheckSeconds(const char* name, double value, bool zero_allowed) {
+  const bool in_range =
+      std::isfinite(value) && (zero_allowed ? value >= 0 : value > 0) && value <= kMaxSeconds;
+  if (in_range) return absl::OkStatus();
+  return Invalid(absl::StrCat("--", name, ": must be ", zero_allowed ? ">= 0" : "> 0",
+                              " and at most 1e9 s (31 years), got ", value));
+}
+
+// host:port with a port 0-65535 ("[v6]:port" for IPv6). gRPC took 127.0.0.1:99999 as port
+// 34463, and a bare port for metrics bound every interface.
+absl::Status CheckListenAddress(const char* name, const std::string& address) {
+  absl::string_view port;
+  bool has_host = false;
+  if (absl::StartsWith(address, "[")) {
+    const size_t close = address.find("]:");
+    if (close != std::string::npos) {
+      has_host = close > 1;
+      port = absl::string_view(address).substr(close + 2);
+    }
+  } else if (const size_t colon = address.find(':');
+             colon != std::string::npos && address.find(':', colon + 1) == std::string::npos) {
+    has_host = colon > 0;
+    port = absl::string_view(address).substr(colon + 1);
+  }
+  int number = -1;
+  if (!has_host || port.empty() || port.size() > 5 ||
+      !std::all_of(port.begin(), port.end(), absl::ascii_isdigit) ||
+      !absl::SimpleAtoi(port, &number) || number > 65535) {
+    return Invalid(absl::StrCat("--", name, "=", address,
+                                ": expected host:port with a port 0-65535 (0: any free port; "
+                                "[addr]:port for IPv6)"));
+  }
+  return absl::OkStatus();
+}
 
 }  // namespace
 
@@ -137,6 +184,17 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   s.tls_client_ca = absl::GetFlag(FLAGS_tls_client_ca);
   s.drain_seconds = absl::GetFlag(FLAGS_drain_seconds);
   s.log_level = absl::GetFlag(FLAGS_log_level);
+  if (absl::Status valid = CheckListenAddress("listen", s.listen); !valid.ok()) return valid;
+  if (!s.local_listen.empty()) {
+    if (absl::Status valid = CheckListenAddress("local_listen", s.local_listen); !valid.ok()) {
+      return valid;
+    }
+  }
+  if (!s.metrics_listen.empty()) {
+    if (absl::Status valid = CheckListenAddress("metrics_listen", s.metrics_listen); !valid.ok()) {
+      return valid;
+    }
+  }
   if (!s.local_listen.empty() && !IsLoopback(s.local_listen)) {
     return Invalid(absl::StrCat("--local_listen=", s.local_listen,
                                 ": must be a loopback address (127.x.x.x:PORT, [::1]:PORT or "
@@ -159,8 +217,8 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
                              {"max_connection_idle_seconds", server.max_connection_idle_seconds}}) {
     if (!Positive(value)) return Invalid(absl::StrCat("--", name, ": must be > 0, got ", value));
   }
-  if (!(s.drain_seconds >= 0) || !std::isfinite(s.drain_seconds)) {
-    return Invalid(absl::StrCat("--drain_seconds: must be >= 0, got ", s.drain_seconds));
+  if (absl::Status valid = CheckSeconds("drain_seconds", s.drain_seconds, true); !valid.ok()) {
+    return valid;
   }
 
   ServiceConfig& service = s.service;
@@ -196,10 +254,10 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
                              {"input_deadline_seconds", l.input_deadline_seconds},
                              {"idle_timeout_seconds", l.idle_timeout_seconds},
                              {"write_stall_seconds", l.write_stall_seconds}}) {
-    if (!Positive(value)) return Invalid(absl::StrCat("--", name, ": must be > 0, got ", value));
+    if (absl::Status valid = CheckSeconds(name, value, false); !valid.ok()) return valid;
   }
-  if (!(l.queue_seconds >= 0) || !std::isfinite(l.queue_seconds)) {
-    return Invalid(absl::StrCat("--queue_seconds: must be >= 0, got ", l.queue_seconds));
+  if (absl::Status valid = CheckSeconds("queue_seconds", l.queue_seconds, true); !valid.ok()) {
+    return valid;
   }
 
   // Memory: the limit, the budget the calls share, and the tet budget that fits it.
@@ -229,11 +287,31 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   }
   l.max_output_tets = absl::GetFlag(FLAGS_max_output_tets);
   if (l.max_output_tets < 0) return Invalid("--max_output_tets: must be >= 0");
+  // A call that may reach the tet budget reserves it whole; when even one such call cannot fit
+  // the memory budget, every call with default options is refused (and a budget computed as 1
+  // tet returned every mesh unrefined): a server that cannot do its job must not start.
+  const int64_t fitting_tets = (l.memory_budget_bytes - call_floor) / l.bytes_per_output_tet;
   if (l.max_output_tets == 0) {
     // One call at the default budget must fit the whole memory budget with its input: a tenth
     // of the budget is left for the input (a 1.8 GiB budget takes a 180 MiB volume and mesh).
-    l.max_output_tets = std::clamp<int64_t>(
-        (l.memory_budget_bytes / 10 * 9 - call_floor) / l.bytes_per_output_tet, 1, 50'000'000);
+    l.max_output_tets = std::min<int64_t>(
+        (l.memory_budget_bytes / 10 * 9 - call_floor) / l.bytes_per_output_tet, 50'000'000);
+    if (l.max_output_tets < kMinOutputTets) {
+      return Invalid(absl::StrCat(
+          "the memory budget (", HumanBytes(l.memory_budget_bytes), ", from ", s.memory_source,
+          ") leaves room for ", std::max<int64_t>(0, l.max_output_tets),
+          " output tets a call at --bytes_per_output_tet=", l.bytes_per_output_tet, ", fewer than ",
+          kMinOutputTets, ": raise --memory_limit_bytes or --memory_budget_bytes"));
+    }
+  } else if (l.max_output_tets > fitting_tets) {
+    return Invalid(absl::StrCat("--max_output_tets=", l.max_output_tets,
+                                ": a call that reaches it needs ",
+                                HumanBytes(call_floor + l.max_output_tets * l.bytes_per_output_tet),
+                                " (", l.bytes_per_output_tet,
+                                " bytes a tet, --bytes_per_output_tet), more than the memory "
+                                "budget of ",
+                                HumanBytes(l.memory_budget_bytes), " (from ", s.memory_source,
+                                "): at most ", std::max<int64_t>(0, fitting_tets), " fit"));
   }
 
   // Identity.

@@ -15,6 +15,9 @@ sigset_t ShutdownSet() {
   sigemptyset(&set);
   sigaddset(&set, SIGINT);
   sigaddset(&set, SIGTERM);
+  // A closed terminal (or `kill -HUP`) used to kill the server at once, cutting off its calls:
+  // it drains like SIGTERM. Nothing is reloaded on it.
+  sigaddset(&set, SIGHUP);
   return set;
 }
 

@@ -8,16 +8,16 @@
 
 namespace tetrefine::server {
 
-// SIGTERM and SIGINT for a server that drains before it exits. Both are blocked in every thread
-// and taken by one thread of their own with sigwait: the first starts the drain (Wait returns
-// it), and every later one is logged and ignored, so a second Ctrl-C or an impatient
+// SIGTERM, SIGINT and SIGHUP for a server that drains before it exits. They are blocked in every
+// thread and taken by one thread of their own with sigwait: the first starts the drain (Wait
+// returns it), and every later one is logged and ignored, so a second Ctrl-C or an impatient
 // orchestrator cannot cut off the calls being drained; the drain's own deadline bounds it.
 class ShutdownSignals {
  public:
-  // Blocks SIGTERM and SIGINT in the calling thread, whose mask every thread it starts later
-  // inherits. Call first thing in main: gRPC starts its own threads on first use (even creating
-  // credentials does), and a thread that does not block the signals would die of the default
-  // action when the kernel picks it to take one.
+  // Blocks SIGTERM, SIGINT and SIGHUP in the calling thread, whose mask every thread it starts
+  // later inherits. Call first thing in main: gRPC starts its own threads on first use (even
+  // creating credentials does), and a thread that does not block the signals would die of the
+  // default action when the kernel picks it to take one.
   static void BlockInThisThread();
 
   // Starts the signal thread. BlockInThisThread must have run on this thread first.

@@ -169,8 +169,8 @@ TEST(AbuseTest, SignalsDuringTheDrainAreLoggedAndIgnored) {
 
   server->process().Signal(SIGTERM);
   ASSERT_TRUE(server->process().WaitForLine("draining", std::chrono::seconds(10)));
-  // An impatient operator: Ctrl-C twice, then SIGTERM three more times.
-  for (int s : {SIGINT, SIGINT, SIGTERM, SIGTERM, SIGTERM}) {
+  // An impatient operator: Ctrl-C twice, SIGTERM three more times, then closes the terminal.
+  for (int s : {SIGINT, SIGINT, SIGTERM, SIGTERM, SIGTERM, SIGHUP}) {
     server->process().Signal(s);
     std::this_thread::sleep_for(milliseconds(30));
   }
@@ -187,7 +187,7 @@ TEST(AbuseTest, SignalsDuringTheDrainAreLoggedAndIgnored) {
   for (const std::string& line : server->process().Lines()) {
     ignored += absl::StrContains(line, "again while draining: ignored");
   }
-  EXPECT_EQ(ignored, 5) << server->process().Output();
+  EXPECT_EQ(ignored, 6) << server->process().Output();
 }
 
 // A call with default options (16 iterations, no max_tets) reserves the server's default tet
@@ -251,6 +251,22 @@ TEST(ServerCommandLineTest, StartupErrorsGoToStderrNamingTheFlag) {
            {{"--max_lattice_n=65"}, "--max_lattice_n: must be in [0, 64]"},
            {{"--idle_timeout_seconds=0"}, "--idle_timeout_seconds: must be > 0"},
            {{"--log_level=chatty"}, "unknown --log_level chatty"},
+           // gRPC took port 99999 as 34463, and a bare metrics port bound every interface.
+           {{"--listen=127.0.0.1:99999"},
+            "--listen=127.0.0.1:99999: expected host:port with a port 0-65535"},
+           {{"--local_listen=127.0.0.1:65536"}, "--local_listen=127.0.0.1:65536: expected"},
+           {{"--metrics_listen=52254"}, "--metrics_listen=52254: expected host:port"},
+           // About 9.2e9 s overflows the clocks: every call then failed at once.
+           {{"--max_call_seconds=1e10"}, "--max_call_seconds: must be > 0 and at most 1e9 s"},
+           {{"--drain_seconds=1e10"}, "--drain_seconds: must be >= 0 and at most 1e9 s"},
+           {{"--queue_seconds=inf"}, "--queue_seconds: must be >= 0 and at most 1e9 s"},
+           // A tet budget no call can reserve, and a budget of a few MiB.
+           {{"--memory_limit_bytes=1000000000", "--max_output_tets=20000000"},
+            "--max_output_tets=20000000: a call that reaches it needs 3.0 GiB (160 bytes a tet, "
+            "--bytes_per_output_tet), more than the memory budget of 697.7 MiB (from "
+            "--memory_limit_bytes): at most 4519849 fit"},
+           {{"--memory_limit_bytes=277000000"},
+            "the memory budget (8.2 MiB, from --memory_limit_bytes) leaves room for 0 output tets"},
        }) {
     std::vector<std::string> argv = {TETREFINE_SERVER_BINARY, "--listen=127.0.0.1:0",
                                      "--metrics_listen="};
@@ -260,6 +276,32 @@ TEST(ServerCommandLineTest, StartupErrorsGoToStderrNamingTheFlag) {
     EXPECT_THAT(run.err, HasSubstr(c.message));
     EXPECT_EQ(run.out, "") << c.flags[0];
   }
+}
+
+// gRPC bound with SO_REUSEPORT: a second server on a port in use started, and new connections
+// went to either at random. It is now refused, naming the address.
+TEST(ServerCommandLineTest, APortInUseIsRefused) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> first =
+      ServerProcess::Start({"--drain_seconds=1"});
+  ASSERT_TRUE(first.ok()) << first.status();
+  const std::string target = (*first)->target();
+  const ProcessResult second = RunProcess(
+      {TETREFINE_SERVER_BINARY, "--listen=" + target, "--metrics_listen=", "--drain_seconds=0"}, "",
+      30.0);
+  EXPECT_EQ(second.exit_code, 1) << second.err;
+  EXPECT_THAT(second.err, HasSubstr("cannot listen on " + target + ": the port is in use"));
+  EXPECT_EQ((*first)->Stop(), 0) << (*first)->process().Output();
+}
+
+// SIGHUP (a closed terminal) killed the server at once, cutting off its calls; it drains as
+// SIGTERM does, and exits 0.
+TEST(ServerCommandLineTest, SighupDrainsLikeSigterm) {
+  std::unique_ptr<ServerProcess> server = Start({"--drain_seconds=5"});
+  ASSERT_NE(server, nullptr);
+  server->process().Signal(SIGHUP);
+  ASSERT_TRUE(server->process().WaitForLine("draining", std::chrono::seconds(10)))
+      << server->process().Output();
+  EXPECT_EQ(server->process().WaitExit(std::chrono::seconds(30)), 0) << server->process().Output();
 }
 
 }  // namespace

@@ -33,9 +33,10 @@ using ::tetrefine::testing::SmallVolume;
 class HardeningMalformedTest : public ::testing::TestWithParam<MalformedRequest> {
  protected:
   static void SetUpTestSuite() {
-    // The tet budget pinned: by default it follows the machine's memory.
-    absl::StatusOr<std::unique_ptr<ServerProcess>> server =
-        ServerProcess::Start({"--threads=2", "--max_output_tets=50000000"});
+    // The tet budget pinned: by default it follows the machine's memory. So is the memory limit
+    // it is checked against (50 M tets at 160 bytes need 8 GB of budget), whatever the machine.
+    absl::StatusOr<std::unique_ptr<ServerProcess>> server = ServerProcess::Start(
+        {"--threads=2", "--max_output_tets=50000000", "--memory_limit_bytes=17179869184"});
     ASSERT_TRUE(server.ok()) << server.status();
     server_ = server->release();
     expected_ = new RefineResult(*Refine(SmallVolume(), SmallMesh(), SmallRefineOptions()));
