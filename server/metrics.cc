@@ -48,7 +48,7 @@ ServiceMetrics::ServiceMetrics()
                    .Add({})),
       tets_out_(prometheus::BuildCounter()
                     .Name("tetrefine_tets_out_total")
-                    .Help("Tets of the refined meshes produced")
+                    .Help("Tets of the refined meshes of Refine calls that succeeded")
                     .Register(*registry_)
                     .Add({})),
       bytes_in_(prometheus::BuildCounter()

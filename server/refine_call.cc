@@ -114,8 +114,13 @@ void RefineCall::SendStatus(const grpc::Status& status, std::optional<int> retry
     std::lock_guard<std::mutex> lock(mu_);
     phase_ = Phase::kFinished;
     bytes_in = reader_.bytes_received();
-    tets_in = reader_.tets_declared();
+    // The declared count of an input that never completed (or whose header was refused: an
+    // operator sweep put 1e15 on the counter with one request) is not input.
+    tets_in = reader_.complete() ? reader_.tets_declared() : 0;
   }
+  // Only a delivered refinement counts: a call cancelled or out of time after its refinement
+  // made tets but gave the client none.
+  const int64_t tets_out = status.ok() ? tets_out_ : 0;
   const double seconds = SecondsBetween(start_, Clock::now());
   if (env_.config->metrics != nullptr) {
     env_.config->metrics->RecordCall({.code = status.error_code(),
@@ -123,12 +128,12 @@ void RefineCall::SendStatus(const grpc::Status& status, std::optional<int> retry
                                       .seconds = seconds,
                                       .bytes_in = bytes_in,
                                       .tets_in = tets_in,
-                                      .tets_out = tets_out_});
+                                      .tets_out = tets_out});
   }
   spdlog::info(
       "Refine peer={} identity={} bytes_in={} tets_in={} tets_out={} iterations={} "
       "duration={:.3f}s status={} {}",
-      peer_, identity_, bytes_in, tets_in, tets_out_, iterations_, seconds,
+      peer_, identity_, bytes_in, tets_in, tets_out, iterations_, seconds,
       absl::StatusCodeToString(static_cast<absl::StatusCode>(status.error_code())),
       status.error_message());
   if (retry_after_ms.has_value()) {

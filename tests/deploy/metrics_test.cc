@@ -5,10 +5,13 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <map>
 #include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "client/refine_client.h"
 #include "grpcpp/create_channel.h"
@@ -53,7 +56,8 @@ std::unique_ptr<ServerProcess> StartServer(const std::vector<std::string>& flags
 }
 
 TEST(MetricsTest, CountersFollowRefineCalls) {
-  std::unique_ptr<ServerProcess> server = StartServer({"--metrics_listen=127.0.0.1:0"});
+  std::unique_ptr<ServerProcess> server =
+      StartServer({"--metrics_listen=127.0.0.1:0", "--max_input_tets=500"});
   ASSERT_NE(server, nullptr);
   ASSERT_NE(server->metrics_port(), 0) << server->Log();
 
@@ -75,20 +79,59 @@ TEST(MetricsTest, CountersFollowRefineCalls) {
   absl::StatusOr<client::ClientResult> refused =
       client::RefineViaService(channel, volume, mesh, options);
   ASSERT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument) << refused.status();
+  // A mesh header over --max_input_tets: its declared count was added to tets_in (an operator
+  // sweep put 1e15 there with one request).
+  options.refine.epsilon = 0.02;
+  const Mesh too_big = FiveTetMesh({1.0, 1.0, 1.0}, {10.0, 10.0, 10.0}, {6, 6, 6});
+  absl::StatusOr<client::ClientResult> over =
+      client::RefineViaService(channel, volume, too_big, options);
+  ASSERT_EQ(over.status().code(), absl::StatusCode::kResourceExhausted) << over.status();
 
   const std::map<std::string, double> after = Scrape(*server);
   EXPECT_EQ(Get(after, R"(tetrefine_refine_calls_total{code="OK"})"), 1.0);
   EXPECT_EQ(Get(after, R"(tetrefine_refine_calls_total{code="INVALID_ARGUMENT"})"), 1.0);
-  // The accepted call's tets; the refused one fails on its options, before its mesh is read.
+  EXPECT_EQ(Get(after, R"(tetrefine_refine_calls_total{code="RESOURCE_EXHAUSTED"})"), 1.0);
+  // The accepted call's tets; the refused ones fail on their options or mesh header.
   EXPECT_EQ(Get(after, "tetrefine_tets_in_total"), static_cast<double>(mesh.tets.size()));
   EXPECT_EQ(Get(after, "tetrefine_tets_out_total"),
             static_cast<double>(ok->result.mesh.tets.size()));
   EXPECT_GT(Get(after, "tetrefine_received_bytes_total"),
             static_cast<double>(volume.data().size()));
-  EXPECT_EQ(Get(after, "tetrefine_refine_duration_seconds_count"), 2.0);
+  EXPECT_EQ(Get(after, "tetrefine_refine_duration_seconds_count"), 3.0);
   EXPECT_GT(Get(after, "tetrefine_refine_duration_seconds_sum"), 0.0);
-  EXPECT_EQ(Get(after, R"(tetrefine_refine_duration_seconds_bucket{le="+Inf"})"), 2.0);
+  EXPECT_EQ(Get(after, R"(tetrefine_refine_duration_seconds_bucket{le="+Inf"})"), 3.0);
   EXPECT_EQ(Get(after, "tetrefine_refinements_in_flight"), 0.0);
+}
+
+// A call cancelled during its refinement delivers no mesh: its tets are not output (they were
+// counted, 37 M of them in one operator sweep).
+TEST(MetricsTest, ACancelledCallAddsNoOutputTets) {
+  std::unique_ptr<ServerProcess> server =
+      StartServer({"--metrics_listen=127.0.0.1:0", "--threads=1"});
+  ASSERT_NE(server, nullptr);
+  const Volume volume = TestVolume({22, 22, 22});
+  const Mesh mesh = FiveTetMesh({1.0, 1.0, 1.0}, {20.0, 20.0, 20.0}, {19, 19, 19});
+  client::RefineRequestOptions options;
+  options.refine.epsilon = 0.001;
+  options.refine.max_iterations = 8;
+  client::RefineCallbacks callbacks;
+  std::atomic<bool> iterated{false};
+  callbacks.on_iteration = [&](const IterationStats&) { iterated.store(true); };
+  callbacks.should_cancel = [&] { return iterated.load(); };
+  auto channel = grpc::CreateChannel(server->target(), grpc::InsecureChannelCredentials());
+  absl::StatusOr<client::ClientResult> cancelled =
+      client::RefineViaService(channel, volume, mesh, options, callbacks);
+  ASSERT_EQ(cancelled.status().code(), absl::StatusCode::kCancelled) << cancelled.status();
+  // The server finishes the call after the client has gone: wait for its status to be counted.
+  std::map<std::string, double> after;
+  for (int i = 0; i < 100; ++i) {
+    after = Scrape(*server);
+    if (after.count(R"(tetrefine_refine_calls_total{code="CANCELLED"})") > 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(Get(after, R"(tetrefine_refine_calls_total{code="CANCELLED"})"), 1.0);
+  EXPECT_EQ(Get(after, "tetrefine_tets_in_total"), static_cast<double>(mesh.tets.size()));
+  EXPECT_EQ(Get(after, "tetrefine_tets_out_total"), 0.0);
 }
 
 // Opens `count` connections to the metrics port that send half a request and then nothing.
