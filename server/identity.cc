@@ -3,6 +3,7 @@
 #include <openssl/crypto.h>
 #include <openssl/sha.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
@@ -43,6 +44,28 @@ std::vector<std::string> Property(const grpc::AuthContext& auth, const char* nam
     values.emplace_back(value.data(), value.size());
   }
   return values;
+}
+
+// A subject's attributes in a canonical order: gRPC prints "O=acme,CN=alice" for the subject an
+// operator writes as "CN=alice,O=acme" (an operator sweep followed the help's example and was
+// refused). Attributes are split at commas that are not escaped ("\\,"), trimmed and sorted.
+std::string CanonicalSubject(absl::string_view subject) {
+  std::vector<std::string> parts;
+  std::string part;
+  for (size_t i = 0; i < subject.size(); ++i) {
+    if (subject[i] == '\\' && i + 1 < subject.size()) {
+      part.append(subject.data() + i, 2);
+      ++i;
+    } else if (subject[i] == ',') {
+      parts.emplace_back(absl::StripAsciiWhitespace(part));
+      part.clear();
+    } else {
+      part += subject[i];
+    }
+  }
+  parts.emplace_back(absl::StripAsciiWhitespace(part));
+  std::sort(parts.begin(), parts.end());
+  return absl::StrJoin(parts, ",");
 }
 
 }  // namespace
@@ -123,11 +146,20 @@ absl::StatusOr<std::string> IdentifyCall(const AccessPolicy& policy,
     common_names = Property(*auth, GRPC_X509_CN_PROPERTY_NAME);
     subjects = Property(*auth, GRPC_X509_SUBJECT_PROPERTY_NAME);
   }
+  if (policy.require_client_certificate && common_names.empty() && subjects.empty()) {
+    // The plaintext --local_listen has no certificates: it let any local process refine
+    // without one (found by an operator sweep; in Kubernetes every container of the pod shares
+    // that loopback).
+    return absl::UnauthenticatedError(
+        "this server requires a client certificate (--tls_client_ca): call its TLS listener "
+        "with one; the plaintext --local_listen serves health checks only");
+  }
   if (!policy.allowed_subjects.empty()) {
     bool allowed = false;
     for (const std::string& entry : policy.allowed_subjects) {
-      for (const std::vector<std::string>* names : {&common_names, &subjects}) {
-        for (const std::string& name : *names) allowed = allowed || name == entry;
+      for (const std::string& name : common_names) allowed = allowed || name == entry;
+      for (const std::string& subject : subjects) {
+        allowed = allowed || CanonicalSubject(subject) == CanonicalSubject(entry);
       }
     }
     if (!allowed) {

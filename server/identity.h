@@ -43,15 +43,20 @@ class TokenTable {
 // What a server asks of its callers. Default: nothing (identity = the peer's address).
 struct AccessPolicy {
   std::optional<TokenTable> tokens;  // set: every Refine and GetServerInfo call needs a token
-  // Non-empty: a client certificate's common name or full subject ("CN=a,O=b") must be one of
-  // these (the server must require client certificates, --tls_client_ca).
+  // Non-empty: a client certificate's common name or full subject ("CN=a,O=b", its attributes
+  // in any order) must be one of these (the server must require client certificates,
+  // --tls_client_ca).
   std::vector<std::string> allowed_subjects;
+  // --tls_client_ca: every Refine and GetServerInfo call must come with a verified client
+  // certificate, also on the plaintext --local_listen (which then serves health checks only).
+  bool require_client_certificate = false;
 };
 
 // The identity quotas count a call by: "token:<name>" when tokens are on, else "cert:<common
 // name>" for a verified client certificate, else "peer:<address without port>". Errors:
-// UNAUTHENTICATED for a missing or unknown token, PERMISSION_DENIED for a certificate subject
-// not on the allow-list; each message says what the server expects.
+// UNAUTHENTICATED for a missing or unknown token or a missing required certificate,
+// PERMISSION_DENIED for a certificate subject not on the allow-list; each message says what the
+// server expects.
 absl::StatusOr<std::string> IdentifyCall(const AccessPolicy& policy,
                                          const grpc::ServerContextBase& context);
 

@@ -28,7 +28,8 @@ ABSL_FLAG(std::string, listen, "0.0.0.0:50051", "Address to listen on, host:port
 ABSL_FLAG(std::string, local_listen, "",
           "A second, plaintext gRPC listener on a loopback address (127.0.0.1:PORT or [::1]:PORT; "
           "empty: none), for health probes run inside the container when --listen uses TLS. "
-          "Tokens, quotas and limits apply there too");
+          "Tokens, quotas and limits apply there too; with --tls_client_ca it serves health "
+          "checks only (Refine needs a client certificate)");
 ABSL_FLAG(std::string, metrics_listen, "127.0.0.1:9464",
           "Prometheus /metrics endpoint, host:port (port 0: any; empty: off). HTTPS with the "
           "--tls_cert certificate when gRPC uses TLS. If it cannot be bound the server logs an "
@@ -45,12 +46,12 @@ ABSL_FLAG(bool, reflection, true, "Serve gRPC server reflection (what grpcurl us
 ABSL_FLAG(std::string, tls_cert, "", "PEM server certificate chain (enables TLS, with --tls_key)");
 ABSL_FLAG(std::string, tls_key, "", "PEM private key of --tls_cert");
 ABSL_FLAG(std::string, tls_client_ca, "",
-          "PEM CA bundle: when set, clients must present a certificate it verifies; quotas then "
-          "count per certificate common name");
+          "PEM CA bundle: when set, clients must present a certificate it verifies (on every "
+          "listener); quotas then count per certificate common name");
 ABSL_FLAG(std::string, tls_allowed_subjects, "",
-          "Semicolon-separated client certificate common names or full subjects (as gRPC "
-          "prints them, e.g. CN=a,O=b) allowed to call; empty: any certificate --tls_client_ca "
-          "verifies");
+          "Semicolon-separated client certificate common names or full subjects (e.g. "
+          "CN=a,O=b, attributes in any order) allowed to call; empty: any certificate "
+          "--tls_client_ca verifies");
 ABSL_FLAG(std::string, token_file, "",
           "File of lines '<identity> <token>': every Refine and GetServerInfo call must carry "
           "metadata 'authorization: Bearer <token>'; quotas then count per identity");
@@ -326,6 +327,7 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
        absl::StrSplit(absl::GetFlag(FLAGS_tls_allowed_subjects), ';', absl::SkipWhitespace())) {
     service.access.allowed_subjects.emplace_back(absl::StripAsciiWhitespace(subject));
   }
+  service.access.require_client_certificate = !s.tls_client_ca.empty();
   if (!service.access.allowed_subjects.empty() && s.tls_client_ca.empty()) {
     return Invalid("--tls_allowed_subjects needs --tls_client_ca (clients must send certificates)");
   }

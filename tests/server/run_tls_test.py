@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """CTest driver: tetrefine_server with --tls_cert/--tls_key/--tls_client_ca accepts a client
 certificate signed by the CA and refuses clients without one or with a foreign one;
---tls_allowed_subjects admits only the listed subjects among those; /metrics is served over HTTPS
-with the server's certificate; --local_listen serves plaintext on loopback for probes."""
+--tls_allowed_subjects admits only the listed subjects among those (a full subject in any order
+of its attributes); /metrics is served over HTTPS with the server's certificate; --local_listen
+serves plaintext health checks on loopback for probes, and refuses calls there (no certificate)."""
 
 import argparse
 import os
@@ -30,13 +31,13 @@ def make_ca(directory, name):
     return key, cert
 
 
-def make_leaf(directory, name, ca, extension):
+def make_leaf(directory, name, ca, extension, subject=None):
     key, csr = os.path.join(directory, name + ".key"), os.path.join(directory, name + ".csr")
     cert, ext = os.path.join(directory, name + ".pem"), os.path.join(directory, name + ".ext")
     with open(ext, "w") as f:
         f.write(extension)
-    openssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", f"/CN={name}", "-keyout", key,
-            "-out", csr)
+    openssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", subject or f"/CN={name}", "-keyout",
+            key, "-out", csr)
     openssl("x509", "-req", "-in", csr, "-CA", ca[1], "-CAkey", ca[0], "-CAcreateserial",
             "-days", "2", "-extfile", ext, "-out", cert)
     return key, cert
@@ -121,9 +122,12 @@ def main():
         client_cert = make_leaf(d, "client", ca, "extendedKeyUsage=clientAuth\n")
         stranger_cert = make_leaf(d, "stranger", ca, "extendedKeyUsage=clientAuth\n")
         foreign_cert = make_leaf(d, "intruder", other_ca, "extendedKeyUsage=clientAuth\n")
+        # Two attributes: gRPC prints this subject "O=acme,CN=alice"; the allow-list below
+        # names it in the order people write it.
+        alice_cert = make_leaf(d, "alice", ca, "extendedKeyUsage=clientAuth\n", "/CN=alice/O=acme")
 
         flags = [f"--tls_cert={server_cert[1]}", f"--tls_key={server_cert[0]}",
-                 f"--tls_client_ca={ca[1]}", "--tls_allowed_subjects=client",
+                 f"--tls_client_ca={ca[1]}", "--tls_allowed_subjects=client; CN=alice, O=acme",
                  "--metrics_listen=127.0.0.1:0", "--local_listen=127.0.0.1:0"]
         with ServerProcess(args.server, flags) as server:
             results = {
@@ -134,16 +138,28 @@ def main():
                                                           foreign_cert),
                 "trusted certificate not on the allow-list": server_info(
                     args.stubs, server.target, ca, stranger_cert),
+                "allowed by its full subject in another order": server_info(
+                    args.stubs, server.target, ca, alice_cert),
             }
             metrics_port = logged_port(server.log, r"metrics on https://127\.0\.0\.1:(\d+)/")
             local_port = logged_port(server.log, r"plaintext local listener on 127\.0\.0\.1:(\d+)")
             https = fetch(f"https://localhost:{metrics_port}/metrics", ca[1]) if metrics_port else ""
             plain = fetch(f"http://127.0.0.1:{metrics_port}/metrics") if metrics_port else ""
             local = plaintext_calls(args.stubs, f"127.0.0.1:{local_port}") if local_port else ()
+        # Client certificates required, no allow-list: the plaintext local listener, which has
+        # no certificates, let any local process refine (an operator sweep).
+        flags_any = [f"--tls_cert={server_cert[1]}", f"--tls_key={server_cert[0]}",
+                     f"--tls_client_ca={ca[1]}", "--metrics_listen=",
+                     "--local_listen=127.0.0.1:0"]
+        with ServerProcess(args.server, flags_any) as any_cert:
+            any_port = logged_port(any_cert.log, r"plaintext local listener on 127\.0\.0\.1:(\d+)")
+            any_local = plaintext_calls(args.stubs, f"127.0.0.1:{any_port}") if any_port else ()
+            any_trusted = server_info(args.stubs, any_cert.target, ca, stranger_cert)
     print("".join(server.log), end="")
     failures = []
     expected = {"trusted client certificate": "OK",
-                "trusted certificate not on the allow-list": "PERMISSION_DENIED"}
+                "trusted certificate not on the allow-list": "PERMISSION_DENIED",
+                "allowed by its full subject in another order": "OK"}
     for case, code in results.items():
         print(f"{case}: {code}")
         if expected.get(case) is not None:
@@ -156,11 +172,18 @@ def main():
         failures.append("metrics over https with the server's certificate")
     if "tetrefine_refine_calls_total" in plain:
         failures.append("metrics also served as plain http")
-    # The local listener answers probes; the allow-list still applies to calls made there.
+    # The local listener answers probes; calls there have no certificate and are refused.
     print(f"plaintext local listener: health {local[0] if local else None}, "
           f"GetServerInfo {local[1] if local else None}")
-    if local != ("SERVING", "PERMISSION_DENIED"):
+    if local != ("SERVING", "UNAUTHENTICATED"):
         failures.append("plaintext local listener")
+    print(f"client certificates without an allow-list: any trusted one {any_trusted}; local "
+          f"listener: health {any_local[0] if any_local else None}, GetServerInfo "
+          f"{any_local[1] if any_local else None}")
+    if any_trusted != "OK":
+        failures.append("a trusted certificate without an allow-list")
+    if any_local != ("SERVING", "UNAUTHENTICATED"):
+        failures.append("plaintext local listener with --tls_client_ca and no allow-list")
     if server.exit_code != 0:
         failures.append(f"server exit code {server.exit_code}")
     if failures:
