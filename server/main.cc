@@ -20,6 +20,7 @@
 #include "server/server_flags.h"
 #include "server/server_setup.h"
 #include "server/shutdown_signals.h"
+#include "server/tls_files.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
 
@@ -41,11 +42,20 @@ absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> Credentials(const Serve
   if (!cert_pem.ok()) return cert_pem.status();
   absl::StatusOr<std::string> key_pem = ReadFile(s.tls_key, "--tls_key");
   if (!key_pem.ok()) return key_pem.status();
-  options.pem_key_cert_pairs.push_back({*key_pem, *cert_pem});
+  std::string ca_text;
   if (!s.tls_client_ca.empty()) {
     absl::StatusOr<std::string> ca_pem = ReadFile(s.tls_client_ca, "--tls_client_ca");
     if (!ca_pem.ok()) return ca_pem.status();
-    options.pem_root_certs = *ca_pem;
+    ca_text = *ca_pem;
+  }
+  if (absl::Status usable =
+          CheckServerTlsFiles(*cert_pem, s.tls_cert, *key_pem, s.tls_key, ca_text, s.tls_client_ca);
+      !usable.ok()) {
+    return usable;
+  }
+  options.pem_key_cert_pairs.push_back({*key_pem, *cert_pem});
+  if (!s.tls_client_ca.empty()) {
+    options.pem_root_certs = ca_text;
     options.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(options);

@@ -36,6 +36,11 @@ ServiceMetrics::ServiceMetrics()
                  .Name("tetrefine_refine_calls_total")
                  .Help("Refine calls finished, by gRPC status code")
                  .Register(*registry_)),
+      info_calls_(prometheus::BuildCounter()
+                      .Name("tetrefine_server_info_calls_total")
+                      .Help("GetServerInfo calls, by gRPC status code (clients ask it first: a "
+                            "refused token or certificate counts here)")
+                      .Register(*registry_)),
       duration_(prometheus::BuildHistogram()
                     .Name("tetrefine_refine_duration_seconds")
                     .Help("Wall time of admitted Refine calls, from arrival to status")
@@ -63,6 +68,11 @@ ServiceMetrics::ServiceMetrics()
                      .Add({})) {
   // Present from the start, so a dashboard's rate() has a series before the first call.
   calls_.Add({{"code", CodeName(grpc::StatusCode::OK)}});
+  info_calls_.Add({{"code", CodeName(grpc::StatusCode::OK)}});
+}
+
+void ServiceMetrics::RecordServerInfo(grpc::StatusCode code) {
+  info_calls_.Add({{"code", CodeName(code)}}).Increment();
 }
 
 ServiceMetrics::InFlight::InFlight(ServiceMetrics* metrics) : metrics_(metrics) {

@@ -50,6 +50,9 @@ class ServiceMetrics {
   };
 
   void RecordCall(const CallMetrics& call);
+  // A GetServerInfo call finished with `code` (clients call it before Refine: a refused token or
+  // certificate shows here and nowhere else).
+  void RecordServerInfo(grpc::StatusCode code);
 
   // The Prometheus text exposition of every metric (what /metrics serves).
   std::string Scrape() const;
@@ -59,6 +62,7 @@ class ServiceMetrics {
  private:
   std::shared_ptr<prometheus::Registry> registry_;
   prometheus::Family<prometheus::Counter>& calls_;
+  prometheus::Family<prometheus::Counter>& info_calls_;
   prometheus::Histogram& duration_;
   prometheus::Counter& tets_in_;
   prometheus::Counter& tets_out_;

@@ -7,6 +7,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -132,6 +134,32 @@ TEST(MetricsTest, ACancelledCallAddsNoOutputTets) {
   EXPECT_EQ(Get(after, R"(tetrefine_refine_calls_total{code="CANCELLED"})"), 1.0);
   EXPECT_EQ(Get(after, "tetrefine_tets_in_total"), static_cast<double>(mesh.tets.size()));
   EXPECT_EQ(Get(after, "tetrefine_tets_out_total"), 0.0);
+}
+
+// Clients ask GetServerInfo before they refine, so a wrong token ends there: it is logged and
+// counted (three refused CLI runs used to leave no trace on the server).
+TEST(MetricsTest, RefusedIdentitiesAreLoggedAndCounted) {
+  const std::string tokens = (std::filesystem::temp_directory_path() /
+                              ("tetrefine_metrics_tokens_" + std::to_string(::getpid())))
+                                 .string();
+  std::ofstream(tokens) << "alice alice-token-0123456789abcdef\n";
+  std::unique_ptr<ServerProcess> server =
+      StartServer({"--metrics_listen=127.0.0.1:0", "--token_file=" + tokens});
+  ASSERT_NE(server, nullptr);
+  auto channel = grpc::CreateChannel(server->target(), grpc::InsecureChannelCredentials());
+  const auto deadline = std::chrono::system_clock::now() + std::chrono::seconds(10);
+  EXPECT_TRUE(client::GetServerInfo(channel, deadline, "alice-token-0123456789abcdef").ok());
+  for (const char* token : {"wrong-token-0123456789abcdef", ""}) {
+    EXPECT_EQ(client::GetServerInfo(channel, deadline, token).status().code(),
+              absl::StatusCode::kUnauthenticated);
+  }
+  const std::map<std::string, double> after = Scrape(*server);
+  EXPECT_EQ(Get(after, R"(tetrefine_server_info_calls_total{code="OK"})"), 1.0);
+  EXPECT_EQ(Get(after, R"(tetrefine_server_info_calls_total{code="UNAUTHENTICATED"})"), 2.0);
+  EXPECT_TRUE(server->process().WaitForLine("refused: UNAUTHENTICATED the bearer token is not",
+                                            std::chrono::seconds(5)))
+      << server->Log();
+  std::filesystem::remove(tokens);
 }
 
 // Opens `count` connections to the metrics port that send half a request and then nothing.

@@ -155,8 +155,32 @@ def main():
             any_port = logged_port(any_cert.log, r"plaintext local listener on 127\.0\.0\.1:(\d+)")
             any_local = plaintext_calls(args.stubs, f"127.0.0.1:{any_port}") if any_port else ()
             any_trusted = server_info(args.stubs, any_cert.target, ca, stranger_cert)
+        # Unusable TLS files stop the server at once, naming the flag and the file (gRPC's own
+        # complaint came only at bind time, after the metrics endpoint had failed on them).
+        garbage = os.path.join(d, "garbage.pem")
+        with open(garbage, "w") as f:
+            f.write("garbage\n")
+        startup = {}
+        for case, tls_flags, message in [
+                ("a key that is not the certificate's",
+                 [f"--tls_cert={server_cert[1]}", f"--tls_key={client_cert[0]}"],
+                 f"--tls_key: {client_cert[0]} is not the private key of the --tls_cert"),
+                ("a CA bundle without a certificate",
+                 [f"--tls_cert={server_cert[1]}", f"--tls_key={server_cert[0]}",
+                  f"--tls_client_ca={garbage}"],
+                 f"--tls_client_ca: {garbage} holds no PEM certificate"),
+                ("a key file without a key",
+                 [f"--tls_cert={server_cert[1]}", f"--tls_key={garbage}"],
+                 f"--tls_key: {garbage} holds no unencrypted PEM private key")]:
+            run = subprocess.run([args.server, "--listen=127.0.0.1:0", "--metrics_listen=",
+                                  *tls_flags], capture_output=True, text=True, timeout=30)
+            startup[case] = (run.returncode, message in run.stderr, run.stderr.strip())
     print("".join(server.log), end="")
     failures = []
+    for case, (code, named, stderr) in startup.items():
+        print(f"startup with {case}: exit {code}, {stderr!r}")
+        if code != 2 or not named:
+            failures.append(f"startup with {case}")
     expected = {"trusted client certificate": "OK",
                 "trusted certificate not on the allow-list": "PERMISSION_DENIED",
                 "allowed by its full subject in another order": "OK"}
