@@ -31,7 +31,8 @@ absl::StatusOr<std::string> ReadPem(const std::string& path, const char* flag) {
 
 std::vector<FlagSpec> TlsFlagSpecs() {
   return {
-      {"tls-ca", "FILE", "TLS: PEM CA bundle that verifies the server (default: system roots)"},
+      {"tls", "", "TLS, verifying the server with the system's root certificates"},
+      {"tls-ca", "FILE", "TLS: PEM CA bundle that verifies the server (instead of the system's)"},
       {"tls-cert", "FILE", "TLS: PEM client certificate, for servers that require one"},
       {"tls-key", "FILE", "TLS: PEM private key of --tls-cert"},
   };
@@ -39,6 +40,7 @@ std::vector<FlagSpec> TlsFlagSpecs() {
 
 absl::StatusOr<TlsFiles> TlsFilesFromArgs(const ParsedArgs& args) {
   TlsFiles tls;
+  tls.on = args.Has("tls");
   tls.ca = args.Get("tls-ca").value_or("");
   tls.cert = args.Get("tls-cert").value_or("");
   tls.key = args.Get("tls-key").value_or("");
@@ -46,6 +48,17 @@ absl::StatusOr<TlsFiles> TlsFilesFromArgs(const ParsedArgs& args) {
     return absl::InvalidArgumentError("--tls-cert and --tls-key go together");
   }
   return tls;
+}
+
+absl::Status WithTlsHint(const absl::Status& status, const TlsFiles& tls) {
+  if (tls.enabled() || !absl::IsUnavailable(status) ||
+      !absl::StrContains(status.message(), "Socket closed")) {
+    return status;
+  }
+  return absl::Status(status.code(),
+                      absl::StrCat(status.message(),
+                                   " (a server that uses TLS closes plaintext connections: pass "
+                                   "--tls, or --tls-ca with its CA)"));
 }
 
 FlagSpec TokenFlagSpec() {

@@ -14,13 +14,18 @@ namespace tetrefine::cli {
 // --tls_client_ca for mutual TLS). Any of them set turns TLS on; without --tls-ca the system's
 // root certificates verify the server.
 struct TlsFiles {
+  bool on = false;   // --tls: TLS with the system's root certificates (implied by the files)
   std::string ca;    // --tls-ca: CA bundle that signed the server's certificate
   std::string cert;  // --tls-cert: client certificate chain (mutual TLS)
   std::string key;   // --tls-key: private key of --tls-cert
-  bool enabled() const { return !ca.empty() || !cert.empty() || !key.empty(); }
+  bool enabled() const { return on || !ca.empty() || !cert.empty() || !key.empty(); }
 };
 
-// The --tls-ca, --tls-cert and --tls-key flags, for a subcommand's spec.
+// A plaintext call's failure against a server that speaks TLS shows only as a closed socket:
+// `status` with a hint to pass --tls (or --tls-ca) when that is what happened.
+absl::Status WithTlsHint(const absl::Status& status, const TlsFiles& tls);
+
+// The --tls, --tls-ca, --tls-cert and --tls-key flags, for a subcommand's spec.
 std::vector<FlagSpec> TlsFlagSpecs();
 // Their values; --tls-cert and --tls-key must come together.
 absl::StatusOr<TlsFiles> TlsFilesFromArgs(const ParsedArgs& args);

@@ -81,10 +81,10 @@ int RunHealth(const std::vector<std::string>& args) {
                             std::chrono::duration<double>(timeout));
   absl::StatusOr<client::ServingStatus> status = client::CheckHealth(*channel, service, deadline);
   if (!status.ok()) {
-    return Fail(
-        absl::StrCat("server ", server, ": ", absl::StatusCodeToString(status.status().code()),
-                     ": ", status.status().message()),
-        kExitFailed);
+    const absl::Status failed = WithTlsHint(status.status(), *tls);
+    return Fail(absl::StrCat("server ", server, ": ", absl::StatusCodeToString(failed.code()), ": ",
+                             failed.message()),
+                kExitFailed);
   }
   std::printf("%s\n", StatusName(*status));
   return *status == client::ServingStatus::kServing ? kExitOk : kExitFailed;

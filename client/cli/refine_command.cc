@@ -161,7 +161,8 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   s->tls = *tls;
   if (s->tls.enabled() && s->server.empty()) {
     return absl::InvalidArgumentError(
-        "--tls-ca/--tls-cert/--tls-key apply to --server; the embedded service needs none");
+        "--tls/--tls-ca/--tls-cert/--tls-key apply to --server; the embedded service needs "
+        "none");
   }
   absl::StatusOr<std::string> token = TokenFromArgs(args);
   if (!token.ok()) return token.status();
@@ -524,10 +525,10 @@ int RunRefinement(const RefineSettings& s) {
     if (reply.status().code() == absl::StatusCode::kInvalidArgument) {
       return Fail(absl::StrCat(s.mesh_path, ": ", reply.status().message()), kExitUsage);
     }
-    return Fail(
-        absl::StrCat((*backend)->Name(), ": ", absl::StatusCodeToString(reply.status().code()),
-                     ": ", reply.status().message()),
-        kExitFailed);
+    const absl::Status failed = WithTlsHint(reply.status(), s.tls);
+    return Fail(absl::StrCat((*backend)->Name(), ": ", absl::StatusCodeToString(failed.code()),
+                             ": ", failed.message()),
+                kExitFailed);
   }
   RefineResult& result = reply->result;
   const int64_t piece_vertices = PieceVertices(pieces);

@@ -75,6 +75,20 @@ TEST_F(CliTls, HealthOverTlsAndMutualTls) {
     EXPECT_EQ(tls.exit_code, 0) << tls.err;
     const ProcessResult plain = RunTetrefine({"health", "--server", server.target()});
     EXPECT_EQ(plain.exit_code, 1) << "a plaintext client must not reach a TLS server";
+    // All gRPC says is "Socket closed": the message says what to pass.
+    EXPECT_TRUE(absl::StrContains(plain.err,
+                                  "a server that uses TLS closes plaintext "
+                                  "connections: pass --tls, or --tls-ca with its CA"))
+        << plain.err;
+    // --tls alone is TLS against the system's roots, which do not hold this test CA: the
+    // handshake happens and fails on the certificate (no "Socket closed", no hint).
+    const ProcessResult system_roots =
+        RunTetrefine({"health", "--server", server.target(), "--tls"});
+    EXPECT_EQ(system_roots.exit_code, 1) << system_roots.err;
+    EXPECT_FALSE(absl::StrContains(system_roots.err, "pass --tls")) << system_roots.err;
+    EXPECT_TRUE(absl::StrContains(system_roots.err, "certificate verify failed") ||
+                absl::StrContains(system_roots.err, "Ssl handshake failed"))
+        << system_roots.err;
   }
   absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
       {"--tls_cert=" + dir_.File("server.pem"), "--tls_key=" + dir_.File("server.key"),
