@@ -167,8 +167,11 @@ int Run(ShutdownSignals& signals) {
   signals.SetDrainDeadline(deadline);
   spdlog::info("signal {}: not serving, draining in-flight calls for up to {} s", signal_number,
                drain);
-  // Load balancers probing health stop sending work before the listener goes away.
-  server->GetHealthCheckService()->SetServingStatus(false);
+  // Load balancers and readiness probes asking about the Refiner stop sending work before the
+  // listener goes away. The server as a whole ("", what liveness probes ask) stays SERVING
+  // while it drains: a failing liveness probe would have the orchestrator kill the process in
+  // the middle of the drain it is waiting for.
+  server->GetHealthCheckService()->SetServingStatus(v1::Refiner::service_full_name(), false);
   // gRPC's Shutdown closes each connection as soon as its last call ends, which can cut off the
   // end of a response its client is still reading (the client sees UNAVAILABLE "Broken pipe"
   // for a call the server completed). So new calls are refused first, in-flight ones finish

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "absl/flags/flag.h"
@@ -239,13 +240,21 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   l.queue_seconds = absl::GetFlag(FLAGS_queue_seconds);
   l.max_calls_per_identity = absl::GetFlag(FLAGS_max_calls_per_identity);
   l.bytes_per_output_tet = absl::GetFlag(FLAGS_bytes_per_output_tet);
-  if (l.max_concurrent_refinements < 1 || l.max_voxels < 1 || l.max_input_tets < 1 ||
-      l.max_message_bytes < 1024 || l.max_iterations < 0 || l.max_lattice_points < 0 ||
-      l.max_calls_per_identity < 0 || l.bytes_per_output_tet < 1 || service.refine_threads < 0) {
-    return Invalid(
-        "--max_concurrent, --max_voxels, --max_input_tets and --bytes_per_output_tet must be >= "
-        "1, --max_message_bytes >= 1024, --max_iterations, --max_lattice_points, "
-        "--max_calls_per_identity and --threads >= 0");
+  // Each bound named on its own (one message listing nine flags left the operator to find
+  // which was wrong).
+  for (auto [name, value, least] : {std::tuple<const char*, int64_t, int64_t>{
+                                        "max_concurrent", l.max_concurrent_refinements, 1},
+                                    {"max_voxels", l.max_voxels, 1},
+                                    {"max_input_tets", l.max_input_tets, 1},
+                                    {"bytes_per_output_tet", l.bytes_per_output_tet, 1},
+                                    {"max_message_bytes", l.max_message_bytes, 1024},
+                                    {"max_iterations", l.max_iterations, 0},
+                                    {"max_lattice_points", l.max_lattice_points, 0},
+                                    {"max_calls_per_identity", l.max_calls_per_identity, 0},
+                                    {"threads", service.refine_threads, 0}}) {
+    if (value < least) {
+      return Invalid(absl::StrCat("--", name, ": must be >= ", least, ", got ", value));
+    }
   }
   if (l.max_lattice_n < 0 || l.max_lattice_n > 64) {
     return Invalid(absl::StrCat("--max_lattice_n: must be in [0, 64] (the core's bound), got ",

@@ -169,6 +169,15 @@ TEST(AbuseTest, SignalsDuringTheDrainAreLoggedAndIgnored) {
 
   server->process().Signal(SIGTERM);
   ASSERT_TRUE(server->process().WaitForLine("draining", std::chrono::seconds(10)));
+  // Readiness (the Refiner) goes NOT_SERVING; liveness (the server, "") stays SERVING, or an
+  // orchestrator would kill the process in the middle of its drain.
+  const auto soon = std::chrono::system_clock::now() + std::chrono::seconds(5);
+  EXPECT_EQ(client::CheckHealth(server->NewChannel(), "tetrefine.v1.Refiner", soon)
+                .value_or(client::ServingStatus::kUnknown),
+            client::ServingStatus::kNotServing);
+  EXPECT_EQ(
+      client::CheckHealth(server->NewChannel(), "", soon).value_or(client::ServingStatus::kUnknown),
+      client::ServingStatus::kServing);
   // An impatient operator: Ctrl-C twice, SIGTERM three more times, then closes the terminal.
   for (int s : {SIGINT, SIGINT, SIGTERM, SIGTERM, SIGTERM, SIGHUP}) {
     server->process().Signal(s);
@@ -242,7 +251,9 @@ TEST(ServerCommandLineTest, StartupErrorsGoToStderrNamingTheFlag) {
     std::string message;
   };
   for (const Case& c : std::vector<Case>{
-           {{"--max_concurrent=0"}, "--max_concurrent"},
+           {{"--max_concurrent=0"}, "--max_concurrent: must be >= 1, got 0"},
+           {{"--threads=-1"}, "--threads: must be >= 0, got -1"},
+           {{"--token_file=/tmp"}, "--token_file: /tmp: is a directory, not a token file"},
            {{"--token_file=/nonexistent/tokens"}, "--token_file: /nonexistent/tokens: cannot read"},
            {{"--local_listen=0.0.0.0:0"}, "--local_listen=0.0.0.0:0: must be a loopback address"},
            {{"--tls_cert=/nonexistent/cert.pem", "--tls_key=/nonexistent/key.pem"},
