@@ -4,6 +4,7 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -187,6 +188,8 @@ class GmshParser {
   absl::Status ExpectEnd(absl::string_view section);
   absl::Status SkipSection(absl::string_view section);
   absl::Status Entities();
+  absl::Status PartitionedEntities();
+  absl::Status EntityLists(bool partitioned);
   absl::Status Nodes22();
   absl::Status Nodes41();
   absl::Status Elements22();
@@ -274,7 +277,7 @@ absl::Status GmshParser::ExpectEnd(absl::string_view section) {
   return absl::OkStatus();
 }
 
-// Skips a section this reader does not use ($PhysicalNames, $Periodic, $PartitionedEntities,
+// Skips a section this reader does not use ($PhysicalNames, $Periodic, $GhostElements,
 // ...). Its end marker is searched as bytes: binary sections are not tokens.
 absl::Status GmshParser::SkipSection(absl::string_view section) {
   const std::string end = absl::StrCat("$End", section);
@@ -285,33 +288,83 @@ absl::Status GmshParser::SkipSection(absl::string_view section) {
   return in_.Error(absl::StrCat("truncated: no ", end));
 }
 
-absl::Status GmshParser::Entities() {
-  int64_t counts[4];
+absl::Status GmshParser::Entities() { return EntityLists(/*partitioned=*/false); }
+
+// $PartitionedEntities (a mesh saved with -part N): the element blocks then name the partitioned
+// entities, whose physical tags are listed here. They were skipped, so every label of a
+// partitioned 4.1 file was lost without a word (found by a file-format sweep).
+absl::Status GmshParser::PartitionedEntities() {
   StartBinary();
+  if (absl::Status s = Size("the partition count", 0, kMaxCount).status(); !s.ok()) return s;
+  absl::StatusOr<int64_t> ghosts = Size("the ghost entity count", 0, kMaxCount);
+  if (!ghosts.ok()) return ghosts.status();
+  if (absl::Status s = in_.CheckCount(*ghosts, binary_ ? 8 : 4, "ghost entities"); !s.ok()) {
+    return s;
+  }
+  for (int64_t g = 0; g < 2 * *ghosts; ++g) {
+    if (absl::Status s = Int("a ghost entity tag or partition", std::numeric_limits<int32_t>::min(),
+                             std::numeric_limits<int32_t>::max())
+                             .status();
+        !s.ok()) {
+      return s;
+    }
+  }
+  return EntityLists(/*partitioned=*/true);
+}
+
+// The four entity lists of $Entities, or of $PartitionedEntities, whose entities also name
+// their parent entity and their partitions.
+absl::Status GmshParser::EntityLists(bool partitioned) {
+  int64_t counts[4];
+  if (!partitioned) StartBinary();
   for (int64_t& c : counts) {
     absl::StatusOr<int64_t> n = Size("an entity count", 0, kMaxCount);
     if (!n.ok()) return n.status();
     c = *n;
   }
+  constexpr int64_t kIntMin = std::numeric_limits<int32_t>::min();
+  constexpr int64_t kIntMax = std::numeric_limits<int32_t>::max();
   for (int dim = 0; dim < 4; ++dim) {
     // An entity takes at least a tag, a box and two counts.
     if (absl::Status s = in_.CheckCount(counts[dim], 8, "entities"); !s.ok()) return s;
     for (int64_t e = 0; e < counts[dim]; ++e) {
-      absl::StatusOr<int64_t> tag = Int("an entity tag", std::numeric_limits<int32_t>::min(),
-                                        std::numeric_limits<int32_t>::max());
+      absl::StatusOr<int64_t> tag = Int("an entity tag", kIntMin, kIntMax);
       if (!tag.ok()) return tag.status();
+      std::optional<int64_t> parent_key;
+      if (partitioned) {
+        absl::StatusOr<int64_t> parent_dim = Int("a parent entity dimension", 0, 3);
+        if (!parent_dim.ok()) return parent_dim.status();
+        absl::StatusOr<int64_t> parent_tag = Int("a parent entity tag", kIntMin, kIntMax);
+        if (!parent_tag.ok()) return parent_tag.status();
+        parent_key = (*parent_dim << 32) + *parent_tag;
+        absl::StatusOr<int64_t> partitions = Size("a partition count", 0, kMaxCount);
+        if (!partitions.ok()) return partitions.status();
+        if (absl::Status s = in_.CheckCount(*partitions, binary_ ? 4 : 2, "partitions"); !s.ok()) {
+          return s;
+        }
+        for (int64_t p = 0; p < *partitions; ++p) {
+          if (absl::Status s = Int("a partition tag", kIntMin, kIntMax).status(); !s.ok()) {
+            return s;
+          }
+        }
+      }
       for (int k = 0; k < (dim == 0 ? 3 : 6); ++k) {
         if (absl::Status s = Real("an entity bounding box").status(); !s.ok()) return s;
       }
       absl::StatusOr<int64_t> physicals = Size("a physical tag count", 0, 1 << 20);
       if (!physicals.ok()) return physicals.status();
+      const int64_t key = (int64_t{dim} << 32) + *tag;
       for (int64_t p = 0; p < *physicals; ++p) {
-        absl::StatusOr<int64_t> physical =
-            Int("a physical tag", std::numeric_limits<int32_t>::min(),
-                std::numeric_limits<int32_t>::max());
+        absl::StatusOr<int64_t> physical = Int("a physical tag", kIntMin, kIntMax);
         if (!physical.ok()) return physical.status();
         // An entity may belong to several physical groups; the first is its label.
-        if (p == 0) entity_physical_[(int64_t{dim} << 32) + *tag] = *physical;
+        if (p == 0) entity_physical_[key] = *physical;
+      }
+      // A partitioned entity without physical tags of its own takes its parent's.
+      if (*physicals == 0 && parent_key.has_value()) {
+        if (auto parent = entity_physical_.find(*parent_key); parent != entity_physical_.end()) {
+          entity_physical_[key] = parent->second;
+        }
       }
       if (dim > 0) {
         absl::StatusOr<int64_t> bounding = Size("a bounding entity count", 0, kMaxCount);
@@ -321,10 +374,7 @@ absl::Status GmshParser::Entities() {
           return s;
         }
         for (int64_t b = 0; b < *bounding; ++b) {
-          if (absl::Status s = Int("a bounding entity", std::numeric_limits<int32_t>::min(),
-                                   std::numeric_limits<int32_t>::max())
-                                   .status();
-              !s.ok()) {
+          if (absl::Status s = Int("a bounding entity", kIntMin, kIntMax).status(); !s.ok()) {
             return s;
           }
         }
@@ -764,6 +814,8 @@ absl::StatusOr<MeshFile> GmshParser::Parse(GmshReadInfo* info) {
       }
     } else if (name == "Entities" && version_ >= 4) {
       s = Entities();
+    } else if (name == "PartitionedEntities" && version_ >= 4) {
+      s = PartitionedEntities();
     } else if (name == "NodeData" || name == "ElementData") {
       s = Data(name == "NodeData");
     } else {

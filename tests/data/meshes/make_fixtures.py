@@ -168,6 +168,14 @@ def write_gmsh():
             if binary:
                 args.append("-bin")
             subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
+    # Partitioned (4.1 only): the elements then name the partitioned entities of
+    # $PartitionedEntities, which carry the physical tags.
+    for binary in (False, True):
+        out = f"gmsh_41_part2_{'binary' if binary else 'ascii'}.msh"
+        args = ["gmsh", "-3", "two_cubes.geo", "-part", "2", "-format", "msh41", "-o", out]
+        if binary:
+            args.append("-bin")
+        subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
 
 
 if __name__ == "__main__":
