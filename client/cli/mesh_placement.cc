@@ -18,13 +18,28 @@ Box IndexBox(const Volume& volume) {
   return box;
 }
 
-Box BoundingBox(const std::vector<Vec3>& points) {
-  Box box = {points[0], points[0]};
-  for (const Vec3& p : points) {
+// The box of the vertices the tets use (all vertices when there is no tet). A vertex no tet uses
+// (Gmsh's -save_all keeps geometry points) counted too, and squeezed the tets into a corner of
+// the volume without a word (found by a file-format sweep). Out-of-range indices are left to
+// the mesh's validation.
+Box BoundingBox(const Mesh& mesh) {
+  bool found = false;
+  Box box{};
+  const auto add = [&](const Vec3& p) {
+    if (!found) box = {p, p};
+    found = true;
     for (int a = 0; a < 3; ++a) {
       box[0][a] = std::min(box[0][a], p[a]);
       box[1][a] = std::max(box[1][a], p[a]);
     }
+  };
+  for (const Tet& t : mesh.tets) {
+    for (uint32_t v : t) {
+      if (v < mesh.points.size()) add(mesh.points[v]);
+    }
+  }
+  if (!found) {
+    for (const Vec3& p : mesh.points) add(p);
   }
   return box;
 }
@@ -63,7 +78,7 @@ int64_t FirstVertexOutside(const Volume& volume, const Mesh& mesh) {
 
 absl::Status FitMeshToVolume(const Volume& volume, Mesh* mesh) {
   if (mesh->points.empty()) return absl::OkStatus();
-  const Box from = BoundingBox(mesh->points);
+  const Box from = BoundingBox(*mesh);
   for (int a = 0; a < 3; ++a) {
     if (!(from[1][a] > from[0][a])) {
       return absl::InvalidArgumentError(absl::StrCat("the mesh is flat along axis ",

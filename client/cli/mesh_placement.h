@@ -22,7 +22,8 @@ std::string FormatBox(const Box& box);
 // Index of the first vertex outside the volume's sampled box (with the core's tolerance), or -1.
 int64_t FirstVertexOutside(const Volume& volume, const Mesh& mesh);
 
-// --fit-mesh-to-volume: scales each axis and translates so that the mesh's bounding box becomes
+// --fit-mesh-to-volume: scales each axis and translates so that the bounding box of the vertices
+// the tets use (all vertices without tets; an unused vertex outside it is clamped onto it) becomes
 // the volume's world box shrunk by a margin of one voxel on every side (a quarter of the box when
 // the volume is thinner than four voxels). Positive scales, so orientation is kept. For an oblique
 // volume the box is the index box (one sample of margin) mapped through the grid's affine, with

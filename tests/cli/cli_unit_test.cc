@@ -265,6 +265,15 @@ TEST(CliMeshPlacement, FitFillsTheBoxLessAVoxelAndKeepsOrientation) {
   flat.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
   flat.tets = {{0, 1, 2, 3}};
   EXPECT_FALSE(FitMeshToVolume(volume, &flat).ok());
+
+  // A vertex no tet uses (Gmsh -save_all keeps geometry points) does not shrink the fit: the
+  // tets fill the same box as without it, and it is clamped onto that box.
+  Mesh stray = testing::FiveTetMesh({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}, {2, 2, 2});
+  stray.points.push_back({5.0, 5.0, 5.0});
+  ASSERT_TRUE(FitMeshToVolume(volume, &stray).ok());
+  EXPECT_EQ(FirstVertexOutside(volume, stray), -1);
+  EXPECT_EQ(AnalyzeMesh(stray).bounding_box, want);
+  EXPECT_EQ(stray.points.back(), want[1]);
 }
 
 TEST(CliMeshReport, FindsDuplicatesInvertedTetsAndOverusedFaces) {
