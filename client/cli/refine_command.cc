@@ -383,6 +383,13 @@ int RunRefinement(const RefineSettings& s) {
                               " (refine writes value, iteration, quality and the region labels)"));
   }
   const InputTags tags{.label_name = mesh_file->label_name, .frame = mesh_file->frame};
+  if (io::LpsTagLost(s.output_path, *mesh_file)) {
+    PrintWarning(absl::StrCat(
+        s.output_path,
+        ": written in the input's LPS coordinates, but this format has no place "
+        "for the SPACE=LPS tag: RAS readers (tetrefine's too) will see it mirrored in x and y; "
+        ".vtu and .vtk keep the tag"));
+  }
   // Region labels (mesh.labels) go in with the mesh; every child tet inherits its parent's.
   Mesh mesh = std::move(mesh_file->mesh);
   // The service samples the volume at the vertices; values stored in the file are not inputs.

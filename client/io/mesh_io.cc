@@ -5,6 +5,7 @@
 #include "client/io/gmsh_format.h"
 #include "client/io/io_error.h"
 #include "client/io/medit_format.h"
+#include "client/io/mesh_frame.h"
 #include "client/io/vtk_legacy_format.h"
 #include "client/io/vtu_format.h"
 
@@ -64,11 +65,38 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   return file;
 }
 
+namespace {
+
+// .vtu (field data SPACE) and .vtk (the title's SPACE=) say which frame their points are in.
+bool CarriesFrameTag(MeshFormat format) {
+  return format == MeshFormat::kVtu || format == MeshFormat::kVtkLegacy;
+}
+
+}  // namespace
+
+bool LpsTagLost(const std::string& path, const MeshFile& file) {
+  const MeshFormat format = FormatOf(path);
+  return file.frame == MeshFrame::kLps && format != MeshFormat::kUnknown &&
+         !CarriesFrameTag(format);
+}
+
 absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
                                        const MeshWriteOptions& options) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
   if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
+  if (file.frame == MeshFrame::kLps && !CarriesFrameTag(format)) {
+    // No place for the tag: the input's own numbers are written, so that every input vertex
+    // keeps its coordinates in every output format (an LPS file came back in RAS as .msh,
+    // .mesh and .meshb, x and y negated without a word; found by a file-format sweep). Callers
+    // warn that the tag is lost (LpsTagLost).
+    MeshFile stored = file;
+    for (Vec3& p : stored.mesh.points) {
+      for (int a = 0; a < 3; ++a) p[a] *= FrameSign(MeshFrame::kLps, a);
+    }
+    stored.frame = MeshFrame::kUntagged;
+    return FormatMesh(path, stored, options);
+  }
   std::string bytes;
   switch (format) {
     case MeshFormat::kVtu:

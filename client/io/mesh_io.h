@@ -35,7 +35,8 @@ struct MeshWriteOptions {
 // What each format keeps: .vtu/.vtk keep values, iteration, quality, labels (under label_name)
 // and the frame tag; .msh keeps values, iteration, quality and positive labels (as physical
 // groups); .mesh/.meshb keep only the labels (as references). Formats without a frame tag get
-// RAS coordinates.
+// the coordinates of `file.frame` untagged: an LPS mesh is written with its LPS numbers, so every
+// input vertex keeps its coordinates whatever the format (LpsTagLost says when).
 absl::Status WriteMesh(const std::string& path, const MeshFile& file,
                        const MeshWriteOptions& options = {});
 
@@ -43,6 +44,10 @@ absl::Status WriteMesh(const std::string& path, const MeshFile& file,
 // them: for callers that send or time the encoding on its own.
 absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
                                        const MeshWriteOptions& options = {});
+
+// True when writing `file` to `path` loses its frame tag: an LPS mesh to .msh, .mesh or .meshb,
+// whose readers (tetrefine's too) then take the LPS coordinates as RAS. For a warning.
+bool LpsTagLost(const std::string& path, const MeshFile& file);
 
 // True when `path` has one of the mesh extensions above.
 bool IsMeshPath(const std::string& path);

@@ -212,6 +212,35 @@ TEST_F(CliOutput, EveryEncodingFlagReadsBackTheSameTetsAndLabels) {
   }
 }
 
+// An LPS-tagged input refined into a format without a frame tag keeps its LPS numbers there
+// (io::FormatMesh), and refine says the tag is lost; into .vtu the tag is kept, and no warning.
+TEST_F(CliOutput, AnLpsInputWarnsWhereTheTagCannotBeWritten) {
+  io::MeshFile lps;
+  lps.mesh = testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2});
+  lps.frame = io::MeshFrame::kLps;  // written with SPACE=LPS: the file stores -x, -y
+  const std::string in = dir_.File("lps_in.vtu");
+  ASSERT_TRUE(io::WriteMesh(in, lps).ok());
+  for (const char* extension : {".msh", ".mesh", ".vtu"}) {
+    SCOPED_TRACE(extension);
+    const std::string out = dir_.File(absl::StrCat("lps_out", extension));
+    const ProcessResult run = Refine(in, out, {"--quiet"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const bool lost = std::string(extension) != ".vtu";
+    EXPECT_EQ(absl::StrContains(run.err, out + ": written in the input's LPS coordinates, but "
+                                               "this format has no place for the SPACE=LPS tag"),
+              lost)
+        << run.err;
+    absl::StatusOr<io::MeshFile> got = io::ReadMesh(out);
+    ASSERT_TRUE(got.ok()) << got.status();
+    // The input's vertices come first: read back untagged, they are the LPS numbers.
+    for (size_t i = 0; i < lps.mesh.points.size(); ++i) {
+      const Vec3& p = lps.mesh.points[i];
+      const Vec3 want = lost ? Vec3{-p[0], -p[1], p[2]} : p;
+      EXPECT_EQ(got->mesh.points[i], want) << i;
+    }
+  }
+}
+
 // The same files through meshio and VTK 9, the readers ParaView, Slicer and FEniCS users have.
 TEST_F(CliOutput, IndependentReadersSeeTheSameTetsAndLabels) {
   const bool meshio = PythonImports("meshio");

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "client/io/mesh_io.h"
@@ -194,6 +195,35 @@ TEST(IoFixtureTest, GmshPartitionedFilesKeepTheirPhysicalVolumes) {
   ASSERT_EQ(volume.size(), 2u);
   EXPECT_NEAR(volume.at(5), 1.0, 1e-12);
   EXPECT_NEAR(volume.at(7), 1.0, 1e-12);
+}
+
+// A Slicer (LPS-tagged) model written where no frame tag fits (.msh, .mesh, .meshb) keeps the
+// input's own numbers, as every other vertex of the output does: it came back in RAS, x and y
+// negated without a word. LpsTagLost says so for those formats only.
+TEST(IoFixtureTest, LpsMeshesKeepTheirCoordinatesWhereNoTagFits) {
+  for (const char* input : {"slicer_lps.vtu", "slicer_lps.vtk"}) {
+    SCOPED_TRACE(input);
+    absl::StatusOr<MeshFile> lps = ReadMesh(FixturePath(input));
+    ASSERT_TRUE(lps.ok()) << lps.status();
+    ASSERT_EQ(lps->frame, MeshFrame::kLps);
+    iotest::ScratchDir dir;
+    for (const char* name : {"out.msh", "out.mesh", "out.meshb", "out.vtu", "out.vtk"}) {
+      SCOPED_TRACE(name);
+      const bool tagged = absl::EndsWith(name, ".vtu") || absl::EndsWith(name, ".vtk");
+      EXPECT_EQ(LpsTagLost(name, *lps), !tagged);
+      ASSERT_TRUE(WriteMesh(dir.File(name), *lps).ok());
+      absl::StatusOr<MeshFile> back = ReadMesh(dir.File(name));
+      ASSERT_TRUE(back.ok()) << back.status();
+      EXPECT_EQ(back->frame, tagged ? MeshFrame::kLps : MeshFrame::kUntagged);
+      ASSERT_EQ(back->mesh.points.size(), lps->mesh.points.size());
+      for (size_t i = 0; i < lps->mesh.points.size(); ++i) {
+        // Read back as RAS: the tagged ones are converted again, the others are the LPS numbers.
+        const Vec3& p = lps->mesh.points[i];
+        const Vec3 want = tagged ? p : Vec3{-p[0], -p[1], p[2]};
+        for (int a = 0; a < 3; ++a) EXPECT_NEAR(back->mesh.points[i][a], want[a], 1e-12) << i;
+      }
+    }
+  }
 }
 
 }  // namespace

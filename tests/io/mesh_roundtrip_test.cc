@@ -36,7 +36,12 @@ MeshFile Expected(const MeshFile& written, const std::string& extension) {
     if (!kept.mesh.labels.empty()) kept.label_name = LabelArrayName(written);
     return kept;
   }
-  kept.frame = MeshFrame::kUntagged;  // no frame tag: written in RAS
+  // No frame tag: the points are written as the frame stores them (LPS numbers for an LPS
+  // mesh) and read back untagged, as RAS.
+  if (kept.frame == MeshFrame::kLps) {
+    for (Vec3& p : kept.mesh.points) p = {-p[0], -p[1], p[2]};
+  }
+  kept.frame = MeshFrame::kUntagged;
   if (extension == ".msh") {
     // Physical groups are positive; other labels read back as "no group" (0), and a file
     // without any group has no labels.
