@@ -11,6 +11,7 @@
 #include "gtest/gtest.h"
 #include "tests/cli/cli_test_util.h"
 #include "tests/io/io_test_util.h"
+#include "tests/support/geometry.h"
 
 namespace tetrefine::clitest {
 namespace {
@@ -253,8 +254,25 @@ TEST_F(CliMeshVerify, InfoOnAMesh) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   for (const char* text :
        {"tetrahedral mesh", "tets                  120", "[-5, 5] x [0, 12] x [10, 22]", "1440",
-        "value (per vertex)", "inverted tets         0"}) {
+        "value (per vertex)", "inverted tets         0", "frame                 untagged"}) {
     EXPECT_TRUE(absl::StrContains(run.out, text)) << text << " missing from\n" << run.out;
+  }
+  EXPECT_FALSE(absl::StrContains(run.out, "regions")) << run.out;
+
+  // Labels, the frame tag and the arrays refine does not carry are shown: "arrays none" on a
+  // labelled file left a user unable to tell whether its labels had been recognised.
+  io::MeshFile labelled;
+  labelled.mesh = testing::FiveTetMesh({0, 0, 0}, {1, 1, 1}, {2, 1, 1});  // 10 tets
+  labelled.mesh.labels = {11, 11, 11, 12, 12, 11, 11, 11, 11, 13};
+  labelled.label_name = "gmsh:physical";
+  labelled.frame = io::MeshFrame::kLps;
+  ASSERT_TRUE(io::WriteMesh(dir_.File("labelled.vtu"), labelled).ok());
+  const ProcessResult info = RunTetrefine({"info", dir_.File("labelled.vtu")});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  for (const char* text : {"gmsh:physical (region label per tet)",
+                           "regions               3: 11 (7 tets), 12 (2 tets), 13 (1 tet)",
+                           "frame                 LPS (SPACE=LPS tag), read as RAS"}) {
+    EXPECT_TRUE(absl::StrContains(info.out, text)) << text << " missing from\n" << info.out;
   }
 }
 
