@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -278,12 +279,14 @@ std::string IterationPath(const std::string& output, int iteration) {
 struct InputTags {
   std::string label_name;
   io::MeshFrame frame = io::MeshFrame::kUntagged;
+  std::map<int32_t, std::string> region_names;  // kept by .msh outputs
 };
 
 io::MeshFile WithQuality(const Mesh& mesh, const InputTags& tags) {
   io::MeshFile file{.mesh = mesh, .tet_iteration = {}, .tet_quality = {}};
   file.label_name = tags.label_name;
   file.frame = tags.frame;
+  file.region_names = tags.region_names;
   file.tet_quality.reserve(mesh.tets.size());
   for (const Tet& t : mesh.tets) {
     file.tet_quality.push_back(static_cast<float>(
@@ -382,7 +385,17 @@ int RunRefinement(const RefineSettings& s) {
                               absl::StrJoin(mesh_file->dropped_arrays, ", "),
                               " (refine writes value, iteration, quality and the region labels)"));
   }
-  const InputTags tags{.label_name = mesh_file->label_name, .frame = mesh_file->frame};
+  const InputTags tags{.label_name = mesh_file->label_name,
+                       .frame = mesh_file->frame,
+                       .region_names = mesh_file->region_names};
+  if (!tags.region_names.empty() && !absl::EndsWithIgnoreCase(s.output_path, ".msh")) {
+    std::vector<std::string> names;
+    for (const auto& [label, name] : tags.region_names) {
+      names.push_back(absl::StrCat(label, " \"", name, "\""));
+    }
+    PrintWarning(absl::StrCat(s.output_path, ": the region names (", absl::StrJoin(names, ", "),
+                              ") are not written: only .msh keeps them; the labels are kept"));
+  }
   if (io::LpsTagLost(s.output_path, *mesh_file)) {
     PrintWarning(absl::StrCat(
         s.output_path,
@@ -567,6 +580,7 @@ int RunRefinement(const RefineSettings& s) {
                                                          .tet_quality = std::move(quality)});
     file.label_name = tags.label_name;
     file.frame = tags.frame;
+    file.region_names = tags.region_names;
   };
   if (s.pvtu) {
     for (sharding::RefinedMesh& piece : pieces) {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <utility>
@@ -189,6 +190,7 @@ class GmshParser {
   absl::Status SkipSection(absl::string_view section);
   absl::Status Entities();
   absl::Status PartitionedEntities();
+  absl::Status PhysicalNames();
   absl::Status EntityLists(bool partitioned);
   absl::Status Nodes22();
   absl::Status Nodes41();
@@ -217,6 +219,7 @@ class GmshParser {
   TagMap node_index_;
   // Physical tags of 4.1 entities, keyed by dimension * 2^32 + entity tag.
   absl::flat_hash_map<int64_t, int64_t> entity_physical_;
+  std::map<int32_t, std::string> region_names_;  // $PhysicalNames of dimension 3
 
   // Tets as read, in file order.
   std::vector<Tet> tets_;
@@ -277,8 +280,8 @@ absl::Status GmshParser::ExpectEnd(absl::string_view section) {
   return absl::OkStatus();
 }
 
-// Skips a section this reader does not use ($PhysicalNames, $Periodic, $GhostElements,
-// ...). Its end marker is searched as bytes: binary sections are not tokens.
+// Skips a section this reader does not use ($Periodic, $GhostElements, ...). Its end marker is
+// searched as bytes: binary sections are not tokens.
 absl::Status GmshParser::SkipSection(absl::string_view section) {
   const std::string end = absl::StrCat("$End", section);
   while (!in_.AtEndOfInput()) {
@@ -286,6 +289,29 @@ absl::Status GmshParser::SkipSection(absl::string_view section) {
     if (line == end) return absl::OkStatus();
   }
   return in_.Error(absl::StrCat("truncated: no ", end));
+}
+
+// $PhysicalNames (text in ASCII and binary files alike): "dim tag \"name\"" lines. The names
+// of volume groups are the regions' names, written back to .msh outputs; they were dropped
+// (found by a file-format sweep).
+absl::Status GmshParser::PhysicalNames() {
+  absl::StatusOr<int64_t> count = in_.IntIn("the physical name count", 0, kMaxCount);
+  if (!count.ok()) return count.status();
+  if (absl::Status s = in_.CheckCount(*count, 6, "physical names"); !s.ok()) return s;
+  for (int64_t i = 0; i < *count; ++i) {
+    absl::StatusOr<int64_t> dim = in_.IntIn("a physical group dimension", 0, 3);
+    if (!dim.ok()) return dim.status();
+    absl::StatusOr<int64_t> tag = in_.IntIn("a physical tag", std::numeric_limits<int32_t>::min(),
+                                            std::numeric_limits<int32_t>::max());
+    if (!tag.ok()) return tag.status();
+    absl::string_view name = absl::StripAsciiWhitespace(in_.RestOfLine());
+    if (name.size() < 2 || name.front() != '"' || name.back() != '"') {
+      return in_.Error(absl::StrCat("physical name of ", *tag, ": expected a quoted name"));
+    }
+    name = name.substr(1, name.size() - 2);
+    if (*dim == 3 && !name.empty()) region_names_[static_cast<int32_t>(*tag)] = std::string(name);
+  }
+  return absl::OkStatus();
 }
 
 absl::Status GmshParser::Entities() { return EntityLists(/*partitioned=*/false); }
@@ -816,6 +842,8 @@ absl::StatusOr<MeshFile> GmshParser::Parse(GmshReadInfo* info) {
       s = Entities();
     } else if (name == "PartitionedEntities" && version_ >= 4) {
       s = PartitionedEntities();
+    } else if (name == "PhysicalNames") {
+      s = PhysicalNames();
     } else if (name == "NodeData" || name == "ElementData") {
       s = Data(name == "NodeData");
     } else {
@@ -896,6 +924,7 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
     file.mesh.labels.resize(t);
     for (size_t i = 0; i < t; ++i) file.mesh.labels[i] = labels_[at(i)];
     file.label_name = "gmsh:physical";
+    file.region_names = std::move(region_names_);
   }
   if (absl::Status s = ValidateMeshFile(file, path_); !s.ok()) return s;
   return file;

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
@@ -154,7 +155,19 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
     AppendNative<int32_t>(out, 1);
     out += '\n';
   }
-  out += "$EndMeshFormat\n$Entities\n";
+  out += "$EndMeshFormat\n";
+  // The names of the physical groups written (positive labels present in the mesh).
+  std::vector<std::pair<int32_t, std::string>> names;
+  for (const Group& group : groups) {
+    auto name = file.region_names.find(group.label);
+    if (group.label > 0 && name != file.region_names.end()) names.emplace_back(*name);
+  }
+  if (!names.empty()) {
+    absl::StrAppend(&out, "$PhysicalNames\n", names.size(), "\n");
+    for (const auto& [label, name] : names) absl::StrAppend(&out, "3 ", label, " \"", name, "\"\n");
+    out += "$EndPhysicalNames\n";
+  }
+  out += "$Entities\n";
   if (binary) {
     for (uint64_t n : {uint64_t{0}, uint64_t{0}, uint64_t{0}, uint64_t{groups.size()}}) {
       AppendNative(out, n);

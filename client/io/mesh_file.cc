@@ -48,6 +48,14 @@ absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path) {
     return FileError(path, absl::StrCat("cell data \"quality\" has ", file.tet_quality.size(),
                                         " entries for ", t, " tetrahedra"));
   }
+  for (const auto& [label, name] : file.region_names) {
+    for (const char c : name) {
+      if (c == '"' || static_cast<unsigned char>(c) < 0x20) {
+        return FileError(path, absl::StrCat("the name of region ", label,
+                                            " holds a quote or a control character"));
+      }
+    }
+  }
   // A label name must be one readers recognise (label_names.h), or labels written under it
   // would come back as an anonymous cell array.
   if (!file.mesh.labels.empty() && !file.label_name.empty() && LabelNameRank(file.label_name) < 0) {

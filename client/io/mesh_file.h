@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,9 @@ struct MeshFile {
   std::string label_name{};
   MeshFrame frame = MeshFrame::kUntagged;
   std::vector<std::string> dropped_arrays{};
+  // Names of labels (Gmsh $PhysicalNames of dimension 3), for the formats that keep them: .msh
+  // writes them back. Printable, without '"'.
+  std::map<int32_t, std::string> region_names{};
 };
 
 // "point data \"name\"" or "cell data \"name\"": an entry of MeshFile::dropped_arrays.

@@ -241,6 +241,30 @@ TEST_F(CliOutput, AnLpsInputWarnsWhereTheTagCannotBeWritten) {
   }
 }
 
+// Gmsh region names go through refine to a .msh output; other outputs say they drop them.
+TEST_F(CliOutput, GmshRegionNamesReachAMshOutput) {
+  io::MeshFile named;
+  named.mesh = testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2});
+  for (size_t t = 0; t < named.mesh.tets.size(); ++t) {
+    named.mesh.labels.push_back(t % 2 == 0 ? 3 : 4);
+  }
+  named.label_name = "gmsh:physical";
+  named.region_names = {{3, "grey matter"}, {4, "white matter"}};
+  const std::string in = dir_.File("named_in.msh");
+  ASSERT_TRUE(io::WriteMesh(in, named).ok());
+  const ProcessResult to_msh = Refine(in, dir_.File("named_out.msh"), {"--quiet"});
+  ASSERT_EQ(to_msh.exit_code, 0) << to_msh.err;
+  EXPECT_EQ(to_msh.err, "");
+  absl::StatusOr<io::MeshFile> got = io::ReadMesh(dir_.File("named_out.msh"));
+  ASSERT_TRUE(got.ok()) << got.status();
+  EXPECT_EQ(got->region_names, named.region_names);
+  const ProcessResult to_vtu = Refine(in, dir_.File("named_out.vtu"), {"--quiet"});
+  ASSERT_EQ(to_vtu.exit_code, 0) << to_vtu.err;
+  EXPECT_TRUE(absl::StrContains(
+      to_vtu.err, "the region names (3 \"grey matter\", 4 \"white matter\") are not written"))
+      << to_vtu.err;
+}
+
 // The same files through meshio and VTK 9, the readers ParaView, Slicer and FEniCS users have.
 TEST_F(CliOutput, IndependentReadersSeeTheSameTetsAndLabels) {
   const bool meshio = PythonImports("meshio");

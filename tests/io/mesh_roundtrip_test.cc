@@ -1,9 +1,11 @@
 // Mesh formats: write-then-read round trips, hand-written inputs, the real Medit mesh, and
 // atomic writes.
 #include <filesystem>
+#include <map>
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_replace.h"
 #include "client/io/gmsh_format.h"
 #include "client/io/mesh_io.h"
 #include "gmock/gmock.h"
@@ -296,6 +298,43 @@ TEST(IoMeshTest, FailedWriteLeavesOldFileAndNoTemporary) {
     ++files;
   }
   EXPECT_EQ(files, 1);
+}
+
+// Gmsh's $PhysicalNames of volume groups are the regions' names: read, and written back to .msh
+// (they were dropped, found by a file-format sweep). Names of surfaces and empty names are not
+// regions' names.
+TEST(IoMeshTest, GmshRegionNamesRoundTrip) {
+  ScratchDir dir;
+  MeshFile file;
+  file.mesh.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  file.mesh.tets = {{0, 1, 2, 3}, {1, 2, 3, 4}};
+  file.mesh.labels = {5, 7};
+  file.label_name = "gmsh:physical";
+  file.region_names = {{5, "liver"}, {7, "left kidney"}, {9, "absent"}};
+  for (const bool binary : {false, true}) {
+    SCOPED_TRACE(binary ? "binary" : "ascii");
+    const std::string path = dir.File(binary ? "named_binary.msh" : "named_ascii.msh");
+    ASSERT_TRUE(WriteMesh(path, file, {.binary = binary}).ok());
+    absl::StatusOr<MeshFile> back = ReadMesh(path);
+    ASSERT_TRUE(back.ok()) << back.status();
+    EXPECT_EQ(back->mesh.labels, file.mesh.labels);
+    // Only the groups written: 9 labels no tet.
+    EXPECT_EQ(back->region_names,
+              (std::map<int32_t, std::string>{{5, "liver"}, {7, "left kidney"}}));
+  }
+  // As Gmsh writes them: a surface's name and an empty name are not kept.
+  const std::string text = iotest::ReadBytes(dir.File("named_ascii.msh"));
+  const std::string gmsh_style = absl::StrReplaceAll(
+      text, {{"$PhysicalNames\n2\n", "$PhysicalNames\n4\n2 1 \"skin\"\n3 8 \"\"\n"}});
+  ASSERT_NE(gmsh_style, text);
+  iotest::WriteBytes(dir.File("gmsh_style.msh"), gmsh_style);
+  absl::StatusOr<MeshFile> named = ReadMesh(dir.File("gmsh_style.msh"));
+  ASSERT_TRUE(named.ok()) << named.status();
+  EXPECT_EQ(named->region_names,
+            (std::map<int32_t, std::string>{{5, "liver"}, {7, "left kidney"}}));
+  file.region_names[5] = "bad \"quote\"";
+  EXPECT_THAT(std::string(WriteMesh(dir.File("bad.msh"), file).message()),
+              HasSubstr("the name of region 5 holds a quote"));
 }
 
 // A user who keeps `latest.vtu -> runs/7/out.vtu` expects a write to latest.vtu to land in
