@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -213,6 +214,25 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
     }
     return absl::OkStatus();
   }
+  // Two tets on the bad face with the same four vertices are one element listed twice (Gmsh 2
+  // lists an element once per physical group it belongs to): said so, rather than as an overlap
+  // or a crowded face (found by a file-format sweep).
+  const auto duplicate = [&](const std::vector<int64_t>& on) -> std::optional<absl::Status> {
+    for (size_t i = 0; i < on.size(); ++i) {
+      for (size_t j = i + 1; j < on.size(); ++j) {
+        Tet a = tets[on[i]], c = tets[on[j]];
+        std::sort(a.begin(), a.end());
+        std::sort(c.begin(), c.end());
+        if (a != c) continue;
+        return absl::InvalidArgumentError(
+            absl::StrCat("mesh.tets[", on[i], "] and mesh.tets[", on[j],
+                         "] are the same tet (vertices ", a[0], ", ", a[1], ", ", a[2], ", ", a[3],
+                         "): an element listed twice, as Gmsh 2 files list "
+                         "an element once per physical group it belongs to"));
+      }
+    }
+    return std::nullopt;
+  };
   // The bad bucket, sorted, names its first bad face; the tets on it are found again.
   FaceUse* b = uses.get() + start[v];
   FaceUse* e = uses.get() + start[v + 1];
@@ -224,13 +244,16 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
     const auto fc = static_cast<uint32_t>((*p >> 1) & 0x7fffffffu);
     const std::string face = absl::StrCat("(", v, ", ", fb, ", ", fc, ")");
     if (q - p > 2) {
-      const std::vector<int64_t> on = TetsOnFace(tets, {static_cast<uint32_t>(v), fb, fc}, 3);
+      const std::vector<int64_t> on =
+          TetsOnFace(tets, {static_cast<uint32_t>(v), fb, fc}, static_cast<size_t>(q - p));
+      if (std::optional<absl::Status> same = duplicate(on)) return *same;
       return absl::InvalidArgumentError(absl::StrCat(
           "mesh.tets: face ", face, " is shared by ", q - p, " tets (mesh.tets[", on.at(0), "], [",
           on.at(1), "], [", on.at(2), "]): a face may belong to at most two"));
     }
     if (q - p == 2 && FaceSide(p[0]) == FaceSide(p[1])) {
       const std::vector<int64_t> on = TetsOnFace(tets, {static_cast<uint32_t>(v), fb, fc}, 2);
+      if (std::optional<absl::Status> same = duplicate(on)) return *same;
       return absl::InvalidArgumentError(absl::StrCat("mesh.tets[", on.at(0), "] and mesh.tets[",
                                                      on.at(1),
                                                      "] overlap: both lie on the same "

@@ -59,7 +59,7 @@ const BadCase kCases[] = {
        m.points[4] = {2, 2, 4.5};
      },
      "mesh.points[4] = (2, 2, 4.5) lies outside"},
-    {"overlap", [](Mesh& m, RefineOptions&) { m.tets[1] = m.tets[0]; }, "overlap"},
+    {"listed twice", [](Mesh& m, RefineOptions&) { m.tets[1] = m.tets[0]; }, "are the same tet"},
     {"empty", [](Mesh& m, RefineOptions&) { m.tets.clear(); }, "mesh.tets is empty"},
     {"epsilon zero", [](Mesh&, RefineOptions& o) { o.epsilon = 0; }, "options.epsilon"},
     {"epsilon negative", [](Mesh&, RefineOptions& o) { o.epsilon = -1; }, "options.epsilon"},
@@ -144,6 +144,24 @@ TEST(Validation, FaceInThreeTetsIsRefused) {
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.status().message().find("is shared by 3 tets"), std::string::npos)
       << r.status().message();
+}
+
+// One tet listed twice (Gmsh 2 lists an element once per physical group) is named as such, not
+// as an overlap or a face in three tets, whichever face check meets it first.
+TEST(Validation, ATetListedTwiceIsNamedAsSuch) {
+  // A lone tet and its copy; a tet, its neighbour across a face, and the neighbour's copy.
+  Mesh lone = TwoTets();
+  lone.tets = {lone.tets[0], lone.tets[0]};
+  Mesh pair = TwoTets();
+  pair.tets.push_back(pair.tets[1]);
+  for (const auto& [mesh, message] :
+       {std::pair{lone, "mesh.tets[0] and mesh.tets[1] are the same tet"},
+        std::pair{pair, "mesh.tets[1] and mesh.tets[2] are the same tet"}}) {
+    auto r = Refine(UnitVolume(), mesh, RefineOptions{});
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.status().message().find(message), std::string::npos) << r.status().message();
+    EXPECT_NE(r.status().message().find("an element listed twice"), std::string::npos);
+  }
 }
 
 TEST(Validation, PoliciesNormalizeAndClamp) {

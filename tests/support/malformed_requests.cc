@@ -725,7 +725,7 @@ std::vector<MalformedRequest> MalformedRequests() {
              const Tet first = SmallMesh().tets[0];
              SetTet(r, 1, first);
            },
-           {"overlap"}),
+           {"mesh.tets[0] and mesh.tets[1] are the same tet", "an element listed twice"}),
       {"FaceInThreeTets",
        [] { return Write(SmallVolume(), NonManifoldMesh()); },
        {"is shared by 3 tets", "a face may belong to at most two"}},
