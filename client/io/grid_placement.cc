@@ -47,6 +47,28 @@ std::vector<std::byte> Flip(const std::vector<std::byte>& data, const Index3& di
   return out;
 }
 
+// The first non-finite float sample, named by the file's own index (x fastest).
+absl::Status CheckFiniteInFileOrder(absl::string_view path, const Index3& dims, VoxelType type,
+                                    const std::vector<std::byte>& data) {
+  if (type != VoxelType::kFloat32 && type != VoxelType::kFloat64) return absl::OkStatus();
+  const int64_t count = dims[0] * dims[1] * dims[2];
+  for (int64_t i = 0; i < count; ++i) {
+    double value = 0.0;
+    if (type == VoxelType::kFloat32) {
+      float f = 0.0f;
+      std::memcpy(&f, data.data() + i * 4, 4);
+      value = f;
+    } else {
+      std::memcpy(&value, data.data() + i * 8, 8);
+    }
+    if (std::isfinite(value)) continue;
+    return FileError(
+        path, absl::StrCat("voxel (", i % dims[0], ", ", (i / dims[0]) % dims[1], ", ",
+                           i / (dims[0] * dims[1]), ") of the file is not finite (", value, ")"));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& affine,
@@ -93,7 +115,14 @@ absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& aff
         grid.origin[row] += affine[row][column] * static_cast<double>(first[column]);
       }
     }
-    if (flip[0] || flip[1] || flip[2]) data = Flip(data, dims, VoxelSize(type), flip);
+    if (flip[0] || flip[1] || flip[2]) {
+      // The core names a non-finite sample by its grid index, which after a flip is not the
+      // file's: (22, 10, 10) for the file's (10, 10, 10) (found by a file-format sweep).
+      if (absl::Status finite = CheckFiniteInFileOrder(path, dims, type, data); !finite.ok()) {
+        return finite;
+      }
+      data = Flip(data, dims, VoxelSize(type), flip);
+    }
   } else {
     // Oblique: the samples stay in storage order and the rotation/shear/permutation goes into
     // the grid's direction, so volume.Sample(p) is the file's value at world point p.

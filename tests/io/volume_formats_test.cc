@@ -254,6 +254,27 @@ TEST(IoReadVolumeTest, DevicesAreRefusedNotReadForever) {
   }
 }
 
+// A NaN is named by the file's own voxel index, also where the reader flips an axis (a negative
+// x scale, as in the bundled anatomical example): it was named after the flip, (2, 1, 1) for the
+// file's (1, 1, 1) on this 4 x 2 x 2 grid.
+TEST(IoReadVolumeTest, ANonFiniteVoxelIsNamedByTheFilesIndex) {
+  ScratchDir dir;
+  for (const double x_scale : {1.0, -1.0}) {
+    iotest::NiftiSpec spec;
+    spec.dim = {3, 4, 2, 2, 1, 1, 1, 1};
+    spec.sform_code = 1;
+    spec.srow = {{{x_scale, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}};
+    std::vector<float> samples(16, 1.f);
+    samples[1 + 4 * (1 + 2 * 1)] = std::nanf("");  // file voxel (1, 1, 1)
+    const std::string path = dir.File(x_scale > 0 ? "plain.nii" : "flipped.nii");
+    WriteBytes(path, iotest::NiftiHeaderBytes(spec) + FloatSamples(samples, false));
+    const absl::Status status = ReadVolume(path).status();
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << path;
+    EXPECT_THAT(std::string(status.message()), HasSubstr("(1, 1, 1)")) << status.message();
+    EXPECT_THAT(std::string(status.message()), HasSubstr("is not finite (nan)"));
+  }
+}
+
 TEST(IoReadVolumeTest, ExtensionsAreCaseInsensitive) {
   ScratchDir dir;
   iotest::NiftiSpec spec;
