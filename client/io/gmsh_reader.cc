@@ -829,6 +829,13 @@ absl::StatusOr<MeshFile> GmshParser::Parse(GmshReadInfo* info) {
     }
     const std::string name(section);
     absl::Status s;
+    if (name == "ParametricNodes") {
+      // MSH 2 files saved with Mesh.SaveParametric hold their nodes here instead of $Nodes; they
+      // were refused as "$Elements before $Nodes" (found by a file-format sweep).
+      return in_.Error(
+          "$ParametricNodes (MSH 2 nodes with parametric coordinates) is not read: save the mesh "
+          "without Mesh.SaveParametric, or as MSH 4.1");
+    }
     if (name == "Nodes") {
       s = version_ >= 4 ? Nodes41() : Nodes22();
     } else if (name == "Elements") {

@@ -190,6 +190,8 @@ INSTANTIATE_TEST_SUITE_P(
         Edit{".msh", "0.125 0.25 0.5", "0.125 0.25 inf", "not finite"},
         Edit{".msh", "$Elements\n1 2 1 2", "$Elements\n1 200000000000 1 2", "bytes remain"},
         Edit{".msh", "$EndNodes", "$EndNodez", "expected $EndNodes"},
+        // MSH 2 with Mesh.SaveParametric: was "$Elements before $Nodes".
+        Edit{".msh", "$Nodes\n", "$ParametricNodes\n", "$ParametricNodes (MSH 2 nodes with"},
         Edit{".vtu", "NumberOfPoints=\"5\"", "NumberOfPoints=\"6\"", "header says"},
         Edit{".vtu", "NumberOfCells=\"2\"", "NumberOfCells=\"99999999999\"", "header says"},
         Edit{".vtu", "</Points>", "</Pointz>", "not well-formed XML"},
