@@ -64,10 +64,13 @@ int VolumeInfo(const std::string& path) {
                            r == 0 ? "  (columns: world axes of i, j, k; oblique)" : "")});
     }
   }
+  // The file's storage-order index to world, in RAS (an LPS file's NRRD or MetaImage matrix has
+  // x and y negated). "+ 0.0" turns the -0 of a negated zero into 0 (a sweep saw "-0" entries).
   for (int r = 0; r < 4; ++r) {
     const auto& a = file->affine[r];
-    rows.push_back({r == 0 ? "file affine" : "",
-                    absl::StrFormat("[%12.6g %12.6g %12.6g %12.6g]", a[0], a[1], a[2], a[3])});
+    rows.push_back({r == 0 ? "file affine (RAS)" : "",
+                    absl::StrFormat("[%12.6g %12.6g %12.6g %12.6g]", a[0] + 0.0, a[1] + 0.0,
+                                    a[2] + 0.0, a[3] + 0.0)});
   }
   if (file->warnings.empty()) rows.push_back({"warnings", "none"});
   for (size_t i = 0; i < file->warnings.size(); ++i) {

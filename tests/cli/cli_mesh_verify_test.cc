@@ -180,9 +180,23 @@ TEST_F(CliMeshVerify, InfoOnAVolume) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   for (const char* text :
        {"11 x 9 x 7 (693 voxels)", "float64", "1 x 1.5 x 2 mm", "(-5, 0, 10) mm, world RAS",
-        "[-5, 5] x [0, 12] x [10, 22]", "value range", "file affine", "warnings"}) {
+        "[-5, 5] x [0, 12] x [10, 22]", "value range", "file affine (RAS)", "warnings"}) {
     EXPECT_TRUE(absl::StrContains(run.out, text)) << text << " missing from\n" << run.out;
   }
+  // An LPS NRRD: its affine shown in RAS negates x and y, and the negated zeros print as 0, not
+  // as -0 (a file-format sweep saw "-0" entries).
+  const std::string nrrd = dir_.File("lps.nrrd");
+  std::string bytes =
+      "NRRD0004\ntype: uint8\ndimension: 3\nspace: left-posterior-superior\nsizes: 2 2 2\n"
+      "space directions: (1,0,0) (0,1,0) (0,0,1)\nspace origin: (0,0,0)\nencoding: raw\n\n";
+  bytes.append(8, '\1');
+  io::iotest::WriteBytes(nrrd, bytes);
+  const ProcessResult lps = RunTetrefine({"info", nrrd});
+  ASSERT_EQ(lps.exit_code, 0) << lps.err;
+  EXPECT_FALSE(absl::StrContains(lps.out, "-0 ")) << lps.out;
+  EXPECT_FALSE(absl::StrContains(lps.out, "-0]")) << lps.out;
+  EXPECT_TRUE(absl::StrContains(lps.out, "file affine (RAS)  [          -1            0"))
+      << lps.out;
 }
 
 // An oblique volume (rotated about z and mirrored in k, det -1, as radiological MRI often is):
