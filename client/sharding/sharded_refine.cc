@@ -267,10 +267,11 @@ size_t LargestPart(const std::vector<HaloPart>& parts) {
 
 // The parts of one iteration of a halo scheme. `shards` parts each carry `rings` rings of tets;
 // on a mesh small for `shards` every halo holds most of the mesh, and the parts repeat each
-// other's work: the README demo's 133 k-tet run took 1.46 / 1.95 / 3.13 s with 1 / 2 / 4 parts
-// on two servers (0.45 s unsharded). The result does not depend on the cut (every owned tet is
-// decided as in the whole mesh), so the fewest parts (halving from `shards`) whose largest holds
-// at most 10% more tets than the largest of `shards` parts are sent: no server is given
+// other's work: the bundled example at epsilon 0.05 (1,782 to 133 k tets) took 1.46 / 1.95 /
+// 3.13 s with 1 / 2 / 4 parts on two servers (0.45 s unsharded). The result does not depend on
+// the cut (every owned tet is decided as in the whole mesh), so the fewest parts among 1, 2, 4,
+// ... below `shards` whose largest holds at most 10% more tets than the largest of `shards`
+// parts are sent (else `shards` parts): no server is given
 // noticeably more than the requested cut would give it, and one that repeats work is not sent.
 // A count whose largest part must exceed that bound (the mesh over the count) is not extracted.
 std::vector<HaloPart> HaloPartsFor(const Mesh& mesh, int shards, int rings, bool allow_fewer) {

@@ -43,8 +43,9 @@ struct ShardOptions {
   // part's own tets. The default is what the scheme reads (sharding/halo_parts.h); a narrower
   // halo gives a different mesh, and exists for the test that shows it.
   int halo_rings = kHaloRings;
-  // Halo schemes: an iteration is cut into fewer parts than `shards` when that gives no server
-  // more than 10% more tets than `shards` parts would (HaloPartsFor in sharded_refine.cc). On a
+  // Halo schemes: an iteration is cut into fewer parts than `shards` (1, 2, 4, ...) when that
+  // gives no server more than 10% more tets than `shards` parts would (HaloPartsFor in
+  // sharded_refine.cc). On a
   // mesh small for `shards`, every halo holds most of the mesh, and K parts were K times the
   // work of one for the same wall time. The result is the same either way; false always cuts
   // `shards` parts (for tests of the halo merge).
