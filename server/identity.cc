@@ -160,12 +160,13 @@ absl::StatusOr<std::string> IdentifyCall(const AccessPolicy& policy,
         "with one; the plaintext --local_listen serves health checks only");
   }
   if (!policy.allowed_subjects.empty()) {
+    std::vector<std::string> canonical;
+    for (const std::string& subject : subjects) canonical.push_back(CanonicalSubject(subject));
     bool allowed = false;
     for (const std::string& entry : policy.allowed_subjects) {
+      const std::string entry_canonical = CanonicalSubject(entry);
       for (const std::string& name : common_names) allowed = allowed || name == entry;
-      for (const std::string& subject : subjects) {
-        allowed = allowed || CanonicalSubject(subject) == CanonicalSubject(entry);
-      }
+      for (const std::string& subject : canonical) allowed = allowed || subject == entry_canonical;
     }
     if (!allowed) {
       return absl::PermissionDeniedError(absl::StrCat(

@@ -36,17 +36,16 @@ grpc::Status RefinerService::GetServerInfo(grpc::ServerContext* context,
                                            const v1::GetServerInfoRequest* /*request*/,
                                            v1::ServerInfo* response) {
   absl::StatusOr<std::string> identity = IdentifyCall(config_.access, *context);
-  if (config_.metrics != nullptr) {
-    config_.metrics->RecordServerInfo(
-        identity.ok() ? grpc::StatusCode::OK : wire::ToGrpcStatus(identity.status()).error_code());
-  }
-  if (!identity.ok()) {
+  const grpc::Status status =
+      identity.ok() ? grpc::Status::OK : wire::ToGrpcStatus(identity.status());
+  if (config_.metrics != nullptr) config_.metrics->RecordServerInfo(status.error_code());
+  if (!status.ok()) {
     // Clients ask this before they refine, so a wrong token or certificate ends here: the
     // operator must see it (an operator sweep found three refused CLI runs left no trace).
     spdlog::warn("GetServerInfo peer={} refused: {} {}", context->peer(),
                  absl::StatusCodeToString(identity.status().code()),
                  std::string(identity.status().message()));
-    return wire::ToGrpcStatus(identity.status());
+    return status;
   }
   response->set_version(TETREFINE_VERSION);
   wire::LimitsToWire(config_.limits, response->mutable_limits());
