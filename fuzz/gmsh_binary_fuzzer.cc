@@ -14,8 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
            },
        .path = "fuzz.msh",
        .keeps_label_name = false,
-       .keeps_frame = false,
-       .positive_labels_only = true},
+       .keeps_frame = false},
       data, size);
   return 0;
 }

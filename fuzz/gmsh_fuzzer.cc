@@ -12,8 +12,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
            [](const tetrefine::io::MeshFile& file) { return tetrefine::io::FormatGmsh41(file); },
        .path = "fuzz.msh",
        .keeps_label_name = false,
-       .keeps_frame = false,
-       .positive_labels_only = true},
+       .keeps_frame = false},
       data, size);
   return 0;
 }

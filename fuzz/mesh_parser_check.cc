@@ -48,14 +48,9 @@ void CheckMeshParser(const MeshFormatUnderTest& format, const uint8_t* data, siz
                          "tet_iteration changed in a round trip");
   }
   // No labels and all-zero labels are the same to Medit (every tet has a reference, 0 when
-  // none) and Gmsh (0 = no physical group); Gmsh keeps positive labels only.
+  // none) and Gmsh (0 = no physical group, or group 0).
   if (!file->mesh.labels.empty()) {
-    std::vector<int32_t> expected = file->mesh.labels;
-    if (!format.keeps_label_name) {  // Gmsh and Medit store labels in their own slot
-      for (int32_t& label : expected) {
-        if (format.positive_labels_only && label < 0) label = 0;
-      }
-    }
+    const std::vector<int32_t>& expected = file->mesh.labels;
     const bool all_zero =
         std::all_of(expected.begin(), expected.end(), [](int32_t x) { return x == 0; });
     if (!(all_zero && again->mesh.labels.empty())) {

@@ -21,7 +21,6 @@ struct MeshFormatUnderTest {
   bool keeps_iteration = true;
   bool keeps_label_name = true;
   bool keeps_frame = true;
-  bool positive_labels_only = false;  // Gmsh: labels <= 0 read back as 0
 };
 
 // Parses `data` as the format. Any input may fail, but none may crash; an input that parses and

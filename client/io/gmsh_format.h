@@ -35,11 +35,11 @@ struct GmshWriteOptions {
   bool binary = false;  // "4.1 1 8" binary (native little-endian) instead of ASCII
 };
 
-// Writes format 4.1: one volume entity per distinct label (physical group = the label when it is
-// positive; labels <= 0 get an entity without a physical group and read back as 0), or a single
-// volume entity without labels; all nodes in the first volume entity, tags 1..V; tets grouped by
-// label, element tag = tet index + 1, so the tet order survives a round trip; then $NodeData
-// "value" and $ElementData "iteration"/"quality" when the MeshFile has them.
+// Writes format 4.1: one volume entity per distinct label (physical group = the label, zero and
+// negative ones too: see the writer for why), or a single volume entity without labels; all nodes
+// in the first volume entity, tags 1..V; tets grouped by label, element tag = tet index + 1, so the
+// tet order survives a round trip; then $NodeData "value" and $ElementData "iteration"/"quality"
+// when the MeshFile has them.
 std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options = {});
 
 }  // namespace tetrefine::io

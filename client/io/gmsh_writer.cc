@@ -156,11 +156,18 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
     out += '\n';
   }
   out += "$EndMeshFormat\n";
-  // The names of the physical groups written (positive labels present in the mesh).
+  // Every label of a labelled mesh is a physical group, zero and negative ones included. Gmsh
+  // 4.8 reads and saves such tags as they are, and meshio needs one on every entity: with
+  // entities left without a tag for labels <= 0 (as before 2026-11-25), meshio 5 refused the
+  // file when labels mixed <= 0 and > 0 ("Incompatible cell data 'gmsh:physical'"), negative
+  // labels came back as 0, and a Gmsh re-save, which keeps only elements in physical groups,
+  // dropped the untagged tets. An unlabelled mesh has one entity without physical group.
+  const bool physical = !mesh.labels.empty();
+  // The names of the physical groups written (labels present in the mesh).
   std::vector<std::pair<int32_t, std::string>> names;
   for (const Group& group : groups) {
     auto name = file.region_names.find(group.label);
-    if (group.label > 0 && name != file.region_names.end()) names.emplace_back(*name);
+    if (physical && name != file.region_names.end()) names.emplace_back(*name);
   }
   if (!names.empty()) {
     absl::StrAppend(&out, "$PhysicalNames\n", names.size(), "\n");
@@ -177,7 +184,6 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
   }
   for (size_t g = 0; g < groups.size(); ++g) {
     const Group& group = groups[g];
-    const bool physical = group.label > 0;  // Gmsh physical tags are positive
     if (binary) {
       AppendNative<int32_t>(out, static_cast<int32_t>(g + 1));
       for (int a = 0; a < 3; ++a) AppendNative(out, group.lo[a]);

@@ -33,11 +33,11 @@ struct MeshWriteOptions {
 // checking it with ValidateMeshFile. The bytes go to a temporary file in the same directory
 // which is then renamed over `path`, so a failed write never leaves half a file.
 // What each format keeps: .vtu/.vtk keep values, iteration, quality, labels (under label_name)
-// and the frame tag; .msh keeps values, iteration, quality and positive labels (as physical
-// groups, with region_names as $PhysicalNames); .mesh/.meshb keep only the labels (as
-// references). Formats without a frame tag get the coordinates of `file.frame` untagged: an LPS
-// mesh is written with its LPS numbers, so every input vertex keeps its coordinates whatever the
-// format (LpsTagLost says when).
+// and the frame tag; .msh keeps values, iteration, quality and labels (as physical groups,
+// zero and negative ones too, with region_names as $PhysicalNames); .mesh/.meshb keep only the
+// labels (as references). Formats without a frame tag get the coordinates of `file.frame` untagged:
+// an LPS mesh is written with its LPS numbers, so every input vertex keeps its coordinates whatever
+// the format (LpsTagLost says when).
 absl::Status WriteMesh(const std::string& path, const MeshFile& file,
                        const MeshWriteOptions& options = {});
 

@@ -147,7 +147,7 @@ class CliOutput : public ::testing::Test {
     WriteVolume(volume_, BumpVolume({9, 9, 9}, {0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}));
   }
 
-  // A labelled input mesh (positive labels: Gmsh keeps them as physical groups), its pattern
+  // A labelled input mesh (Gmsh keeps labels as physical groups), its pattern
   // depending on `seed`.
   std::string LabelledMesh(int seed) {
     io::MeshFile file;

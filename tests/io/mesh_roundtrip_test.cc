@@ -1,5 +1,6 @@
 // Mesh formats: write-then-read round trips, hand-written inputs, the real Medit mesh, and
 // atomic writes.
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -45,13 +46,10 @@ MeshFile Expected(const MeshFile& written, const std::string& extension) {
   }
   kept.frame = MeshFrame::kUntagged;
   if (extension == ".msh") {
-    // Physical groups are positive; other labels read back as "no group" (0), and a file
-    // without any group has no labels.
-    bool any = false;
-    for (int32_t& label : kept.mesh.labels) {
-      if (label <= 0) label = 0;
-      any = any || label != 0;
-    }
+    // Every label is a physical group, zero and negative ones too; a file whose groups are all
+    // 0 reads as one without labels.
+    const bool any = std::any_of(kept.mesh.labels.begin(), kept.mesh.labels.end(),
+                                 [](int32_t label) { return label != 0; });
     if (!any) kept.mesh.labels.clear();
     kept.label_name = kept.mesh.labels.empty() ? "" : "gmsh:physical";
     return kept;
