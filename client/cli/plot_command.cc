@@ -101,9 +101,10 @@ const CommandSpec& PlotSpec() {
           "(relative to the volume's value range; log scale) with a dashed line at epsilon, and\n"
           "the number of tets (log scale). Iteration 0 is the input mesh; the error of the mesh\n"
           "after iteration k is the one measured at the start of iteration k + 1, and the last\n"
-          "mesh's is the file's final_max_error. One coloured line with markers per file; the\n"
-          "legend gives its label (--label in order, else the file's scheme, else its name),\n"
-          "why it stopped, its iterations and its tets.",
+          "mesh's is the file's final_max_error; an error of 0 is a triangle on the bottom edge.\n"
+          "One coloured line with markers per file; the legend gives its label (--label in\n"
+          "order, else the file's scheme, else its name), why it stopped, its iterations and\n"
+          "its tets.",
       .flags =
           {
               {"stats-json", "FILE", "JSON written by tetrefine refine --stats-json", true,

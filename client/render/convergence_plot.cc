@@ -40,6 +40,9 @@ using Surface = std::unique_ptr<cairo_surface_t, SurfaceDeleter>;
 using Context = std::unique_ptr<cairo_t, ContextDeleter>;
 
 bool Plottable(double v) { return std::isfinite(v) && v > 0.0; }
+// Drawn, on the bottom edge when 0: a run whose error vanished must not look like one that
+// stopped (until 2026-11-25 its line just ended).
+bool Drawable(double v) { return Plottable(v) || v == 0.0; }
 
 // The whole decades around the plottable `values`: [floor(log10 min), ceil(log10 max)], at least
 // one decade; [0, 1] when there are none.
@@ -119,6 +122,17 @@ void DrawAxes(cairo_t* cr, const PlotArea& area, const std::string& title,
       if (decades <= 2 && (m == 2 || m == 5)) Text(cr, r.x - 8, ym + 4, TickLabel(m * decade), 1.0);
     }
   }
+  if (area.zero_row) {  // the row of 0, under a gap that says the scale breaks there
+    const double y = std::floor(area.ZeroY()) + 0.5;
+    cairo_move_to(cr, r.x - 6, y);
+    cairo_line_to(cr, r.x, y);
+    cairo_stroke(cr);
+    Text(cr, r.x - 8, y + 4, "0", 1.0);
+    const double gap = std::floor(area.ZeroY() - kZeroBand / 2.0) + 0.5;
+    cairo_move_to(cr, r.x - 5, gap + 2);
+    cairo_line_to(cr, r.x + 5, gap - 2);
+    cairo_stroke(cr);
+  }
   const double step = XTickStep(area.x_max);
   for (double i = 0; i <= area.x_max + 1e-9; i += step) {
     const double x = std::floor(area.X(i)) + 0.5;
@@ -152,6 +166,17 @@ void Marker(cairo_t* cr, double x, double y) {
   cairo_fill(cr);
 }
 
+// A zero value: a triangle pointing down, its tip on the bottom edge's row.
+void ZeroMarker(cairo_t* cr, double x, double y) {
+  const double s = kMarkerRadius * 1.6;
+  cairo_new_sub_path(cr);
+  cairo_move_to(cr, x, y + s * 0.5);
+  cairo_line_to(cr, x - s, y - s * 1.2);
+  cairo_line_to(cr, x + s, y - s * 1.2);
+  cairo_close_path(cr);
+  cairo_fill(cr);
+}
+
 // The series' line through its plottable points (broken where one is not) and its markers.
 void DrawSeries(cairo_t* cr, const PlotArea& area, const std::vector<double>& values,
                 const Rgb& colour) {
@@ -163,13 +188,14 @@ void DrawSeries(cairo_t* cr, const PlotArea& area, const std::vector<double>& va
   cairo_set_line_width(cr, 2.0);
   cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
   bool drawing = false;
+  const auto y_of = [&](double v) { return v == 0.0 ? area.ZeroY() : area.Y(v); };
   for (size_t i = 0; i < values.size(); ++i) {
-    if (!Plottable(values[i])) {
+    if (!Drawable(values[i])) {
       drawing = false;
       continue;
     }
     const double x = area.X(static_cast<double>(i));
-    const double y = area.Y(values[i]);
+    const double y = y_of(values[i]);
     if (drawing) {
       cairo_line_to(cr, x, y);
     } else {
@@ -179,7 +205,9 @@ void DrawSeries(cairo_t* cr, const PlotArea& area, const std::vector<double>& va
   }
   cairo_stroke(cr);
   for (size_t i = 0; i < values.size(); ++i) {
-    if (Plottable(values[i])) Marker(cr, area.X(static_cast<double>(i)), area.Y(values[i]));
+    const double x = area.X(static_cast<double>(i));
+    if (Plottable(values[i])) Marker(cr, x, area.Y(values[i]));
+    if (values[i] == 0.0) ZeroMarker(cr, x, area.ZeroY());
   }
   cairo_restore(cr);
 }
@@ -208,9 +236,11 @@ double PlotArea::X(double iteration) const {
 }
 
 double PlotArea::Y(double value) const {
-  const double span = rect.height - 2.0 * kPlotInset;
+  const double span = rect.height - 2.0 * kPlotInset - (zero_row ? kZeroBand : 0);
   return rect.y + kPlotInset + (log_hi - std::log10(value)) / (log_hi - log_lo) * span;
 }
+
+double PlotArea::ZeroY() const { return rect.y + rect.height - kPlotInset; }
 
 int PlotArea::Row(double value) const {
   const int row = static_cast<int>(std::floor(Y(value)));
@@ -255,6 +285,10 @@ absl::StatusOr<ConvergenceLayout> LayoutConvergencePlot(
   const std::array<double, 2> error_range = DecadeRange(errors);
   const std::array<double, 2> tets_range = DecadeRange(tets);
   for (PlotArea* area : {&layout.error, &layout.tets}) area->x_max = x_max;
+  for (const ConvergenceSeries& s : series) {
+    layout.error.zero_row |= std::find(s.error.begin(), s.error.end(), 0.0) != s.error.end();
+    layout.tets.zero_row |= std::find(s.tets.begin(), s.tets.end(), 0.0) != s.tets.end();
+  }
   layout.error.log_lo = error_range[0];
   layout.error.log_hi = error_range[1];
   layout.tets.log_lo = tets_range[0];

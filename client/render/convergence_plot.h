@@ -13,8 +13,10 @@
 
 namespace tetrefine::render {
 
-// One run. Index i of both vectors is iteration i (0 = the input mesh). Values <= 0 or not
-// finite have no place on a log axis and are left out (the line breaks there).
+// One run. Index i of both vectors is iteration i (0 = the input mesh). A value of 0 (an error
+// that vanished: a volume the mesh represents exactly) is drawn as a downward triangle on a row
+// labelled 0 under the decades; negative or non-finite values have no place on a log axis and
+// are left out (the line breaks there).
 struct ConvergenceSeries {
   std::string label;          // the legend's text for this run
   std::vector<double> error;  // largest edge-midpoint error of the mesh after iteration i
@@ -34,12 +36,17 @@ struct PlotArea {
   double x_max = 1;   // iterations 0 .. x_max span the width less kPlotInset on both sides
   double log_lo = 0;  // 10^log_lo at the bottom (less the inset), 10^log_hi at the top; whole
   double log_hi = 1;  // decades, log_hi > log_lo
+  // Whether some value is 0: the decades then end kZeroBand pixels higher, and the row of 0
+  // (ZeroY) is labelled under them.
+  bool zero_row = false;
   double X(double iteration) const;
   double Y(double value) const;  // value > 0
+  double ZeroY() const;          // the row of the value 0 (meaningful when zero_row)
   // The pixel row a horizontal line at `value` is drawn on (one pixel wide, not anti-aliased).
   int Row(double value) const;
 };
 inline constexpr int kPlotInset = 10;
+inline constexpr int kZeroBand = 24;
 
 struct ConvergenceLayout {
   int width = 0, height = 0;

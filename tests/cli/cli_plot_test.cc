@@ -310,6 +310,44 @@ TEST(CliPlot, ARunWithNoIterationIsOnePoint) {
       << cancelled.out;
 }
 
+// A run whose error vanished (the mesh represents the volume exactly): the zero is drawn as a
+// triangle on the error panel's bottom edge and the line goes down to it; it used to end at the
+// last positive error, as if the run had stopped there.
+TEST(CliPlot, AZeroErrorIsATriangleOnTheBottomEdge) {
+  ScratchDir dir;
+  WriteBytes(
+      dir.File("z.json"),
+      StatsJson("longest-edge", 0.1, {{1000, 3000, 0.5}, {3000, 9000, 0.2}}, 0.0, "converged"));
+  const ProcessResult run = RunTetrefine({"plot", "--stats-json", dir.File("z.json"), "--output",
+                                          dir.File("z.png"), "--width", "800", "--height", "360"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  absl::StatusOr<Image> image = DecodePng(ReadBytes(dir.File("z.png")));
+  ASSERT_TRUE(image.ok()) << image.status();
+  render::ConvergenceOptions options;
+  options.width = 800;
+  options.height = 360;
+  options.epsilons = {0.1};
+  const std::vector<render::ConvergenceSeries> series = {{"", {0.5, 0.2, 0.0}, {1000, 3000, 9000}}};
+  absl::StatusOr<render::ConvergenceLayout> layout = render::LayoutConvergencePlot(series, options);
+  ASSERT_TRUE(layout.ok()) << layout.status();
+  const render::PlotArea& error = layout->error;
+  const render::Rgb colour = render::SeriesColour(0);
+  // The triangle's body, just above its tip on the bottom edge.
+  EXPECT_EQ(image->At(static_cast<int>(std::floor(error.X(2))),
+                      static_cast<int>(std::floor(error.ZeroY())) - 3),
+            colour);
+  // The line from iteration 1 down to it, half-way.
+  const double x = (error.X(1) + error.X(2)) / 2;
+  const double y = (error.Y(0.2) + error.ZeroY()) / 2;
+  int near = 0;
+  for (int dy = -4; dy <= 4; ++dy) {
+    for (int dx = -4; dx <= 4; ++dx) {
+      near += image->At(static_cast<int>(x) + dx, static_cast<int>(y) + dy) == colour;
+    }
+  }
+  EXPECT_GT(near, 0) << "no line between the last positive error and the zero";
+}
+
 struct BadCase {
   std::string name;
   std::vector<std::string> args;  // "$D/" is replaced by the scratch directory
