@@ -14,7 +14,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
            },
        .path = "fuzz.msh",
        .keeps_label_name = false,
-       .keeps_frame = false},
+       .keeps_frame = false,
+       .groups_tets_by_label = true},
       data, size);
   return 0;
 }

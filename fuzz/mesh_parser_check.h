@@ -21,6 +21,8 @@ struct MeshFormatUnderTest {
   bool keeps_iteration = true;
   bool keeps_label_name = true;
   bool keeps_frame = true;
+  // Gmsh: the tets come back grouped by label, ascending, each group in tet order.
+  bool groups_tets_by_label = false;
 };
 
 // Parses `data` as the format. Any input may fail, but none may crash; an input that parses and

@@ -37,9 +37,10 @@ struct GmshWriteOptions {
 
 // Writes format 4.1: one volume entity per distinct label (physical group = the label, zero and
 // negative ones too: see the writer for why), or a single volume entity without labels; all nodes
-// in the first volume entity, tags 1..V; tets grouped by label, element tag = tet index + 1, so the
-// tet order survives a round trip; then $NodeData "value" and $ElementData "iteration"/"quality"
-// when the MeshFile has them.
+// in the first volume entity, tags 1..V; tets grouped by label in ascending label order (within a
+// label, in tet order), element tags 1..T in that order, so a labelled mesh reads back in that
+// order; then $NodeData "value" and $ElementData "iteration"/"quality" in element order, as
+// meshio needs, when the MeshFile has them.
 std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options = {});
 
 }  // namespace tetrefine::io

@@ -902,8 +902,8 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
       return in_.Error(absl::StrCat("quality ", q, " is not a finite float"));
     }
   }
-  // Tets in element-tag order: a writer grouping tets by physical group keeps their order in
-  // the tags (as FormatGmsh41 does), and Gmsh's own files are already in that order.
+  // Tets in element-tag order: a writer may list elements in another order than their tags
+  // (FormatGmsh41 numbers them in the order it writes them; Gmsh's own files are in tag order).
   const size_t t = tets_.size();
   std::vector<uint32_t> order;
   if (!std::is_sorted(tet_tags_.begin(), tet_tags_.end())) {

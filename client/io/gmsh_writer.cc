@@ -109,22 +109,24 @@ void AppendDataHeader(std::string& out, const char* section, const char* name, s
   absl::StrAppend(&out, "$", section, "\n1\n\"", name, "\"\n1\n0\n3\n0\n1\n", count, "\n");
 }
 
-template <typename T>
+// Entry k is values[order(k)] under tag k + 1, for k < n.
+template <typename T, typename Order>
 void AppendData(std::string& out, const char* section, const char* name, const T* values, size_t n,
-                bool binary) {
+                bool binary, Order order) {
   AppendDataHeader(out, section, name, n);
   if (binary) {
     {
       RecordWriter w(out);
-      for (size_t i = 0; i < n; ++i) {
-        w.Put(static_cast<int32_t>(i + 1));
-        w.Put(static_cast<double>(values[i]));
+      for (size_t k = 0; k < n; ++k) {
+        w.Put(static_cast<int32_t>(k + 1));
+        w.Put(static_cast<double>(values[order(k)]));
       }
     }
     out += '\n';
   } else {
-    for (size_t i = 0; i < n; ++i) {
-      absl::StrAppend(&out, i + 1, " ");
+    for (size_t k = 0; k < n; ++k) {
+      const size_t i = order(k);
+      absl::StrAppend(&out, k + 1, " ");
       if constexpr (std::is_same_v<T, double>) {
         AppendDouble(out, values[i]);
       } else if constexpr (std::is_same_v<T, float>) {
@@ -252,6 +254,12 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
   } else {
     absl::StrAppend(&out, element_blocks, " ", t, " ", t == 0 ? 0 : 1, " ", t, "\n");
   }
+  // Element tags are 1..T in the order written, and the element data follow that order: Gmsh
+  // goes by the tags, but meshio takes data entries by position (and, in binary, refuses tags
+  // other than 1..T in order). Until 2026-11-25 the tag was the tet's index, so the tet order
+  // survived a round trip, but a file whose labels were not in ascending runs showed meshio
+  // each tet's quality and iteration on another tet (off by up to 0.71) or was refused.
+  uint64_t tag = 0;
   for (size_t g = 0; g < groups.size(); ++g) {
     const std::vector<uint32_t>& tets = groups[g].tets;
     if (tets.empty()) continue;
@@ -262,14 +270,14 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
       AppendNative<uint64_t>(out, tets.size());
       RecordWriter w(out);
       for (uint32_t i : tets) {
-        w.Put(uint64_t{i} + 1);
+        w.Put(++tag);
         for (uint32_t c : mesh.tets[i]) w.Put(uint64_t{c} + 1);
       }
     } else {
       absl::StrAppend(&out, "3 ", g + 1, " ", kGmshTet, " ", tets.size(), "\n");
       for (uint32_t i : tets) {
         const Tet& tet = mesh.tets[i];
-        absl::StrAppend(&out, i + 1, " ", tet[0] + 1, " ", tet[1] + 1, " ", tet[2] + 1, " ",
+        absl::StrAppend(&out, ++tag, " ", tet[0] + 1, " ", tet[1] + 1, " ", tet[2] + 1, " ",
                         tet[3] + 1, "\n");
       }
     }
@@ -277,13 +285,22 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
   if (binary) out += '\n';
   out += "$EndElements\n";
   if (!mesh.values.empty()) {
-    AppendData(out, "NodeData", "value", mesh.values.data(), v, binary);
+    AppendData(out, "NodeData", "value", mesh.values.data(), v, binary, [](size_t k) { return k; });
   }
+  std::vector<uint32_t> element_order;  // tet index of element tag k + 1
+  if (!file.tet_iteration.empty() || !file.tet_quality.empty()) {
+    element_order.reserve(t);
+    for (const Group& g : groups) {
+      element_order.insert(element_order.end(), g.tets.begin(), g.tets.end());
+    }
+  }
+  const auto in_element_order = [&](size_t k) { return static_cast<size_t>(element_order[k]); };
   if (!file.tet_iteration.empty()) {
-    AppendData(out, "ElementData", "iteration", file.tet_iteration.data(), t, binary);
+    AppendData(out, "ElementData", "iteration", file.tet_iteration.data(), t, binary,
+               in_element_order);
   }
   if (!file.tet_quality.empty()) {
-    AppendData(out, "ElementData", "quality", file.tet_quality.data(), t, binary);
+    AppendData(out, "ElementData", "quality", file.tet_quality.data(), t, binary, in_element_order);
   }
   return out;
 }

@@ -231,6 +231,54 @@ INSTANTIATE_TEST_SUITE_P(IoFormats, IoIndependentReaderTest, ::testing::ValuesIn
                            return info.param.name;
                          });
 
+// meshio takes $ElementData entries in the order of the elements, which a .msh groups by label:
+// each tet's quality and iteration must come with that tet (sum over tets of the value times
+// (1 + the sum of its vertex indices), which a misplaced value changes).
+constexpr char kMeshioElementDataScript[] = R"(
+import sys, warnings
+warnings.simplefilter("ignore")
+import meshio, numpy as np
+m = meshio.read(sys.argv[1])
+sums = []
+for key in ("quality", "iteration"):
+    s = 0.0
+    for i, c in enumerate(m.cells):
+        if c.type == "tetra":
+            v = np.asarray(m.cell_data[key][i], dtype=np.float64).reshape(-1)
+            s += float(np.sum(v * (1 + c.data.sum(axis=1))))
+    sums.append(repr(s))
+print(" ".join(sums))
+)";
+
+TEST(IoIndependentReaderTest, MeshioPairsMshElementDataWithItsTets) {
+  if (!PythonImports("meshio")) GTEST_SKIP() << "python3-meshio is not installed";
+  ScratchDir dir;
+  const MeshFile mesh = TestMesh(11, MeshFrame::kUntagged, "gmsh:physical");
+  ASSERT_FALSE(mesh.tet_quality.empty());
+  ASSERT_FALSE(mesh.tet_iteration.empty());
+  double quality = 0.0, iteration = 0.0;
+  for (size_t i = 0; i < mesh.mesh.tets.size(); ++i) {
+    const Tet& t = mesh.mesh.tets[i];
+    const double weight = 1.0 + t[0] + t[1] + t[2] + t[3];
+    quality += static_cast<double>(mesh.tet_quality[i]) * weight;
+    iteration += static_cast<double>(mesh.tet_iteration[i]) * weight;
+  }
+  for (bool binary : {false, true}) {
+    SCOPED_TRACE(binary ? "binary" : "ascii");
+    const std::string path = dir.File("m.msh");
+    ASSERT_TRUE(WriteMesh(path, mesh, {.binary = binary}).ok());
+    const testing::ProcessResult run =
+        testing::RunProcess({kPython, "-c", kMeshioElementDataScript, path});
+    ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+    std::istringstream fields(run.out);
+    double got_quality = 0.0, got_iteration = 0.0;
+    fields >> got_quality >> got_iteration;
+    ASSERT_FALSE(fields.fail()) << run.out;
+    EXPECT_NEAR(got_quality, quality, 1e-9 * std::abs(quality));
+    EXPECT_NEAR(got_iteration, iteration, 1e-9 * std::abs(iteration));
+  }
+}
+
 // Each tet as its sorted corner coordinates with its label, sorted: what a mesh is regardless
 // of vertex and tet numbering.
 std::vector<std::pair<std::array<Vec3, 4>, int32_t>> TetsWithLabels(const MeshFile& file) {
