@@ -553,7 +553,8 @@ int RunRefinement(const RefineSettings& s) {
   RefineResult& result = reply->result;
   const int64_t piece_vertices = PieceVertices(pieces);
   // Everything that reads the result's mesh is done before the mesh moves into the file.
-  const std::string report = FormatRefineReport(result, s.options.refine.epsilon);
+  const std::string report =
+      FormatRefineReport(result, s.options.refine.epsilon, s.options.refine.certify);
   std::string stats_json;
   if (!s.stats_json_path.empty()) {
     RunDescription run{.volume_path = s.volume_path,

@@ -141,8 +141,8 @@ std::string RefineStatsJson(const RunDescription& run, const client::ClientResul
   json.EndObject();
   json.Key("lattice");
   json.BeginObject();
-  json.Key("n");
-  json.Int(r.lattice.n);
+  json.Key("n");  // 0 when nothing was sampled (--lattice-n 0)
+  json.Int(r.lattice.tets_sampled > 0 ? r.lattice.n : 0);
   json.Key("tets_sampled");
   json.Int(r.lattice.tets_sampled);
   json.Key("points_sampled");

@@ -9,12 +9,15 @@
 #include <string>
 #include <vector>
 
+#include "absl/strings/match.h"
 #include "client/cli/arg_parser.h"
 #include "client/cli/file_kind.h"
 #include "client/cli/grid_mesher.h"
 #include "client/cli/grpc_channel.h"
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_report.h"
+#include "client/cli/refine_report.h"
+#include "client/cli/stats_json.h"
 #include "client/cli/text_table.h"
 #include "client/io/json_writer.h"
 #include "core/mesh_validation.h"
@@ -173,6 +176,52 @@ TEST(CliFileKind, ExtensionsAndStems) {
   EXPECT_EQ(PathStem("dir.d/noext"), "dir.d/noext");
   EXPECT_EQ(FileStem("dir/cube.mesh"), "cube");
   EXPECT_EQ(FileStem(".hidden"), ".hidden");
+}
+
+// The lattice line says whether it covers every tet or a sample of them (a sample's maximum can
+// be below the mesh's: an independent check found 0.2055 against 0.2606, 2026-11-25); with
+// --certify, a run a limit stopped says it is not certified.
+TEST(CliRefineReport, TheLatticeLineSaysSampleOrEveryTetAndCertifyWhyNot) {
+  RefineResult result;
+  result.stop_reason = StopReason::kMaxIterations;
+  result.final_quality.count = 874585;
+  result.lattice.tets_sampled = 200000;
+  result.lattice.points_sampled = 33000000;
+  std::string report = FormatRefineReport(result, 0.02, /*certify=*/true);
+  EXPECT_TRUE(absl::StrContains(report,
+                                "33000000 points in a sample of 200000 of the 874585 tets; its "
+                                "max can be below the mesh's"))
+      << report;
+  EXPECT_TRUE(absl::StrContains(report,
+                                "Not certified: the run stopped before every tet's lattice error "
+                                "was within epsilon (max_iterations)"))
+      << report;
+
+  result.final_quality.count = 200000;
+  result.stop_reason = StopReason::kConverged;
+  result.certified_max_error = 0.019;
+  report = FormatRefineReport(result, 0.02, /*certify=*/true);
+  EXPECT_TRUE(absl::StrContains(report, "points in every one of the 200000 tets")) << report;
+  EXPECT_TRUE(absl::StrContains(report, "Certified: lattice error at most 0.019000")) << report;
+  EXPECT_FALSE(absl::StrContains(report, "Not certified")) << report;
+
+  result.certified_max_error = -1.0;
+  EXPECT_FALSE(absl::StrContains(FormatRefineReport(result, 0.02), "ertified"));
+}
+
+// --lattice-n 0 samples nothing: the JSON's lattice order says 0, not the default 8.
+TEST(CliStatsJson, ALatticeThatSampledNothingHasOrderZero) {
+  client::ClientResult reply;
+  reply.result.lattice.n = 8;
+  // The lattice object's first line (the JSON is indented, one field per line).
+  const auto lattice_order = [&] {
+    const std::string json = RefineStatsJson({}, reply);
+    const size_t at = json.find("\"lattice\": {");
+    return at == std::string::npos ? json : json.substr(at, json.find(',', at) - at);
+  };
+  EXPECT_TRUE(absl::StrContains(lattice_order(), "\"n\": 0")) << lattice_order();
+  reply.result.lattice.tets_sampled = 10;
+  EXPECT_TRUE(absl::StrContains(lattice_order(), "\"n\": 8")) << lattice_order();
 }
 
 TEST(CliTextTable, AlignsColumns) {
