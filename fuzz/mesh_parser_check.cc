@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "client/io/gmsh_format.h"
 #include "fuzz/fuzz_support.h"
 
 namespace tetrefine::fuzz {
@@ -27,23 +28,8 @@ void CheckMeshParser(const MeshFormatUnderTest& format, const uint8_t* data, siz
   }
   if (!io::ValidateMeshFile(*file, format.path).ok()) return;
 
-  if (format.groups_tets_by_label && !file->mesh.labels.empty()) {
-    // What the round trip must give back: the tets grouped by label (a stable sort).
-    io::MeshFile& f = *file;
-    std::vector<size_t> order(f.mesh.tets.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](size_t x, size_t y) { return f.mesh.labels[x] < f.mesh.labels[y]; });
-    const auto permute = [&](auto& v) {
-      if (v.empty()) return;
-      auto copy = v;
-      for (size_t i = 0; i < order.size(); ++i) v[i] = copy[order[i]];
-    };
-    permute(f.mesh.tets);
-    permute(f.mesh.labels);
-    permute(f.tet_iteration);
-    permute(f.tet_quality);
-  }
+  // What the round trip must give back: the tets in the order the format writes them.
+  if (format.groups_tets_by_label) io::OrderTetsAsGmshWrites(*file);
   const std::string written = format.format(*file);
   absl::StatusOr<io::MeshFile> again = format.parse(written, format.path);
   TETREFINE_FUZZ_CHECK(

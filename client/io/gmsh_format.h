@@ -43,4 +43,9 @@ struct GmshWriteOptions {
 // meshio needs, when the MeshFile has them.
 std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options = {});
 
+// Puts the tets of a labelled `file` (with their labels, iterations and qualities) in the order
+// FormatGmsh41 writes them and ParseGmsh reads them back: by ascending label, each label's tets
+// in their order. An unlabelled file is left as it is.
+void OrderTetsAsGmshWrites(MeshFile& file);
+
 }  // namespace tetrefine::io

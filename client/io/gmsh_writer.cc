@@ -1,6 +1,7 @@
 // Writing Gmsh .msh 4.1, ASCII or binary. See gmsh_format.h for the layout.
 #include <algorithm>
 #include <cstring>
+#include <numeric>
 #include <string>
 #include <utility>
 #include <vector>
@@ -303,6 +304,24 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
     AppendData(out, "ElementData", "quality", file.tet_quality.data(), t, binary, in_element_order);
   }
   return out;
+}
+
+void OrderTetsAsGmshWrites(MeshFile& file) {
+  if (file.mesh.labels.empty()) return;
+  const std::vector<int32_t>& labels = file.mesh.labels;
+  std::vector<size_t> order(file.mesh.tets.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return labels[a] < labels[b]; });
+  const auto permute = [&](auto& v) {
+    if (v.empty()) return;
+    const auto copy = v;
+    for (size_t i = 0; i < order.size(); ++i) v[i] = copy[order[i]];
+  };
+  permute(file.mesh.tets);
+  permute(file.mesh.labels);
+  permute(file.tet_iteration);
+  permute(file.tet_quality);
 }
 
 }  // namespace tetrefine::io

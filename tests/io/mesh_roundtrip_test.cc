@@ -52,22 +52,7 @@ MeshFile Expected(const MeshFile& written, const std::string& extension) {
                                  [](int32_t label) { return label != 0; });
     if (!any) kept.mesh.labels.clear();
     // Tets come back grouped by label, ascending, each group in tet order.
-    std::vector<size_t> order(kept.mesh.tets.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-    if (!kept.mesh.labels.empty()) {
-      std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return kept.mesh.labels[a] < kept.mesh.labels[b];
-      });
-    }
-    const auto permute = [&](auto& v) {
-      if (v.empty()) return;
-      auto copy = v;
-      for (size_t i = 0; i < order.size(); ++i) v[i] = copy[order[i]];
-    };
-    permute(kept.mesh.tets);
-    permute(kept.mesh.labels);
-    permute(kept.tet_iteration);
-    permute(kept.tet_quality);
+    OrderTetsAsGmshWrites(kept);
     kept.label_name = kept.mesh.labels.empty() ? "" : "gmsh:physical";
     return kept;
   }
