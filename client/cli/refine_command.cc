@@ -396,6 +396,16 @@ int RunRefinement(const RefineSettings& s) {
     PrintWarning(absl::StrCat(s.output_path, ": the region names (", absl::StrJoin(names, ", "),
                               ") are not written: only .msh keeps them; the labels are kept"));
   }
+  // Found by a downstream sweep (2026-11-25): a Gmsh re-save as MSH 2.2 of label -7 beside 7
+  // gave one region 7 with the -7 tets inside out.
+  if (const std::vector<int32_t> negative = io::NegativeGmshLabels(s.output_path, *mesh_file);
+      !negative.empty()) {
+    PrintWarning(absl::StrCat(
+        s.output_path, ": negative labels (", absl::StrJoin(negative, ", "),
+        ") are written as negative physical groups: meshio and tetrefine read them back, but "
+        "Gmsh takes -L as group L with the orientation reversed (saved from Gmsh as MSH 2.2 "
+        "they merge into L, inside out); .vtu and .vtk keep them as plain numbers"));
+  }
   if (io::LpsTagLost(s.output_path, *mesh_file)) {
     PrintWarning(absl::StrCat(
         s.output_path,

@@ -1,5 +1,7 @@
 #include "client/io/mesh_io.h"
 
+#include <algorithm>
+
 #include "absl/strings/match.h"
 #include "client/io/file_bytes.h"
 #include "client/io/gmsh_format.h"
@@ -78,6 +80,17 @@ bool LpsTagLost(const std::string& path, const MeshFile& file) {
   const MeshFormat format = FormatOf(path);
   return file.frame == MeshFrame::kLps && format != MeshFormat::kUnknown &&
          !CarriesFrameTag(format);
+}
+
+std::vector<int32_t> NegativeGmshLabels(const std::string& path, const MeshFile& file) {
+  std::vector<int32_t> negative;
+  if (FormatOf(path) != MeshFormat::kGmsh) return negative;
+  for (int32_t label : file.mesh.labels) {
+    if (label < 0) negative.push_back(label);
+  }
+  std::sort(negative.begin(), negative.end());
+  negative.erase(std::unique(negative.begin(), negative.end()), negative.end());
+  return negative;
 }
 
 absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -49,6 +50,12 @@ absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& 
 // True when writing `file` to `path` loses its frame tag: an LPS mesh to .msh, .mesh or .meshb,
 // whose readers (tetrefine's too) then take the LPS coordinates as RAS. For a warning.
 bool LpsTagLost(const std::string& path, const MeshFile& file);
+
+// The distinct negative labels of `file`, ascending, when `path` is a .msh: they are written as
+// negative physical groups, which meshio and tetrefine read back as they are, but which Gmsh
+// takes as the group of the absolute value with the orientation reversed (a Gmsh save as
+// MSH 2.2 merges -L into L and turns those tets inside out). Empty otherwise. For a warning.
+std::vector<int32_t> NegativeGmshLabels(const std::string& path, const MeshFile& file);
 
 // True when `path` has one of the mesh extensions above.
 bool IsMeshPath(const std::string& path);

@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstdlib>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -239,6 +241,38 @@ TEST_F(CliOutput, AnLpsInputWarnsWhereTheTagCannotBeWritten) {
       EXPECT_EQ(got->mesh.points[i], want) << i;
     }
   }
+}
+
+// Negative labels reach a .msh as negative physical groups, which Gmsh reads as reversed
+// orientation: refine says so (a Gmsh MSH 2.2 save merged -7 into 7, inside out); no warning
+// for .vtu, or for a .msh of non-negative labels.
+TEST_F(CliOutput, NegativeLabelsIntoMshWarnAboutGmsh) {
+  io::MeshFile file;
+  file.mesh = testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2});
+  for (size_t t = 0; t < file.mesh.tets.size(); ++t) {
+    file.mesh.labels.push_back(t % 3 == 0 ? -7 : (t % 3 == 1 ? 7 : -2));
+  }
+  file.label_name = "region";
+  const std::string in = dir_.File("negative.vtu");
+  ASSERT_TRUE(io::WriteMesh(in, file).ok());
+  const ProcessResult to_msh = Refine(in, dir_.File("negative.msh"), {"--quiet"});
+  ASSERT_EQ(to_msh.exit_code, 0) << to_msh.err;
+  EXPECT_TRUE(absl::StrContains(to_msh.err, dir_.File("negative.msh") +
+                                                ": negative labels (-7, -2) are written as "
+                                                "negative physical groups"))
+      << to_msh.err;
+  absl::StatusOr<io::MeshFile> got = io::ReadMesh(dir_.File("negative.msh"));
+  ASSERT_TRUE(got.ok()) << got.status();
+  EXPECT_EQ(std::set<int32_t>(got->mesh.labels.begin(), got->mesh.labels.end()),
+            (std::set<int32_t>{-7, -2, 7}));
+  const ProcessResult to_vtu = Refine(in, dir_.File("negative_out.vtu"), {"--quiet"});
+  ASSERT_EQ(to_vtu.exit_code, 0) << to_vtu.err;
+  EXPECT_EQ(to_vtu.err, "");
+  for (int32_t& label : file.mesh.labels) label = std::abs(label);
+  ASSERT_TRUE(io::WriteMesh(in, file).ok());
+  const ProcessResult positive = Refine(in, dir_.File("positive.msh"), {"--quiet"});
+  ASSERT_EQ(positive.exit_code, 0) << positive.err;
+  EXPECT_EQ(positive.err, "");
 }
 
 // Gmsh region names go through refine to a .msh output; other outputs say they drop them.
