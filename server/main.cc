@@ -165,8 +165,6 @@ int Run(ShutdownSignals& signals) {
                         std::chrono::duration_cast<std::chrono::system_clock::duration>(
                             std::chrono::duration<double>(drain));
   signals.SetDrainDeadline(deadline);
-  spdlog::info("signal {}: not serving, draining in-flight calls for up to {} s", signal_number,
-               drain);
   // Load balancers and readiness probes asking about the Refiner stop sending work before the
   // listener goes away. The server as a whole ("", what liveness probes ask) stays SERVING
   // while it drains: a failing liveness probe would have the orchestrator kill the process in
@@ -178,6 +176,10 @@ int Run(ShutdownSignals& signals) {
   // with every connection open, their clients get a moment to read the rest, and only then
   // does gRPC shut down (cancelling whatever still runs at the deadline).
   service.StopAdmitting();
+  // Logged once it is true: a health check made after this line must see NOT_SERVING (the
+  // abuse test read SERVING once, under load, when the line came first).
+  spdlog::info("signal {}: not serving, draining in-flight calls for up to {} s", signal_number,
+               drain);
   const auto steady_deadline = std::chrono::steady_clock::now() +
                                std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                    std::chrono::duration<double>(drain));
