@@ -32,6 +32,7 @@
 #include "client/cli/stats_json.h"
 #include "client/io/file_bytes.h"
 #include "client/io/mesh_io.h"
+#include "client/io/pvd_writer.h"
 #include "client/io/pvtu_writer.h"
 #include "core/quality.h"
 #include "core/refine_options.h"
@@ -272,6 +273,14 @@ class InterruptGuard {
 
 std::string IterationPath(const std::string& output, int iteration) {
   return absl::StrFormat("%s.iter%02d%s", PathStem(output), iteration, PathExtension(output));
+}
+
+// The ParaView collection of an --every-iteration series: <output stem>.pvd beside a .vtu
+// output, listing the iteration files with the iteration as time step, so that ParaView opens
+// the run as one time series (issue 13: ".pvd for --every-iteration"). Other formats have no
+// collection file ParaView reads: none then.
+std::string SeriesPath(const std::string& output) {
+  return absl::EndsWithIgnoreCase(output, ".vtu") ? PathStem(output) + ".pvd" : "";
 }
 
 // What the input file said about its labels and frame, carried to every file refine writes: the
@@ -517,11 +526,13 @@ int RunRefinement(const RefineSettings& s) {
     progress.Line(absl::StrCat("received the refined mesh: ", FormatBytes(bytes), ", ",
                                FormatSeconds(SecondsSince(phase_start))));
   };
+  std::vector<io::PvdEntry> series;  // the iteration files written, for the .pvd
   if (s.every_iteration) {
     callbacks.on_mesh = [&](int iteration, const Mesh& m) {
       if (!iteration_write.ok()) return;
-      iteration_write = WriteMeshReported(s, progress, IterationPath(s.output_path, iteration),
-                                          WithQuality(m, tags));
+      const std::string path = IterationPath(s.output_path, iteration);
+      iteration_write = WriteMeshReported(s, progress, path, WithQuality(m, tags));
+      series.push_back({.timestep = static_cast<double>(iteration), .file = path});
     };
   }
   // Printed even with --quiet: a server that failed mid-run is the operator's to look at.
@@ -608,6 +619,11 @@ int RunRefinement(const RefineSettings& s) {
   absl::Status written = s.pvtu ? WritePiecesReported(s, progress, files, out_tets)
                                 : WriteMeshReported(s, progress, s.output_path, files[0]);
   if (!written.ok()) return Fail(written, kExitUsage);
+  const std::string series_path = s.every_iteration ? SeriesPath(s.output_path) : "";
+  if (!series_path.empty() && !series.empty()) {
+    absl::Status pvd = io::WritePvd(series_path, series);
+    if (!pvd.ok()) return Fail(pvd, kExitUsage);
+  }
   if (!s.stats_json_path.empty()) {
     progress.Begin(absl::StrCat("writing ", s.stats_json_path));
     absl::Status json = io::WriteFileAtomically(s.stats_json_path, stats_json);
@@ -624,6 +640,10 @@ int RunRefinement(const RefineSettings& s) {
       static_cast<long long>(out_vertices), s.pvtu ? " over the pieces" : "",
       static_cast<long long>(out_tets),
       s.stats_json_path.empty() ? "" : absl::StrCat("; statistics in ", s.stats_json_path).c_str());
+  if (!series_path.empty() && !series.empty()) {
+    std::printf("Wrote %s: the %zu iteration meshes as a ParaView time series\n",
+                series_path.c_str(), series.size());
+  }
   return kExitOk;
 }
 
@@ -681,7 +701,8 @@ const CommandSpec& RefineSpec() {
                  "the extension .pvtu) and K .vtu pieces <stem>_<k>.vtu beside it, for "
                  "ParaView's parallel reader; also chosen by an --output ending in .pvtu"},
                 {"every-iteration", "",
-                 "also write each iteration's mesh as <output stem>.iterNN.<ext>"},
+                 "also write each iteration's mesh as <output stem>.iterNN.<ext>; with a .vtu "
+                 "output, also <output stem>.pvd, the series for ParaView"},
                 {"stats-json", "FILE", "write the statistics as JSON"},
                 {"server", "HOST:PORT[,...]",
                  "use this tetrefine_server instead of the embedded service; several "
