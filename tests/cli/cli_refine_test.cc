@@ -168,6 +168,25 @@ TEST_F(CliRefine, StatsJsonParsesAndAgreesWithTheRun) {
   EXPECT_TRUE(absl::StrContains(check.out, " " + tets + " 8")) << check.out;
 }
 
+// --lattice-max-tets sets the lattice check's sample: fewer tets than the output is a sample, and
+// the line says so; more covers every tet. 0 (the core's "every tet up to max_tets", which every
+// service refuses at the default budget) is a flag error.
+TEST_F(CliRefine, LatticeMaxTetsSetsTheSample) {
+  const auto run = [&](const std::string& n) {
+    return RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.05",
+                         "--output", dir_.File("l.vtu"), "--lattice-max-tets", n});
+  };
+  const ProcessResult sample = run("10");
+  ASSERT_EQ(sample.exit_code, 0) << sample.err;
+  EXPECT_TRUE(absl::StrContains(sample.out, "1650 points in a sample of 10 of the ")) << sample.out;
+  const ProcessResult every = run("1000000");
+  ASSERT_EQ(every.exit_code, 0) << every.err;
+  EXPECT_TRUE(absl::StrContains(every.out, "points in every one of the ")) << every.out;
+  const ProcessResult zero = run("0");
+  EXPECT_EQ(zero.exit_code, 2);
+  EXPECT_TRUE(absl::StrContains(zero.err, "--lattice-max-tets: ")) << zero.err;
+}
+
 TEST_F(CliRefine, EveryIterationWritesOneFilePerIteration) {
   const std::string out = dir_.File("series.vtk");
   const ProcessResult run =
