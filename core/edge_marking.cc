@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/alternative_tilings.h"
 #include "core/lattice_kernel.h"
 #include "core/parallel.h"
 #include "core/quality.h"
@@ -251,8 +252,8 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
 }
 
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                         const EdgeTable& edges, double ratio, FillLater<uint8_t>& split,
-                         CancelFlag& cancel) {
+                         const EdgeTable& edges, double ratio, bool best_tiling,
+                         FillLater<uint8_t>& split, CancelFlag& cancel) {
   const int64_t nt = static_cast<int64_t>(tets.size());
   const auto& table = SubdivisionTable();
   PendingMarks next(nt);
@@ -269,7 +270,10 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
       std::array<Vec3, 10> p;
       for (int c = 0; c < 4; ++c) p[c] = corners[c];
       for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
-      const SubdivisionEntry& entry = table[SubdivisionKey(pattern, p)];
+      const uint32_t key = SubdivisionKey(pattern, p);
+      // The tiling Subdivide will cut the tet by.
+      const SubdivisionEntry& entry =
+          best_tiling ? TilingEntry(BestTiling(key, corners)) : table[key];
       const auto local = LocalPoints(corners, entry);
       const double own = MeanRatio(corners[0], corners[1], corners[2], corners[3]);
       bool bad = false;

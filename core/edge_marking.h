@@ -90,8 +90,8 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
 // 1:8 refinement keeps at least 0.77 of the parent's quality, measured). Returns edges added.
 // Polls `cancel` as CloseToLongestEdges does.
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                         const EdgeTable& edges, double ratio, FillLater<uint8_t>& split,
-                         CancelFlag& cancel);
+                         const EdgeTable& edges, double ratio, bool best_tiling,
+                         FillLater<uint8_t>& split, CancelFlag& cancel);
 
 // Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165
 // points for n = 8) and keeps its discrepancy in state.tet_lattice_error (final until the tet is

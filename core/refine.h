@@ -36,8 +36,12 @@ struct IterationStats {
   int64_t failing_tets = 0;
   ConfigurationCounts configurations{};  // tets by configuration (Tables 3 and 4)
   int64_t schonhardt_prisms = 0;         // SP: prisms that needed a Steiner point
-  QualityStats quality;                  // mean-ratio quality after the iteration
-  double seconds = 0.0;                  // wall time of the iteration
+  // kLongestEdge: tets cut by another tiling of their faces than the table's, one with a better
+  // worst child (core/alternative_tilings.h). Some have one child fewer than Table 1 says (3c:
+  // 4, 4a: 5), so FNT = sum of configurations x Table 1's counts + 5 SP - at most this.
+  int64_t other_tilings = 0;
+  QualityStats quality;  // mean-ratio quality after the iteration
+  double seconds = 0.0;  // wall time of the iteration
 };
 
 // Discrepancy sampled inside tets on the barycentric lattice of the paper's section 5.1:

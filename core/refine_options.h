@@ -35,13 +35,15 @@ enum class OrientationPolicy : uint8_t {
 
 // Which subdivision scheme Refine runs. Both split edges at their midpoints and subdivide every
 // tet by the paper's 64-case table, so both keep the mesh conformal with every face
-// triangulated from its own data; they differ in which edges they split.
+// triangulated from its own data; they differ in which edges they split and in how the inside of
+// a tet is cut.
 enum class RefineScheme : uint8_t {
   // The paper exactly: an edge is split when the discrepancy at its midpoint exceeds epsilon.
   kPaper,
   // The paper's midpoint test, then every tet with a split edge also splits its
   // longest edge (longest-edge closure, as in Rivara's and Plaza's schemes), and a tet whose
-  // split would make a much flatter child is refined regularly (1:8) instead. It reaches
+  // split would make a much flatter child is refined regularly (1:8) instead; each tet is cut by
+  // the tiling of its faces with the best worst child (core/alternative_tilings.h). It reaches
   // epsilon where the paper's scheme stops with needles. See SchemeRules in core/refine.cc for
   // the measurements behind each rule.
   kLongestEdge,

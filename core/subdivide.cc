@@ -6,6 +6,7 @@
 #include <array>
 #include <vector>
 
+#include "core/alternative_tilings.h"
 #include "core/huge_pages.h"
 #include "core/parallel.h"
 #include "core/quality.h"
@@ -25,7 +26,6 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
   const bool clamp = limits.clamp;
   const int64_t nt = static_cast<int64_t>(m.tets.size());
   const int64_t nv = static_cast<int64_t>(m.points.size());
-  const auto& table = SubdivisionTable();
   const auto& patterns = PatternTable();
 
   // Pass 1: each tet's subdivision key and child counts, per block.
@@ -33,11 +33,12 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
   FillLater<uint8_t> children_of;
   if (succession != nullptr) children_of.resize(nt);
   const int64_t tet_blocks = BlockCount(nt);
-  std::vector<int64_t> child_offset(tet_blocks), steiner_offset(tet_blocks);
+  std::vector<int64_t> child_offset(tet_blocks), steiner_offset(tet_blocks),
+      other_tilings(tet_blocks);
   std::vector<ConfigurationCounts> config_counts(tet_blocks);
   ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
     if (cancel.Check()) return;
-    int64_t children = 0, steiner = 0;
+    int64_t children = 0, steiner = 0, other = 0;
     ConfigurationCounts counts{};
     for (int64_t t = begin; t < end; ++t) {
       const Tet& tet = m.tets[t];
@@ -54,16 +55,19 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
           }
         }
         key = SubdivisionKey(pattern, p);
+        if (limits.best_tiling) key = BestTiling(key, {p[0], p[1], p[2], p[3]});
       }
       keys[t] = static_cast<uint16_t>(key);
-      const SubdivisionEntry& entry = table[key];
+      const SubdivisionEntry& entry = TilingEntry(key);
       if (succession != nullptr) children_of[t] = key == 0 ? 0 : entry.tet_count;
       children += entry.tet_count;
       steiner += entry.steiner;
+      other += (key >> kTilingShift) != 0;
       ++counts[static_cast<int>(patterns[pattern].configuration)];
     }
     child_offset[b] = children;
     steiner_offset[b] = steiner;
+    other_tilings[b] = other;
     config_counts[b] = counts;
   });
   if (cancel.IsSet()) return StepOutcome::kCancelled;
@@ -77,6 +81,7 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
     for (int i = 0; i < kNumConfigurations; ++i) stats.configurations[i] += c[i];
   }
   stats.schonhardt_prisms = total_steiner;
+  for (int64_t n : other_tilings) stats.other_tilings += n;
   stats.tets_with_error = nt - stats.configurations[0];
 
   // New vertex ids: midpoints in edge order after the old vertices, then Steiner points in tet
@@ -181,7 +186,7 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
       const auto& te = edges.tet_edges[t];
       // mid_id is written for split edges only (FillLater): read nothing else.
       for (int k = 0; k < 6; ++k) global[4 + k] = errors.split[te[k]] ? mid_id[te[k]] : 0;
-      const SubdivisionEntry& entry = table[keys[t]];
+      const SubdivisionEntry& entry = TilingEntry(keys[t]);
       if (entry.steiner) {
         std::array<Vec3, 6> pts;
         for (int i = 0; i < 6; ++i) pts[i] = next.mesh.points[global[entry.steiner_of[i]]];

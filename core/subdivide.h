@@ -19,6 +19,7 @@ struct StepLimits {
   int64_t max_tets = 0;      // refuse a step that would make more tets
   double min_quality = 0.0;  // refuse a step that would make a tet of lower quality
   bool clamp = false;        // Steiner points sampled clamped into the grid
+  bool best_tiling = false;  // each tet cut by BestTiling (core/alternative_tilings.h)
 };
 
 // Subdivides every tet of `state` whose edges are split (errors.split, errors.mid_value) with

@@ -124,6 +124,7 @@ std::vector<IterationStats> CombineIterations(const std::vector<const RefineResu
         error_sum += x.mean_error * static_cast<double>(x.edges);
         for (int c = 0; c < kNumConfigurations; ++c) s.configurations[c] += x.configurations[c];
         s.schonhardt_prisms += x.schonhardt_prisms;
+        s.other_tilings += x.other_tilings;
         quality.Add(x.quality);
         s.seconds = std::max(s.seconds, x.seconds);
         continue;

@@ -262,6 +262,7 @@ void IterationStatsToWire(const IterationStats& s, v1::IterationStats* out) {
   out->set_max_segment_error(s.max_segment_error);
   out->set_closure_edges(s.closure_edges);
   out->set_guard_edges(s.guard_edges);
+  out->set_other_tilings(s.other_tilings);
   out->set_failing_tets(s.failing_tets);
 }
 
@@ -288,6 +289,7 @@ absl::StatusOr<IterationStats> IterationStatsFromWire(const v1::IterationStats& 
   s.max_segment_error = in.max_segment_error();
   s.closure_edges = in.closure_edges();
   s.guard_edges = in.guard_edges();
+  s.other_tilings = in.other_tilings();
   s.failing_tets = in.failing_tets();
   return s;
 }

@@ -691,8 +691,9 @@ const CommandSpec& RefineSpec() {
                 {"scheme", "NAME",
                  absl::StrCat("which edges are split: longest-edge (the midpoint test, then "
                               "each marked tet's longest edge, and 1:8 where a split would "
-                              "flatten a tet: reaches epsilon with bounded quality) or paper (the "
-                              "midpoint test alone, as published). Default ",
+                              "flatten a tet; each tet cut by the tiling with the best worst "
+                              "child: reaches epsilon with bounded quality) or paper (the "
+                              "midpoint test and the paper's table alone, as published). Default ",
                               std::string(RefineSchemeName(RefineOptions{}.scheme)))},
                 {"certify", "",
                  "also refine until every lattice point of every tet is within epsilon; the "

@@ -54,6 +54,8 @@ void WriteIteration(JsonWriter& json, const IterationStats& s) {
   json.Int(s.closure_edges);
   json.Key("guard_edges");
   json.Int(s.guard_edges);
+  json.Key("other_tilings");
+  json.Int(s.other_tilings);
   json.Key("failing_tets");
   json.Int(s.failing_tets);
   json.Key("quality");

@@ -412,6 +412,7 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
       stats.short_edges_kept += x.short_edges_kept;
       stats.closure_edges += x.closure_edges;
       stats.guard_edges += x.guard_edges;
+      stats.other_tilings += x.other_tilings;
       stats.failing_tets += x.failing_tets;
       stats.seconds = std::max(stats.seconds, x.seconds);
     }

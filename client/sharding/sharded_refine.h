@@ -127,8 +127,8 @@ struct ShardedResult {
 // budget and the quality floor are judged here on the merged iteration, as the core judges them.
 // A last round of parts without halos and without iterations measures the result. Per-iteration
 // counts (NTwE, edges, split edges, configurations, SP) are then the whole mesh's, quality and
-// max error exact; mean_error, short_edges_kept, closure_edges, guard_edges and failing_tets are
-// over the parts' tets and edges, halos included.
+// max error exact; mean_error, short_edges_kept, closure_edges, guard_edges, failing_tets and
+// other_tilings are over the parts' tets and edges, halos included.
 //
 // Errors: INVALID_ARGUMENT for bad input (checked here for what splitting needs, by the servers
 // for the rest, prefixed with "part k: " and naming the part's own indices); a part's

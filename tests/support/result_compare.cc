@@ -53,6 +53,7 @@ void ExpectSameStats(const IterationStats& e, const IterationStats& a) {
   ExpectSameDouble(e.max_segment_error, a.max_segment_error, "max_segment_error");
   EXPECT_EQ(e.closure_edges, a.closure_edges);
   EXPECT_EQ(e.guard_edges, a.guard_edges);
+  EXPECT_EQ(e.other_tilings, a.other_tilings);
   EXPECT_EQ(e.failing_tets, a.failing_tets);
   ExpectSameQuality(e.quality, a.quality, "quality");
 }

@@ -41,6 +41,7 @@ void WriteIteration(JsonWriter& w, const IterationStats& s) {
   w.Field("max_segment_error", s.max_segment_error);
   w.Field("closure_edges", s.closure_edges);
   w.Field("guard_edges", s.guard_edges);
+  w.Field("other_tilings", s.other_tilings);
   w.Field("failing_tets", s.failing_tets);
   w.Key("configurations");
   w.BeginObject();
