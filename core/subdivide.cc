@@ -29,6 +29,8 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
   const auto& patterns = PatternTable();
 
   // Pass 1: each tet's subdivision key and child counts, per block.
+  // Tiling keys (core/alternative_tilings.h): the subdivision key and which tiling.
+  static_assert(kNumTilingKeys <= (1 << 16));
   FillLater<uint16_t> keys(nt);
   FillLater<uint8_t> children_of;
   if (succession != nullptr) children_of.resize(nt);

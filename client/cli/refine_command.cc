@@ -734,7 +734,8 @@ const CommandSpec& RefineSpec() {
                 {"clamp", "", "sample vertices outside the volume at the nearest point of its box"},
                 {"fix-orientation", "", "flip inverted input tets instead of refusing the mesh"},
                 {"fit-mesh-to-volume", "",
-                 "scale and move the mesh (per axis) to fill the volume's box less one voxel"},
+                 "scale and move the mesh (per axis) to fill the volume's box less one voxel "
+                 "(for an oblique volume: its index box less one sample, through its affine)"},
                 {"quiet", "", "no progress lines on stderr"},
             },
         .positional = ""};
