@@ -219,12 +219,12 @@ std::array<Vec3, 4> SortedChild(const std::array<Vec3, kNumLocalPoints>& local,
 }
 
 double WorstOf(const SubdivisionEntry& entry, const std::array<Vec3, kNumLocalPoints>& local) {
-  double worst = 1.0;
+  std::array<MeanRatioParts, std::tuple_size_v<decltype(entry.tets)>> parts;
   for (int i = 0; i < entry.tet_count; ++i) {
     const auto c = SortedChild(local, entry.tets[i]);
-    worst = std::min(worst, MeanRatio(c[0], c[1], c[2], c[3]));
+    parts[i] = MeanRatioPartsOf(c[0], c[1], c[2], c[3]);
   }
-  return worst;
+  return std::min(1.0, MinMeanRatio(parts.data(), entry.tet_count));
 }
 
 bool PointsLess(const std::array<Vec3, 4>& a, const std::array<Vec3, 4>& b) {

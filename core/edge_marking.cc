@@ -34,13 +34,16 @@ class PendingMarks {
   explicit PendingMarks(int64_t num_tets) : blocks_(static_cast<size_t>(BlockCount(num_tets))) {}
   // Called by block b's pass only.
   void Add(int64_t b, uint32_t e) { blocks_[b].push_back(e); }
-  // Sets the pending marks; returns how many edges were not split before (each counted once).
-  int64_t Apply(FillLater<uint8_t>& split) {
+  // Sets the pending marks; returns how many edges were not split before (each counted once),
+  // and appends those edges to `fresh` when it is not null.
+  int64_t Apply(FillLater<uint8_t>& split, std::vector<uint32_t>* fresh) {
     int64_t added = 0;
     for (const std::vector<uint32_t>& block : blocks_) {
       for (uint32_t e : block) {
-        added += split[e] == 0;
+        if (split[e] != 0) continue;
+        ++added;
         split[e] = 1;
+        if (fresh != nullptr) fresh->push_back(e);
       }
     }
     return added;
@@ -49,6 +52,21 @@ class PendingMarks {
  private:
   std::vector<std::vector<uint32_t>> blocks_;
 };
+
+// Calls body(block, t) for every tet of the pass: all tets, or the listed ones.
+template <typename Body>
+void ForEachVisitedTet(int64_t num_tets, const std::vector<uint32_t>* visit, Body body,
+                       CancelFlag& cancel) {
+  const int64_t n = visit == nullptr ? num_tets : static_cast<int64_t>(visit->size());
+  ForEachBlock(n, [&](int64_t b, int64_t begin, int64_t end) {
+    if (cancel.Check()) return;
+    for (int64_t i = begin; i < end; ++i) body(b, visit == nullptr ? i : (*visit)[i]);
+  });
+}
+
+int64_t PassSize(int64_t num_tets, const std::vector<uint32_t>* visit) {
+  return visit == nullptr ? num_tets : static_cast<int64_t>(visit->size());
+}
 
 // The local edges of each face (kTetFaces order), and the same as EdgeBit masks.
 constexpr std::array<std::array<int, 3>, 4> kFaceEdges = [] {
@@ -201,94 +219,106 @@ uint32_t ClosureTargets(const std::array<Vec3, 4>& p) {
   return targets;
 }
 
+int64_t ClosureRound(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                     const EdgeTable& edges, FillLater<uint8_t>& split, CancelFlag& cancel,
+                     FillLater<uint16_t>& cache, const std::vector<uint32_t>* visit,
+                     std::vector<uint32_t>* fresh) {
+  PendingMarks next(PassSize(static_cast<int64_t>(tets.size()), visit));
+  const auto rule = [&](int64_t b, int64_t t) {
+    const auto& te = edges.tet_edges[t];
+    uint32_t pattern = 0;
+    for (int k = 0; k < 6; ++k) pattern |= split[te[k]] != 0 ? EdgeBit(k) : 0u;
+    if (pattern == 0) return;
+    // Only this block reads or writes cache[t]: no two threads share an entry (a visit list
+    // names a tet once).
+    if (cache[t] == kTargetsUnknown) {
+      const Tet& tet = tets[t];
+      cache[t] = static_cast<uint16_t>(
+          ClosureTargets({points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]}));
+    }
+    const uint32_t r = cache[t];
+    const auto add = [&](uint32_t k) {
+      if ((pattern & EdgeBit(static_cast<int>(k))) == 0) next.Add(b, te[k]);
+    };
+    add(r & 7u);
+    for (int f = 0; f < 4; ++f) {
+      if ((pattern & kFaceEdgeBits[f]) != 0) add((r >> (3 + 3 * f)) & 7u);
+    }
+  };
+  ForEachVisitedTet(static_cast<int64_t>(tets.size()), visit, rule, cancel);
+  if (cancel.IsSet()) return 0;
+  return next.Apply(split, fresh);
+}
+
 int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                             const EdgeTable& edges, int rounds, FillLater<uint8_t>& split,
                             CancelFlag& cancel, FillLater<uint16_t>* targets) {
-  const int64_t nt = static_cast<int64_t>(tets.size());
   FillLater<uint16_t> own;
   if (targets == nullptr) {
-    own.assign(static_cast<size_t>(nt), kTargetsUnknown);
+    own.assign(tets.size(), kTargetsUnknown);
     targets = &own;
   }
-  FillLater<uint16_t>& cache = *targets;
   // Every round visits every tet. Tried 2026-11-24: from the second round on, visiting only the
   // tets with two vertices at the ends of an edge the round before added (a byte per vertex,
   // found in a pass over the edge table) - the same marks (tests/core/edge_marking_test.cc
   // checks the rounds against that rule), but no faster: the T1 brain `--block 4` mesh at eps
   // 0.05, one thread, late iterations 0.76-1.41 s against 0.69-1.32 s, interleaved. The extra
   // pass over the edges and the tets' vertex reads cost what the skipped edge reads saved.
+  // Refine visits fewer tets another way: core/marking_sequence.h.
   int64_t added = 0;
   for (int round = 0; round < rounds; ++round) {
-    PendingMarks next(nt);
-    ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
-      if (cancel.Check()) return;
-      for (int64_t t = begin; t < end; ++t) {
-        const auto& te = edges.tet_edges[t];
-        uint32_t pattern = 0;
-        for (int k = 0; k < 6; ++k) pattern |= split[te[k]] != 0 ? EdgeBit(k) : 0u;
-        if (pattern == 0) continue;
-        // Only this block reads or writes cache[t]: no two threads share an entry.
-        if (cache[t] == kTargetsUnknown) {
-          const Tet& tet = tets[t];
-          cache[t] = static_cast<uint16_t>(
-              ClosureTargets({points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]}));
-        }
-        const uint32_t r = cache[t];
-        const auto add = [&](uint32_t k) {
-          if ((pattern & EdgeBit(static_cast<int>(k))) == 0) next.Add(b, te[k]);
-        };
-        add(r & 7u);
-        for (int f = 0; f < 4; ++f) {
-          if ((pattern & kFaceEdgeBits[f]) != 0) add((r >> (3 + 3 * f)) & 7u);
-        }
-      }
-    });
+    const int64_t round_added =
+        ClosureRound(points, tets, edges, split, cancel, *targets, nullptr, nullptr);
     if (cancel.IsSet()) return added;
-    const int64_t round_added = next.Apply(split);
     added += round_added;
     if (round_added == 0) break;
   }
   return added;
 }
 
+int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                  const EdgeTable& edges, double ratio, bool best_tiling, FillLater<uint8_t>& split,
+                  CancelFlag& cancel, const std::vector<uint32_t>* visit,
+                  std::vector<uint32_t>* fresh) {
+  const auto& table = SubdivisionTable();
+  PendingMarks next(PassSize(static_cast<int64_t>(tets.size()), visit));
+  const auto rule = [&](int64_t b, int64_t t) {
+    const auto& te = edges.tet_edges[t];
+    uint32_t pattern = 0;
+    for (int k = 0; k < 6; ++k) pattern |= split[te[k]] ? EdgeBit(k) : 0u;
+    if (pattern == 0 || pattern == 63) return;
+    const Tet& tet = tets[t];
+    const std::array<Vec3, 4> corners = {points[tet[0]], points[tet[1]], points[tet[2]],
+                                         points[tet[3]]};
+    std::array<Vec3, 10> p;
+    for (int c = 0; c < 4; ++c) p[c] = corners[c];
+    for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+    const uint32_t key = SubdivisionKey(pattern, p);
+    // The tiling Subdivide will cut the tet by.
+    const SubdivisionEntry& entry =
+        best_tiling ? TilingEntry(BestTiling(key, corners)) : table[key];
+    const auto local = LocalPoints(corners, entry);
+    const double threshold = ratio * MeanRatio(corners[0], corners[1], corners[2], corners[3]);
+    bool bad = false;
+    for (int i = 0; i < entry.tet_count && !bad; ++i) {
+      const auto& c = entry.tets[i];
+      bad = MeanRatioBelow(MeanRatioPartsOf(local[c[0]], local[c[1]], local[c[2]], local[c[3]]),
+                           threshold);
+    }
+    if (!bad) return;
+    for (int k = 0; k < 6; ++k) {
+      if (!split[te[k]]) next.Add(b, te[k]);
+    }
+  };
+  ForEachVisitedTet(static_cast<int64_t>(tets.size()), visit, rule, cancel);
+  if (cancel.IsSet()) return 0;
+  return next.Apply(split, fresh);
+}
+
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                          const EdgeTable& edges, double ratio, bool best_tiling,
                          FillLater<uint8_t>& split, CancelFlag& cancel) {
-  const int64_t nt = static_cast<int64_t>(tets.size());
-  const auto& table = SubdivisionTable();
-  PendingMarks next(nt);
-  ForEachBlock(nt, [&](int64_t b, int64_t begin, int64_t end) {
-    if (cancel.Check()) return;
-    for (int64_t t = begin; t < end; ++t) {
-      const auto& te = edges.tet_edges[t];
-      uint32_t pattern = 0;
-      for (int k = 0; k < 6; ++k) pattern |= split[te[k]] ? EdgeBit(k) : 0u;
-      if (pattern == 0 || pattern == 63) continue;
-      const Tet& tet = tets[t];
-      const std::array<Vec3, 4> corners = {points[tet[0]], points[tet[1]], points[tet[2]],
-                                           points[tet[3]]};
-      std::array<Vec3, 10> p;
-      for (int c = 0; c < 4; ++c) p[c] = corners[c];
-      for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
-      const uint32_t key = SubdivisionKey(pattern, p);
-      // The tiling Subdivide will cut the tet by.
-      const SubdivisionEntry& entry =
-          best_tiling ? TilingEntry(BestTiling(key, corners)) : table[key];
-      const auto local = LocalPoints(corners, entry);
-      const double own = MeanRatio(corners[0], corners[1], corners[2], corners[3]);
-      bool bad = false;
-      for (int i = 0; i < entry.tet_count && !bad; ++i) {
-        const auto& c = entry.tets[i];
-        bad = MeanRatio(local[c[0]], local[c[1]], local[c[2]], local[c[3]]) < ratio * own;
-      }
-      if (!bad) continue;
-      for (int k = 0; k < 6; ++k) {
-        if (!split[te[k]]) next.Add(b, te[k]);
-      }
-    }
-  });
-  if (cancel.IsSet()) return 0;
-  return next.Apply(split);
+  return GuardPass(points, tets, edges, ratio, best_tiling, split, cancel, nullptr, nullptr);
 }
 
 int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,

@@ -5,6 +5,7 @@
 // fails. Internal to Refine.
 
 #include <cstdint>
+#include <vector>
 
 #include "core/edge_table.h"
 #include "core/fill_later.h"
@@ -85,6 +86,16 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
                             const EdgeTable& edges, int rounds, FillLater<uint8_t>& split,
                             CancelFlag& cancel, FillLater<uint16_t>* targets = nullptr);
 
+// One closure round (what CloseToLongestEdges does `rounds` times) over the tets in `visit` (each
+// at most once; all tets when null), with the targets cache (T entries) required. Sets the marks
+// after the pass, appends the edges it newly marked to `fresh` when not null, and returns their
+// number. A round over a list marks what a round over all tets marks when every tet left out
+// has the split pattern it had when a round last visited it (core/marking_sequence.h).
+int64_t ClosureRound(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                     const EdgeTable& edges, FillLater<uint8_t>& split, CancelFlag& cancel,
+                     FillLater<uint16_t>& targets, const std::vector<uint32_t>* visit,
+                     std::vector<uint32_t>* fresh);
+
 // One round of the quality guard: every tet whose split (by the paper's table) would make a
 // child of mean-ratio quality below `ratio` times its own splits all six edges instead (regular
 // 1:8 refinement keeps at least 0.77 of the parent's quality, measured). Returns edges added.
@@ -92,6 +103,13 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                          const EdgeTable& edges, double ratio, bool best_tiling,
                          FillLater<uint8_t>& split, CancelFlag& cancel);
+
+// PromoteBadSplits over the tets in `visit` (all when null), as ClosureRound is to a closure
+// round: the same conditions for a list, and the same `fresh` edges.
+int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                  const EdgeTable& edges, double ratio, bool best_tiling, FillLater<uint8_t>& split,
+                  CancelFlag& cancel, const std::vector<uint32_t>* visit,
+                  std::vector<uint32_t>* fresh);
 
 // Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165
 // points for n = 8) and keeps its discrepancy in state.tet_lattice_error (final until the tet is

@@ -1,5 +1,7 @@
 #include "core/quality.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/mesh.h"
@@ -12,6 +14,31 @@ double SquaredDistance(const Vec3& a, const Vec3& b) {
   return dx * dx + dy * dy + dz * dz;
 }
 
+MeanRatioParts PartsWithVolume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                                double volume6) {
+  return {std::abs(volume6) / 6.0, SquaredDistance(a, b) + SquaredDistance(a, c) +
+                                       SquaredDistance(a, d) + SquaredDistance(b, c) +
+                                       SquaredDistance(b, d) + SquaredDistance(c, d)};
+}
+
+// The cube of the mean ratio without a cube root: 12^3 * 9 v^2 / S^3. Both it and MeanRatioOf are
+// computed from the same two doubles, so they differ only by the rounding of the last few
+// operations (about 6 units in the last place each): where two cubes differ by more than
+// kCubeMargin (relative), the mean ratios compare the same way. Far outside the range of those
+// rounding errors (2^-52 = 2.2e-16 per operation), so the filter is exact, not approximate.
+constexpr double kCubeMargin = 1e-12;
+
+// True when the cube is computed without overflow, underflow or subnormals (values that no mesh
+// in millimetres or metres comes near; outside, callers take the exact path).
+bool CubeIsSafe(const MeanRatioParts& p) {
+  return p.sum_l2 > 1e-90 && p.sum_l2 < 1e90 && p.volume > 1e-130 && p.volume < 1e130;
+}
+
+double Cube(const MeanRatioParts& p) {
+  const double s = p.sum_l2;
+  return 1728.0 * (9.0 * p.volume * p.volume) / (s * s * s);
+}
+
 }  // namespace
 
 double MeanRatio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
@@ -20,11 +47,51 @@ double MeanRatio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 
 double MeanRatioWithVolume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
                             double volume6) {
-  const double volume = std::abs(volume6) / 6.0;
-  const double sum_l2 = SquaredDistance(a, b) + SquaredDistance(a, c) + SquaredDistance(a, d) +
-                        SquaredDistance(b, c) + SquaredDistance(b, d) + SquaredDistance(c, d);
-  if (sum_l2 <= 0.0) return 0.0;
-  return 12.0 * std::cbrt(9.0 * volume * volume) / sum_l2;
+  return MeanRatioOf(PartsWithVolume6(a, b, c, d, volume6));
+}
+
+MeanRatioParts MeanRatioPartsOf(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return PartsWithVolume6(a, b, c, d, SignedVolume6(a, b, c, d));
+}
+
+double MeanRatioOf(const MeanRatioParts& parts) {
+  if (parts.sum_l2 <= 0.0) return 0.0;
+  return 12.0 * std::cbrt(9.0 * parts.volume * parts.volume) / parts.sum_l2;
+}
+
+bool MeanRatioBelow(const MeanRatioParts& parts, double threshold) {
+  if (threshold > 0.0 && threshold < 1e30 && CubeIsSafe(parts)) {
+    const double cube = Cube(parts);
+    const double threshold_cube = threshold * threshold * threshold;
+    if (cube < threshold_cube * (1.0 - kCubeMargin)) return true;
+    if (cube > threshold_cube * (1.0 + kCubeMargin)) return false;
+  }
+  return MeanRatioOf(parts) < threshold;
+}
+
+double MinMeanRatio(const MeanRatioParts* parts, int count) {
+  // The largest child count of a subdivision entry is 11; a longer list takes the exact path.
+  constexpr int kMaxFiltered = 16;
+  std::array<double, kMaxFiltered> cubes{};
+  bool safe = count <= kMaxFiltered;
+  double smallest = 0.0;
+  for (int i = 0; i < count && safe; ++i) {
+    safe = CubeIsSafe(parts[i]);
+    cubes[i] = safe ? Cube(parts[i]) : 0.0;
+    smallest = i == 0 ? cubes[i] : std::min(smallest, cubes[i]);
+  }
+  if (!safe) {
+    double worst = MeanRatioOf(parts[0]);
+    for (int i = 1; i < count; ++i) worst = std::min(worst, MeanRatioOf(parts[i]));
+    return worst;
+  }
+  // Only a part whose cube is within the margin of the smallest can have the smallest value.
+  const double bound = smallest * (1.0 + kCubeMargin);
+  double worst = 2.0;  // above any mean ratio (at most 1 up to rounding)
+  for (int i = 0; i < count; ++i) {
+    if (cubes[i] <= bound) worst = std::min(worst, MeanRatioOf(parts[i]));
+  }
+  return worst;
 }
 
 }  // namespace tetrefine

@@ -15,6 +15,27 @@ double MeanRatio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 double MeanRatioWithVolume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
                             double volume6);
 
+// The two numbers a mean ratio is made of. For callers that compare the qualities of many tets
+// (the quality guard and the choice of tiling read 5-24 children per tet): most comparisons are
+// decided without the cube root, which was a tenth of a whole default-scheme call, and the answer
+// is the one MeanRatio's bits give, always (tests/core/quality_test.cc).
+struct MeanRatioParts {
+  double volume = 0.0;  // |six times the signed volume| / 6, as MeanRatio computes it
+  double sum_l2 = 0.0;  // sum of the six squared edge lengths, likewise
+};
+
+// a, b, c, d: the corners in the order MeanRatio would get them (the bits depend on the order).
+MeanRatioParts MeanRatioPartsOf(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
+// MeanRatio's value from its parts: the same bits as MeanRatio of the same corners.
+double MeanRatioOf(const MeanRatioParts& parts);
+
+// Exactly MeanRatioOf(parts) < threshold.
+bool MeanRatioBelow(const MeanRatioParts& parts, double threshold);
+
+// Exactly the smallest MeanRatioOf(parts[i]) for i in [0, count), count >= 1.
+double MinMeanRatio(const MeanRatioParts* parts, int count);
+
 struct QualityStats {
   double min = 0.0;
   double mean = 0.0;

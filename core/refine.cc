@@ -13,6 +13,7 @@
 #include "core/edge_marking.h"
 #include "core/edge_table.h"
 #include "core/lattice.h"
+#include "core/marking_sequence.h"
 #include "core/mesh_validation.h"
 #include "core/parallel.h"
 #include "core/refine_state.h"
@@ -126,10 +127,9 @@ float TetQuality(const std::vector<Vec3>& p, const Tet& t) {
 // (closure and guard: at most 8 + 2 * (1 + 8) = 26 rings of tets), so decisions stay local.
 struct SchemeRules {
   EdgeTest test = EdgeTest::kMidpoint;
-  int closure_rounds = 0;    // longest-edge closure rounds per iteration
-  double guard_ratio = 0.0;  // 0: no quality guard
-  int guard_rounds = 0;
-  bool best_tiling = false;  // cut each tet by its best tiling (core/alternative_tilings.h)
+  // The closure and the guard (core/marking_sequence.h); none by default. best_tiling: cut each
+  // tet by its best tiling (core/alternative_tilings.h), and let the guard judge that one.
+  refine_internal::MarkingRules marking;
 };
 
 constexpr int kClosureRounds = 8;
@@ -140,10 +140,10 @@ SchemeRules RulesOf(const RefineOptions& options) {
   SchemeRules r;
   if (options.scheme == RefineScheme::kLongestEdge) {
     r.test = options.certify ? EdgeTest::kSegment : EdgeTest::kMidpoint;
-    r.closure_rounds = kClosureRounds;
-    r.guard_ratio = kGuardRatio;
-    r.guard_rounds = kGuardRounds;
-    r.best_tiling = true;
+    r.marking.closure_rounds = kClosureRounds;
+    r.marking.guard_ratio = kGuardRatio;
+    r.marking.guard_rounds = kGuardRounds;
+    r.marking.best_tiling = true;
   }
   return r;
 }
@@ -241,7 +241,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   limits.max_tets = options.max_tets;
   limits.min_quality = options.min_quality;
   limits.clamp = clamp;
-  limits.best_tiling = rules.best_tiling;
+  limits.best_tiling = rules.marking.best_tiling;
 
   CancelFlag cancel(options.should_cancel);
   result.stop_reason = StopReason::kMaxIterations;
@@ -319,22 +319,11 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     stats.mean_error = errors.mean_error;
     stats.max_segment_error = errors.max_segment_error;
     stats.failing_tets = failing_tets;
-    FillLater<uint16_t> closure_targets;
-    if (rules.closure_rounds > 0) {
-      closure_targets.assign(state.tets->size(), refine_internal::kTargetsUnknown);
-      stats.closure_edges = refine_internal::CloseToLongestEdges(*state.points, *state.tets, edges,
-                                                                 rules.closure_rounds, errors.split,
-                                                                 cancel, &closure_targets);
-    }
-    for (int r = 0; r < rules.guard_rounds; ++r) {
-      stats.guard_edges +=
-          refine_internal::PromoteBadSplits(*state.points, *state.tets, edges, rules.guard_ratio,
-                                            rules.best_tiling, errors.split, cancel);
-      if (rules.closure_rounds > 0) {
-        stats.closure_edges += refine_internal::CloseToLongestEdges(
-            *state.points, *state.tets, edges, rules.closure_rounds, errors.split, cancel,
-            &closure_targets);
-      }
+    if (rules.marking.closure_rounds > 0 || rules.marking.guard_rounds > 0) {
+      const refine_internal::MarkingCounts marked = refine_internal::CloseAndGuard(
+          *state.points, *state.tets, edges, rules.marking, errors.split, cancel);
+      stats.closure_edges = marked.closure_edges;
+      stats.guard_edges = marked.guard_edges;
     }
     // The closure and the guard poll cancellation (each pass reads every tet): their marks are
     // incomplete once it is set.

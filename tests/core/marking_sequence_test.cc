@@ -1,0 +1,167 @@
+// CloseAndGuard visits only the tets whose split pattern changed since a rule last saw them; it
+// must mark exactly what the full passes mark, round for round. Checked against the plain
+// sequence of CloseToLongestEdges and PromoteBadSplits on jittered and refined meshes with random
+// marks, for several rule settings and thread counts.
+
+#include "core/marking_sequence.h"
+
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/edge_table.h"
+#include "core/refine.h"
+#include "gtest/gtest.h"
+#include "tests/support/geometry.h"
+
+namespace tetrefine::refine_internal {
+namespace {
+
+struct Case {
+  Mesh mesh;
+  EdgeTable edges;
+};
+
+Case WithEdges(Mesh mesh) {
+  Case c{std::move(mesh), {}};
+  c.edges = BuildEdgeTable(c.mesh.tets, static_cast<int64_t>(c.mesh.points.size()));
+  AddTetEdges(c.mesh.tets, &c.edges);
+  return c;
+}
+
+// A box of 5-tet cells with every point moved by up to 0.1 per axis.
+Case JitteredBox(std::mt19937_64& rng) {
+  Mesh mesh = testing::FiveTetMesh({0.0, 0.0, 0.0}, {7.0, 6.0, 5.0}, {7, 6, 5});
+  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  for (Vec3& p : mesh.points) {
+    for (double& x : p) x += jitter(rng);
+  }
+  return WithEdges(std::move(mesh));
+}
+
+// A box refined twice by the paper's scheme on a ripple: tets of many shapes and sizes, the
+// kind the later iterations of a refinement see.
+Case RefinedBox() {
+  GridGeometry g;
+  g.dims = {24, 24, 24};
+  const Volume volume = testing::AnalyticVolume(g, [](const Vec3& p) {
+    return 100.0 * std::sin(p[0] * 0.5) * std::cos(p[1] * 0.4) * std::sin(p[2] * 0.3);
+  });
+  RefineOptions o;
+  o.scheme = RefineScheme::kPaper;
+  o.epsilon = 0.02;
+  o.max_iterations = 2;
+  o.lattice_n = 0;
+  auto r = Refine(volume, testing::FiveTetMesh({0, 0, 0}, {23, 23, 23}, {4, 4, 4}), o);
+  EXPECT_TRUE(r.ok()) << r.status();
+  return WithEdges(std::move(r->mesh));
+}
+
+FillLater<uint8_t> RandomMarks(const Case& c, double density, std::mt19937_64& rng) {
+  FillLater<uint8_t> split(static_cast<size_t>(c.edges.size()), 0);
+  std::bernoulli_distribution marked(density);
+  for (int64_t e = 0; e < c.edges.size(); ++e) split[e] = marked(rng) ? 1 : 0;
+  return split;
+}
+
+// The sequence CloseAndGuard stands for, with every pass over every tet.
+MarkingCounts FullPasses(const Case& c, const MarkingRules& rules, FillLater<uint8_t>& split,
+                         CancelFlag& cancel) {
+  MarkingCounts counts;
+  FillLater<uint16_t> targets(c.mesh.tets.size(), kTargetsUnknown);
+  const auto& p = c.mesh.points;
+  const auto& t = c.mesh.tets;
+  if (rules.closure_rounds > 0) {
+    counts.closure_edges +=
+        CloseToLongestEdges(p, t, c.edges, rules.closure_rounds, split, cancel, &targets);
+  }
+  for (int r = 0; r < rules.guard_rounds; ++r) {
+    counts.guard_edges +=
+        PromoteBadSplits(p, t, c.edges, rules.guard_ratio, rules.best_tiling, split, cancel);
+    if (rules.closure_rounds > 0) {
+      counts.closure_edges +=
+          CloseToLongestEdges(p, t, c.edges, rules.closure_rounds, split, cancel, &targets);
+    }
+  }
+  return counts;
+}
+
+void ExpectSameMarks(const Case& c, const FillLater<uint8_t>& start, const MarkingRules& rules,
+                     const std::string& what, int* passes_with_work) {
+  const std::function<bool()> never = [] { return false; };
+  CancelFlag running(never);
+  FillLater<uint8_t> expected = start;
+  const MarkingCounts want = FullPasses(c, rules, expected, running);
+  for (int threads : {1, 2}) {
+    FillLater<uint8_t> got = start;
+    MarkingCounts have;
+    tbb::task_arena arena(threads);
+    arena.execute(
+        [&] { have = CloseAndGuard(c.mesh.points, c.mesh.tets, c.edges, rules, got, running); });
+    EXPECT_EQ(have.closure_edges, want.closure_edges) << what << ", " << threads << " threads";
+    EXPECT_EQ(have.guard_edges, want.guard_edges) << what << ", " << threads << " threads";
+    EXPECT_TRUE(got == expected) << what << ", " << threads << " threads";
+  }
+  if (want.guard_edges > 0 && want.closure_edges > 0) ++*passes_with_work;
+}
+
+TEST(MarkingSequenceTest, MarksWhatTheFullPassesMark) {
+  std::mt19937_64 rng(20261125);
+  std::vector<Case> cases;
+  for (int i = 0; i < 3; ++i) cases.push_back(JitteredBox(rng));
+  cases.push_back(RefinedBox());
+  int with_work = 0;
+  for (size_t k = 0; k < cases.size(); ++k) {
+    for (double density : {0.002, 0.02, 0.1}) {
+      const FillLater<uint8_t> start = RandomMarks(cases[k], density, rng);
+      for (int closure_rounds : {0, 1, 2, 8}) {
+        for (int guard_rounds : {0, 1, 2, 3}) {
+          // The default scheme's ratio, and a stricter one that promotes more (alternating).
+          for (double ratio : {k % 2 == 0 ? 0.6 : 0.9}) {
+            for (bool best_tiling : {false, true}) {
+              MarkingRules rules;
+              rules.closure_rounds = closure_rounds;
+              rules.guard_rounds = guard_rounds;
+              rules.guard_ratio = ratio;
+              rules.best_tiling = best_tiling;
+              ExpectSameMarks(cases[k], start, rules,
+                              "case " + std::to_string(k) + ", density " + std::to_string(density) +
+                                  ", closure " + std::to_string(closure_rounds) + ", guard " +
+                                  std::to_string(guard_rounds) + " x " + std::to_string(ratio) +
+                                  (best_tiling ? ", best tiling" : ""),
+                              &with_work);
+            }
+          }
+        }
+      }
+    }
+  }
+  // The comparison means something only where both rules marked edges after the first pass.
+  EXPECT_GT(with_work, 100);
+}
+
+TEST(MarkingSequenceTest, MarksNothingOnceCancelled) {
+  std::mt19937_64 rng(7);
+  const Case c = JitteredBox(rng);
+  FillLater<uint8_t> split = RandomMarks(c, 0.02, rng);
+  const FillLater<uint8_t> before = split;
+  const std::function<bool()> always = [] { return true; };
+  CancelFlag cancelled(always);
+  MarkingRules rules;
+  rules.closure_rounds = 8;
+  rules.guard_rounds = 2;
+  rules.guard_ratio = 0.6;
+  const MarkingCounts counts =
+      CloseAndGuard(c.mesh.points, c.mesh.tets, c.edges, rules, split, cancelled);
+  EXPECT_EQ(counts.closure_edges, 0);
+  EXPECT_EQ(counts.guard_edges, 0);
+  EXPECT_TRUE(split == before);
+}
+
+}  // namespace
+}  // namespace tetrefine::refine_internal
