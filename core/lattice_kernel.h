@@ -34,6 +34,12 @@ class LatticePoints {
   std::vector<MaxLocation> location_;
 };
 
+// Whether LatticeErrors runs its AVX2 version (x86-64 CPUs that have AVX2; the same bits as the
+// portable one). SetLatticeSimdForTesting switches it for tests of both paths; it returns false
+// when the version asked for cannot run here.
+bool LatticeSimd();
+bool SetLatticeSimdForTesting(bool on);
+
 // Most points LatticeErrors takes per call: its scratch lives on the stack.
 inline constexpr int64_t kLatticeChunk = 64;
 

@@ -9,6 +9,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <random>
 #include <vector>
@@ -221,92 +222,120 @@ std::vector<Case> EveryCase() {
   return cases;
 }
 
+// Runs body with the portable kernel and, where the CPU has AVX2, with the AVX2 one: both must
+// give the reference's bits.
+void ForEachKernel(const std::function<void()>& body) {
+  const bool was = lattice_internal::LatticeSimd();
+  for (bool simd : {false, true}) {
+    if (!lattice_internal::SetLatticeSimdForTesting(simd)) continue;
+    SCOPED_TRACE(simd ? "AVX2 kernel" : "portable kernel");
+    body();
+  }
+  lattice_internal::SetLatticeSimdForTesting(was);
+}
+
 TEST(LatticeKernel, SampleTetLatticeEqualsThePointByPointScanToTheBit) {
-  for (uint64_t seed : testing::Seeds(6)) {
-    std::mt19937_64 rng(seed);
-    for (const Case& c : EveryCase()) {
-      SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
-                                        << " oblique " << c.oblique << " slab " << c.slab);
-      const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
-      const Mesh mesh = RandomTets(rng, volume, 6);
-      const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
-      // Epsilon 0 counts every nonzero point above it; the others split the points.
-      const double epsilon =
-          rng() % 3 == 0 ? 0.0 : std::uniform_real_distribution<double>(0, 0.2)(rng);
-      for (int n : {1, 2, 8, 13}) {
-        for (bool clamp : {false, true}) {
-          for (int64_t t = 0; t < static_cast<int64_t>(mesh.tets.size()); ++t) {
-            SCOPED_TRACE(::testing::Message() << "n " << n << " clamp " << clamp << " tet " << t);
-            ExpectSame(SampleTetLattice(volume, mesh, t, n, norm, epsilon, clamp),
-                       ReferenceTetLattice(volume, mesh, t, n, norm, epsilon, clamp));
-          }
-        }
-      }
-    }
-  }
-}
-
-// SampleLattice sums per block; its maximum, counts and share above epsilon must still be the
-// reference's over the same tets (every tet, and a drawn sample of them).
-TEST(LatticeKernel, SampleLatticeAgreesWithThePointByPointScan) {
-  for (uint64_t seed : testing::Seeds(4)) {
-    std::mt19937_64 rng(seed);
-    for (const Case& c : EveryCase()) {
-      SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
-                                        << " oblique " << c.oblique << " slab " << c.slab);
-      const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
-      const Mesh mesh = RandomTets(rng, volume, 40);
-      const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
-      const double epsilon = std::uniform_real_distribution<double>(0, 0.1)(rng);
-      const LatticeStats all = SampleLattice(volume, mesh, 8, 0, seed, norm, epsilon, true);
-      double max_error = 0.0;
-      int64_t points = 0, above = 0;
-      for (int64_t t = 0; t < static_cast<int64_t>(mesh.tets.size()); ++t) {
-        const TetLattice r = ReferenceTetLattice(volume, mesh, t, 8, norm, epsilon, true);
-        max_error = std::max(max_error, r.max_error);
-        points += r.points;
-        above += r.above_epsilon;
-      }
-      EXPECT_EQ(Bits(all.max_error), Bits(max_error));
-      EXPECT_EQ(all.points_sampled, points);
-      EXPECT_EQ(Bits(all.share_above_epsilon),
-                Bits(static_cast<double>(above) / static_cast<double>(points)));
-    }
-  }
-}
-
-TEST(LatticeKernel, CertifiedMaximumEqualsThePointByPointScanToTheBit) {
-  for (uint64_t seed : testing::Seeds(6)) {
-    std::mt19937_64 rng(seed);
-    for (const Case& c : EveryCase()) {
-      SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
-                                        << " oblique " << c.oblique << " slab " << c.slab);
-      const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
-      const Mesh mesh = RandomTets(rng, volume, 6);
-      const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
-      for (int n : {1, 2, 8, 13}) {
-        const lattice_internal::LatticePoints points(n, /*with_corners=*/false);
-        for (const Tet& tet : mesh.tets) {
-          const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]],
-                                         mesh.points[tet[2]], mesh.points[tet[3]]};
-          const std::array<double, 4> v = {mesh.values[tet[0]], mesh.values[tet[1]],
-                                           mesh.values[tet[2]], mesh.values[tet[3]]};
-          // A huge epsilon scans every point; the others stop at different points.
-          for (double epsilon : {1e300, 0.0, 0.01, 0.05}) {
-            for (bool clamp : {false, true}) {
-              SCOPED_TRACE(::testing::Message() << "n " << n << " epsilon " << epsilon);
-              EXPECT_EQ(
-                  Bits(lattice_internal::LatticeMaxUntil(volume, points, p, v, norm, epsilon)),
-                  Bits(ReferenceTetLatticeMax(volume, p, v, n, norm, epsilon, clamp)));
+  ForEachKernel([] {
+    for (uint64_t seed : testing::Seeds(6)) {
+      std::mt19937_64 rng(seed);
+      for (const Case& c : EveryCase()) {
+        SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
+                                          << " oblique " << c.oblique << " slab " << c.slab);
+        const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
+        const Mesh mesh = RandomTets(rng, volume, 6);
+        const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
+        // Epsilon 0 counts every nonzero point above it; the others split the points.
+        const double epsilon =
+            rng() % 3 == 0 ? 0.0 : std::uniform_real_distribution<double>(0, 0.2)(rng);
+        for (int n : {1, 2, 8, 13}) {
+          for (bool clamp : {false, true}) {
+            for (int64_t t = 0; t < static_cast<int64_t>(mesh.tets.size()); ++t) {
+              SCOPED_TRACE(::testing::Message() << "n " << n << " clamp " << clamp << " tet " << t);
+              ExpectSame(SampleTetLattice(volume, mesh, t, n, norm, epsilon, clamp),
+                         ReferenceTetLattice(volume, mesh, t, n, norm, epsilon, clamp));
             }
           }
         }
       }
     }
-  }
+  });
+}
+
+// SampleLattice sums per block; its maximum, counts and share above epsilon must still be the
+// reference's over the same tets (every tet, and a drawn sample of them).
+TEST(LatticeKernel, SampleLatticeAgreesWithThePointByPointScan) {
+  ForEachKernel([] {
+    for (uint64_t seed : testing::Seeds(4)) {
+      std::mt19937_64 rng(seed);
+      for (const Case& c : EveryCase()) {
+        SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
+                                          << " oblique " << c.oblique << " slab " << c.slab);
+        const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
+        const Mesh mesh = RandomTets(rng, volume, 40);
+        const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
+        const double epsilon = std::uniform_real_distribution<double>(0, 0.1)(rng);
+        const LatticeStats all = SampleLattice(volume, mesh, 8, 0, seed, norm, epsilon, true);
+        double max_error = 0.0;
+        int64_t points = 0, above = 0;
+        for (int64_t t = 0; t < static_cast<int64_t>(mesh.tets.size()); ++t) {
+          const TetLattice r = ReferenceTetLattice(volume, mesh, t, 8, norm, epsilon, true);
+          max_error = std::max(max_error, r.max_error);
+          points += r.points;
+          above += r.above_epsilon;
+        }
+        EXPECT_EQ(Bits(all.max_error), Bits(max_error));
+        EXPECT_EQ(all.points_sampled, points);
+        EXPECT_EQ(Bits(all.share_above_epsilon),
+                  Bits(static_cast<double>(above) / static_cast<double>(points)));
+      }
+    }
+  });
+}
+
+TEST(LatticeKernel, CertifiedMaximumEqualsThePointByPointScanToTheBit) {
+  ForEachKernel([] {
+    for (uint64_t seed : testing::Seeds(6)) {
+      std::mt19937_64 rng(seed);
+      for (const Case& c : EveryCase()) {
+        SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
+                                          << " oblique " << c.oblique << " slab " << c.slab);
+        const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
+        const Mesh mesh = RandomTets(rng, volume, 6);
+        const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
+        for (int n : {1, 2, 8, 13}) {
+          const lattice_internal::LatticePoints points(n, /*with_corners=*/false);
+          for (const Tet& tet : mesh.tets) {
+            const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]],
+                                           mesh.points[tet[2]], mesh.points[tet[3]]};
+            const std::array<double, 4> v = {mesh.values[tet[0]], mesh.values[tet[1]],
+                                             mesh.values[tet[2]], mesh.values[tet[3]]};
+            // A huge epsilon scans every point; the others stop at different points.
+            for (double epsilon : {1e300, 0.0, 0.01, 0.05}) {
+              for (bool clamp : {false, true}) {
+                SCOPED_TRACE(::testing::Message() << "n " << n << " epsilon " << epsilon);
+                EXPECT_EQ(
+                    Bits(lattice_internal::LatticeMaxUntil(volume, points, p, v, norm, epsilon)),
+                    Bits(ReferenceTetLatticeMax(volume, p, v, n, norm, epsilon, clamp)));
+              }
+            }
+          }
+        }
+      }
+    }
+  });
 }
 
 // The table keeps the scan order and the reference's point count, with and without corners.
+// The AVX2 kernel runs wherever the CPU has it: a build that lost it would be slower, not wrong,
+// and nothing else would notice.
+TEST(LatticeKernel, UsesAvx2WhereTheCpuHasIt) {
+#if defined(__x86_64__)
+  EXPECT_EQ(lattice_internal::LatticeSimd(), __builtin_cpu_supports("avx2") != 0);
+#else
+  EXPECT_FALSE(lattice_internal::LatticeSimd());
+#endif
+}
+
 TEST(LatticeKernel, PointTableHoldsTheLatticeInScanOrder) {
   for (int n : {1, 2, 8, 13, 64}) {
     const lattice_internal::LatticePoints all(n, true), inner(n, false);
