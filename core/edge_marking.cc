@@ -140,28 +140,61 @@ EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& 
   const int64_t blocks = BlockCount(nv);
   std::vector<double> sums(blocks, 0.0), maxs(blocks, 0.0), seg_maxs(blocks, 0.0);
   std::vector<int64_t> failing(blocks, 0), kept(blocks, 0);
+  // Calls visit(e, w, known_index) for vertex v's edges e = (v, w) in order; known_index is the
+  // edge's index in `known`, or -1. v's known edges are walked forward alongside its sorted new
+  // ones.
+  const auto for_each_edge = [&](int64_t v, auto visit) {
+    const uint32_t* kp = nullptr;
+    const uint32_t* ke = nullptr;
+    if (known != nullptr && v + 1 < static_cast<int64_t>(known->edges.first.size())) {
+      kp = known->edges.second.data() + known->edges.first[v];
+      ke = known->edges.second.data() + known->edges.first[v + 1];
+    }
+    for (uint32_t e = edges.first[v]; e < edges.first[v + 1]; ++e) {
+      const uint32_t w = edges.second[e];
+      while (kp < ke && *kp < w) ++kp;
+      visit(e, w, kp < ke && *kp == w ? kp - known->edges.second.data() : int64_t{-1});
+    }
+  };
   ForEachBlock(nv, [&](int64_t b, int64_t begin, int64_t end) {
     if (cancel.Check()) return;
+    // First the midpoint values of the block's edges: known ones copied, new ones sampled a batch
+    // at a time (SampleIndices, four at a time with AVX2; the same bits as SampleInside, whose
+    // clamp to the grid SampleIndex applies anyway). Then the tests, in edge order, so that the
+    // sums keep their order. Midpoint sampling was a tenth of a one-thread file-to-file run.
+    {
+      constexpr int kBatch = 64;
+      double ux[kBatch], uy[kBatch], uz[kBatch], sampled[kBatch];
+      uint32_t batch_edge[kBatch];
+      int n = 0;
+      const auto flush = [&] {
+        lattice_internal::SampleIndices(volume, ux, uy, uz, n, sampled);
+        for (int i = 0; i < n; ++i) out.mid_value[batch_edge[i]] = sampled[i];
+        n = 0;
+      };
+      for (int64_t v = begin; v < end; ++v) {
+        for_each_edge(v, [&](uint32_t e, uint32_t w, int64_t known_index) {
+          if (known_index >= 0) {
+            out.mid_value[e] = known->mid_value[known_index];
+            return;
+          }
+          const Vec3 u = volume.ContinuousIndex(Midpoint(points[v], points[w]));
+          ux[n] = u[0];
+          uy[n] = u[1];
+          uz[n] = u[2];
+          batch_edge[n] = e;
+          if (++n == kBatch) flush();
+        });
+      }
+      if (n > 0) flush();
+    }
     double s = 0.0, mx = 0.0, seg_mx = 0.0;
     int64_t n_failing = 0, n_kept = 0;
     for (int64_t v = begin; v < end; ++v) {
-      // v's known edges, walked forward alongside its sorted new ones.
-      const uint32_t* kp = nullptr;
-      const uint32_t* ke = nullptr;
-      if (known != nullptr && v + 1 < static_cast<int64_t>(known->edges.first.size())) {
-        kp = known->edges.second.data() + known->edges.first[v];
-        ke = known->edges.second.data() + known->edges.first[v + 1];
-      }
-      for (uint32_t e = edges.first[v]; e < edges.first[v + 1]; ++e) {
-        const uint32_t w = edges.second[e];
-        while (kp < ke && *kp < w) ++kp;
-        const bool is_known = kp < ke && *kp == w;
-        const int64_t known_index = is_known ? kp - known->edges.second.data() : -1;
-        const double real =
-            is_known ? known->mid_value[known_index]
-                     : SampleInside(volume, Midpoint(points[v], points[w]), params.clamp);
+      for_each_edge(v, [&](uint32_t e, uint32_t w, int64_t known_index) {
+        const bool is_known = known_index >= 0;
+        const double real = out.mid_value[e];
         const double error = std::abs(real - 0.5 * (values[v] + values[w])) / params.norm;
-        out.mid_value[e] = real;
         double test_error = error;
         if (segment) {
           test_error = is_known && known_segment
@@ -184,7 +217,7 @@ EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& 
         n_failing += split;
         s += error;
         mx = std::max(mx, error);
-      }
+      });
     }
     sums[b] = s;
     maxs[b] = mx;

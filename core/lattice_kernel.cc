@@ -91,9 +91,11 @@ bool FitsAvx2(const TrilinearSampler& s) {
 }
 
 template <typename T>
-[[gnu::target("avx2"), gnu::always_inline]] inline void SampleAvx2(
-    const TrilinearSampler& s, const double* ux, const double* uy, const double* uz,
-    const double* approx, int64_t m, double* out) {
+[[gnu::target("avx2"), gnu::always_inline]] inline void SampleAvx2(const TrilinearSampler& s,
+                                                                   const double* ux,
+                                                                   const double* uy,
+                                                                   const double* uz, int64_t m,
+                                                                   double* out) {
   const double* u[3] = {ux, uy, uz};
   const __m256d zero = _mm256_setzero_pd();
   const __m256d one = _mm256_set1_pd(1.0);
@@ -135,9 +137,16 @@ template <typename T>
     const __m256d c01 = Lerp4(corner[4], corner[5], t[0], one);
     const __m256d c11 = Lerp4(corner[6], corner[7], t[0], one);
     const __m256d value = Lerp4(Lerp4(c00, c10, t[1], one), Lerp4(c01, c11, t[1], one), t[2], one);
-    _mm256_storeu_pd(out + i, _mm256_sub_pd(value, _mm256_loadu_pd(approx + i)));
+    _mm256_storeu_pd(out + i, value);
   }
-  for (; i < m; ++i) out[i] = s.Sample<T>({ux[i], uy[i], uz[i]}) - approx[i];
+  for (; i < m; ++i) out[i] = s.Sample<T>({ux[i], uy[i], uz[i]});
+}
+
+template <typename T>
+[[gnu::target("avx2")]] void SampleManyAvx2(const TrilinearSampler& s, const double* ux,
+                                            const double* uy, const double* uz, int64_t m,
+                                            double* out) {
+  SampleAvx2<T>(s, ux, uy, uz, m, out);
 }
 
 template <typename T, bool kAxisAligned>
@@ -149,8 +158,8 @@ template <typename T, bool kAxisAligned>
   double ux[kLatticeChunk], uy[kLatticeChunk], uz[kLatticeChunk], approx[kLatticeChunk];
   IndicesAndValues<kAxisAligned>(map, points, p, v, begin, m, ux, uy, uz, approx);
   double out[kLatticeChunk];
-  SampleAvx2<T>(sampler, ux, uy, uz, approx, m, out);
-  for (int64_t i = 0; i < m; ++i) out[i] = std::abs(out[i]) / norm;
+  SampleAvx2<T>(sampler, ux, uy, uz, m, out);
+  for (int64_t i = 0; i < m; ++i) out[i] = std::abs(out[i] - approx[i]) / norm;
   std::copy(out, out + m, errors);
 }
 
@@ -239,6 +248,30 @@ bool SetLatticeSimdForTesting(bool on) {
 #else
   return !on;
 #endif
+}
+
+void SampleIndices(const Volume& volume, const double* ux, const double* uy, const double* uz,
+                   int64_t count, double* out) {
+  const TrilinearSampler s = volume.sampler();
+#ifdef TETREFINE_LATTICE_AVX2
+  if (SimdSwitch().load(std::memory_order_relaxed) && FitsAvx2(s)) {
+    switch (volume.type()) {
+      case VoxelType::kUint8:
+        return SampleManyAvx2<uint8_t>(s, ux, uy, uz, count, out);
+      case VoxelType::kInt16:
+        return SampleManyAvx2<int16_t>(s, ux, uy, uz, count, out);
+      case VoxelType::kUint16:
+        return SampleManyAvx2<uint16_t>(s, ux, uy, uz, count, out);
+      case VoxelType::kInt32:
+        return SampleManyAvx2<int32_t>(s, ux, uy, uz, count, out);
+      case VoxelType::kFloat32:
+        return SampleManyAvx2<float>(s, ux, uy, uz, count, out);
+      case VoxelType::kFloat64:
+        return SampleManyAvx2<double>(s, ux, uy, uz, count, out);
+    }
+  }
+#endif
+  for (int64_t i = 0; i < count; ++i) out[i] = volume.SampleIndex({ux[i], uy[i], uz[i]});
 }
 
 void LatticeErrors(const Volume& volume, const LatticePoints& points, const std::array<Vec3, 4>& p,

@@ -40,6 +40,12 @@ class LatticePoints {
 bool LatticeSimd();
 bool SetLatticeSimdForTesting(bool on);
 
+// Volume::SampleIndex at the `count` continuous indices (ux[i], uy[i], uz[i]), into out[i]: the
+// same bits, four at a time where the AVX2 kernel runs. For callers with many samples to take
+// (the edge test's midpoints).
+void SampleIndices(const Volume& volume, const double* ux, const double* uy, const double* uz,
+                   int64_t count, double* out);
+
 // Most points LatticeErrors takes per call: its scratch lives on the stack.
 inline constexpr int64_t kLatticeChunk = 64;
 

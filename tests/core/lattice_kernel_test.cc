@@ -326,6 +326,44 @@ TEST(LatticeKernel, CertifiedMaximumEqualsThePointByPointScanToTheBit) {
 }
 
 // The table keeps the scan order and the reference's point count, with and without corners.
+// The batch sampler the edge test uses gives SampleIndex's bits at any index, inside the slab,
+// on its cell faces and clamped from outside the grid, for counts that leave every tail length.
+TEST(LatticeKernel, SampleIndicesEqualsSampleIndexToTheBit) {
+  ForEachKernel([] {
+    for (uint64_t seed : testing::Seeds(6)) {
+      std::mt19937_64 rng(seed);
+      for (const Case& c : EveryCase()) {
+        SCOPED_TRACE(::testing::Message()
+                     << "seed " << seed << " type " << VoxelTypeName(c.type) << " slab " << c.slab);
+        const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
+        for (int64_t count : {0, 1, 3, 4, 5, 64, 67}) {
+          std::vector<double> u[3];
+          for (int a = 0; a < 3; ++a) {
+            const double lo = static_cast<double>(volume.lo()[a]);
+            const double hi = static_cast<double>(volume.hi()[a] - 1);
+            std::uniform_real_distribution<double> inside(lo, hi);
+            for (int64_t i = 0; i < count; ++i) {
+              // Mostly inside the slab; some on a sample plane, some outside the grid.
+              const int64_t kind = static_cast<int64_t>(rng() % 8);
+              u[a].push_back(kind == 0   ? std::floor(inside(rng))
+                             : kind == 1 ? inside(rng) - 3.0 * hi
+                             : kind == 2 ? inside(rng) + 3.0 * hi
+                                         : inside(rng));
+            }
+          }
+          std::vector<double> got(static_cast<size_t>(count));
+          lattice_internal::SampleIndices(volume, u[0].data(), u[1].data(), u[2].data(), count,
+                                          got.data());
+          for (int64_t i = 0; i < count; ++i) {
+            EXPECT_EQ(Bits(got[i]), Bits(volume.SampleIndex({u[0][i], u[1][i], u[2][i]})))
+                << "count " << count << " point " << i;
+          }
+        }
+      }
+    }
+  });
+}
+
 // The AVX2 kernel runs wherever the CPU has it: a build that lost it would be slower, not wrong,
 // and nothing else would notice.
 TEST(LatticeKernel, UsesAvx2WhereTheCpuHasIt) {
