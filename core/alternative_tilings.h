@@ -22,6 +22,9 @@ inline constexpr int kMaxAlternativeTilings = 2;
 // AlternativeTilings(key)[i - 1]). Fits the uint16_t Subdivide keeps per tet.
 inline constexpr int kTilingShift = 12;
 inline constexpr int kNumTilingKeys = kNumSubdivisionKeys << 2;
+// Not a tiling key: for caches of BestTiling's answers (uint16_t entries).
+inline constexpr uint16_t kUnknownTiling = 0xffff;
+static_assert(kNumTilingKeys <= kUnknownTiling);
 
 struct AlternativeTilings {
   int count = 0;

@@ -312,7 +312,7 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
 int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                   const EdgeTable& edges, double ratio, bool best_tiling, FillLater<uint8_t>& split,
                   CancelFlag& cancel, const std::vector<uint32_t>* visit,
-                  std::vector<uint32_t>* fresh) {
+                  std::vector<uint32_t>* fresh, FillLater<uint16_t>* tilings) {
   const auto& table = SubdivisionTable();
   PendingMarks next(PassSize(static_cast<int64_t>(tets.size()), visit));
   const auto rule = [&](int64_t b, int64_t t) {
@@ -328,8 +328,10 @@ int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
     for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
     const uint32_t key = SubdivisionKey(pattern, p);
     // The tiling Subdivide will cut the tet by.
-    const SubdivisionEntry& entry =
-        best_tiling ? TilingEntry(BestTiling(key, corners)) : table[key];
+    const uint32_t tiling = best_tiling ? BestTiling(key, corners) : key;
+    // Only this block writes tilings[t]: a visit list names a tet once.
+    if (best_tiling && tilings != nullptr) (*tilings)[t] = static_cast<uint16_t>(tiling);
+    const SubdivisionEntry& entry = best_tiling ? TilingEntry(tiling) : table[key];
     const auto local = LocalPoints(corners, entry);
     const double threshold = ratio * MeanRatio(corners[0], corners[1], corners[2], corners[3]);
     bool bad = false;

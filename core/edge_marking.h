@@ -105,11 +105,13 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
                          FillLater<uint8_t>& split, CancelFlag& cancel);
 
 // PromoteBadSplits over the tets in `visit` (all when null), as ClosureRound is to a closure
-// round: the same conditions for a list, and the same `fresh` edges.
+// round: the same conditions for a list, and the same `fresh` edges. With best_tiling and
+// `tilings` (T entries) not null, each tet the guard judges gets the tiling key BestTiling gave
+// it there (Subdivide reuses it while the tet's subdivision key stays the same).
 int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                   const EdgeTable& edges, double ratio, bool best_tiling, FillLater<uint8_t>& split,
                   CancelFlag& cancel, const std::vector<uint32_t>* visit,
-                  std::vector<uint32_t>* fresh);
+                  std::vector<uint32_t>* fresh, FillLater<uint16_t>* tilings = nullptr);
 
 // Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165
 // points for n = 8) and keeps its discrepancy in state.tet_lattice_error (final until the tet is

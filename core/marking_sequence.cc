@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <optional>
 
+#include "core/alternative_tilings.h"
 #include "core/counting_sort.h"
 #include "core/parallel.h"
 
@@ -80,8 +81,16 @@ class RuleWork {
 
 MarkingCounts CloseAndGuard(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                             const EdgeTable& edges, const MarkingRules& rules,
-                            FillLater<uint8_t>& split, CancelFlag& cancel) {
+                            FillLater<uint8_t>& split, CancelFlag& cancel,
+                            FillLater<uint16_t>* tilings) {
   const int64_t nt = static_cast<int64_t>(tets.size());
+  if (tilings != nullptr) {
+    if (rules.best_tiling && rules.guard_rounds > 0) {
+      tilings->assign(tets.size(), kUnknownTiling);
+    } else {
+      tilings = nullptr;
+    }
+  }
   MarkingCounts counts;
   FillLater<uint16_t> targets(tets.size(), kTargetsUnknown);
   std::optional<EdgeTets> around;
@@ -115,7 +124,7 @@ MarkingCounts CloseAndGuard(const std::vector<Vec3>& points, const std::vector<T
   for (int r = 0; r < rules.guard_rounds && !cancel.IsSet(); ++r) {
     const std::vector<uint32_t>* visit = next_visit(guard_work);
     counts.guard_edges += GuardPass(points, tets, edges, rules.guard_ratio, rules.best_tiling,
-                                    split, cancel, visit, &fresh);
+                                    split, cancel, visit, &fresh, tilings);
     if (cancel.IsSet()) break;
     marked();
     close();

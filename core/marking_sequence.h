@@ -36,9 +36,14 @@ struct MarkingCounts {
 // rounds and 2 guard passes in its second iteration, identical output): those passes took
 // 0.60 s of a 1.0 s iteration on two threads, visiting 605 k tets each.
 //
+// `tilings` (optional): with best_tiling and a guard, filled with T entries, the tiling key
+// BestTiling gave each tet at the guard's last look at it, kUnknownTiling for the others; the
+// subdivision reuses them (StepLimits::known_tilings) instead of choosing again.
+//
 // Polls `cancel` per block; once it is set the marks are incomplete and the caller must stop.
 MarkingCounts CloseAndGuard(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                             const EdgeTable& edges, const MarkingRules& rules,
-                            FillLater<uint8_t>& split, CancelFlag& cancel);
+                            FillLater<uint8_t>& split, CancelFlag& cancel,
+                            FillLater<uint16_t>* tilings = nullptr);
 
 }  // namespace tetrefine::refine_internal

@@ -319,9 +319,10 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     stats.mean_error = errors.mean_error;
     stats.max_segment_error = errors.max_segment_error;
     stats.failing_tets = failing_tets;
+    FillLater<uint16_t> guard_tilings;
     if (rules.marking.closure_rounds > 0 || rules.marking.guard_rounds > 0) {
       const refine_internal::MarkingCounts marked = refine_internal::CloseAndGuard(
-          *state.points, *state.tets, edges, rules.marking, errors.split, cancel);
+          *state.points, *state.tets, edges, rules.marking, errors.split, cancel, &guard_tilings);
       stats.closure_edges = marked.closure_edges;
       stats.guard_edges = marked.guard_edges;
     }
@@ -333,6 +334,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     }
     stats.split_edges = CountSplit(errors.split);
     succession.emplace();
+    limits.known_tilings = guard_tilings.empty() ? nullptr : &guard_tilings;
     const StepOutcome outcome =
         Subdivide(volume, edges, errors, iteration, limits, cancel, state, stats,
                   &result.next_iteration_tets, &result.next_iteration_min_quality, &*succession);

@@ -7,6 +7,7 @@
 
 #include "core/edge_marking.h"
 #include "core/edge_table.h"
+#include "core/fill_later.h"
 #include "core/refine.h"
 #include "core/refine_state.h"
 #include "core/volume.h"
@@ -20,6 +21,9 @@ struct StepLimits {
   double min_quality = 0.0;  // refuse a step that would make a tet of lower quality
   bool clamp = false;        // Steiner points sampled clamped into the grid
   bool best_tiling = false;  // each tet cut by BestTiling (core/alternative_tilings.h)
+  // Optional with best_tiling, T entries: a tiling key BestTiling already gave tet t, or
+  // kUnknownTiling (CloseAndGuard's `tilings`). Used when its subdivision key is the tet's.
+  const FillLater<uint16_t>* known_tilings = nullptr;
 };
 
 // Subdivides every tet of `state` whose edges are split (errors.split, errors.mid_value) with

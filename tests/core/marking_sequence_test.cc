@@ -14,8 +14,12 @@
 #include <string>
 #include <vector>
 
+#include "core/alternative_tilings.h"
 #include "core/edge_table.h"
 #include "core/refine.h"
+#include "core/refine_state.h"
+#include "core/subdivision_table.h"
+#include "core/tet_topology.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
 
@@ -143,6 +147,54 @@ TEST(MarkingSequenceTest, MarksWhatTheFullPassesMark) {
   }
   // The comparison means something only where both rules marked edges after the first pass.
   EXPECT_GT(with_work, 100);
+}
+
+// The tilings the guard leaves for the subdivision are BestTiling's answers for their own keys,
+// and for most guarded tets still the key the subdivision will compute: reusing one is choosing
+// again, for less.
+TEST(MarkingSequenceTest, GuardTilingsAreBestTilingsAnswers) {
+  const std::function<bool()> never = [] { return false; };
+  std::mt19937_64 rng(99);
+  for (Case c : {JitteredBox(rng), RefinedBox()}) {
+    FillLater<uint8_t> split = RandomMarks(c, 0.02, rng);
+    MarkingRules rules;
+    rules.closure_rounds = 8;
+    rules.guard_rounds = 2;
+    rules.guard_ratio = 0.6;
+    rules.best_tiling = true;
+    FillLater<uint16_t> tilings;
+    CancelFlag running(never);
+    CloseAndGuard(c.mesh.points, c.mesh.tets, c.edges, rules, split, running, &tilings);
+    ASSERT_EQ(tilings.size(), c.mesh.tets.size());
+    int64_t known = 0, current = 0;
+    for (size_t t = 0; t < c.mesh.tets.size(); ++t) {
+      if (tilings[t] == kUnknownTiling) continue;
+      ++known;
+      const Tet& tet = c.mesh.tets[t];
+      std::array<Vec3, 10> p;
+      for (int k = 0; k < 4; ++k) p[k] = c.mesh.points[tet[k]];
+      for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+      const uint32_t key = tilings[t] & (kNumSubdivisionKeys - 1);
+      EXPECT_EQ(BestTiling(key, {p[0], p[1], p[2], p[3]}), tilings[t]) << "tet " << t;
+      uint32_t pattern = 0;
+      for (int k = 0; k < 6; ++k) pattern |= split[c.edges.tet_edges[t][k]] != 0 ? EdgeBit(k) : 0u;
+      // The guard saw a pattern the marks only grew from.
+      EXPECT_EQ(key & 63u & ~pattern, 0u) << "tet " << t;
+      current += SubdivisionKey(pattern, p) == key;
+    }
+    EXPECT_GT(known, 0);
+    EXPECT_GT(current, known / 2) << "the subdivision would reuse few of them";
+  }
+  MarkingRules no_guard;
+  no_guard.closure_rounds = 8;
+  no_guard.best_tiling = true;
+  std::mt19937_64 rng2(5);
+  const Case c = JitteredBox(rng2);
+  FillLater<uint8_t> split = RandomMarks(c, 0.02, rng2);
+  FillLater<uint16_t> tilings;
+  CancelFlag running(never);
+  CloseAndGuard(c.mesh.points, c.mesh.tets, c.edges, no_guard, split, running, &tilings);
+  EXPECT_TRUE(tilings.empty()) << "without a guard there is nothing to reuse";
 }
 
 TEST(MarkingSequenceTest, MarksNothingOnceCancelled) {
