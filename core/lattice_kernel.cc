@@ -66,6 +66,33 @@ void Errors(const IndexMap& map, const TrilinearSampler& sampler, const LatticeP
   std::copy(out, out + m, errors);
 }
 
+// Calls f(T{}) with T the C++ type of `type` (uint8_t, int16_t, uint16_t, int32_t, float,
+// double); false, without a call, when `type` is not a voxel type.
+template <typename F>
+bool WithVoxelType(VoxelType type, F&& f) {
+  switch (type) {
+    case VoxelType::kUint8:
+      f(uint8_t{});
+      return true;
+    case VoxelType::kInt16:
+      f(int16_t{});
+      return true;
+    case VoxelType::kUint16:
+      f(uint16_t{});
+      return true;
+    case VoxelType::kInt32:
+      f(int32_t{});
+      return true;
+    case VoxelType::kFloat32:
+      f(float{});
+      return true;
+    case VoxelType::kFloat64:
+      f(double{});
+      return true;
+  }
+  return false;
+}
+
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define TETREFINE_LATTICE_AVX2 1
 
@@ -176,36 +203,17 @@ void ErrorsOfType(const Volume& volume, const LatticePoints& points, const std::
   const IndexMap map = volume.index_map();
   const TrilinearSampler s = volume.sampler();
 #ifdef TETREFINE_LATTICE_AVX2
-  if (SimdSwitch().load(std::memory_order_relaxed) && FitsAvx2(s)) {
-    switch (volume.type()) {
-      case VoxelType::kUint8:
-        return ErrorsAvx2<uint8_t, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-      case VoxelType::kInt16:
-        return ErrorsAvx2<int16_t, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-      case VoxelType::kUint16:
-        return ErrorsAvx2<uint16_t, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-      case VoxelType::kInt32:
-        return ErrorsAvx2<int32_t, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-      case VoxelType::kFloat32:
-        return ErrorsAvx2<float, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-      case VoxelType::kFloat64:
-        return ErrorsAvx2<double, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-    }
+  if (SimdSwitch().load(std::memory_order_relaxed) && FitsAvx2(s) &&
+      WithVoxelType(volume.type(), [&](auto voxel) {
+        ErrorsAvx2<decltype(voxel), kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
+      })) {
+    return;
   }
 #endif
-  switch (volume.type()) {
-    case VoxelType::kUint8:
-      return Errors<uint8_t, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-    case VoxelType::kInt16:
-      return Errors<int16_t, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-    case VoxelType::kUint16:
-      return Errors<uint16_t, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-    case VoxelType::kInt32:
-      return Errors<int32_t, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-    case VoxelType::kFloat32:
-      return Errors<float, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
-    case VoxelType::kFloat64:
-      return Errors<double, kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
+  if (WithVoxelType(volume.type(), [&](auto voxel) {
+        Errors<decltype(voxel), kAxisAligned>(map, s, points, p, v, norm, begin, end, errors);
+      })) {
+    return;
   }
   // Not a voxel type: SampleIndex reads 0 there.
   for (int64_t i = begin; i < end; ++i) {
@@ -254,21 +262,11 @@ void SampleIndices(const Volume& volume, const double* ux, const double* uy, con
                    int64_t count, double* out) {
   const TrilinearSampler s = volume.sampler();
 #ifdef TETREFINE_LATTICE_AVX2
-  if (SimdSwitch().load(std::memory_order_relaxed) && FitsAvx2(s)) {
-    switch (volume.type()) {
-      case VoxelType::kUint8:
-        return SampleManyAvx2<uint8_t>(s, ux, uy, uz, count, out);
-      case VoxelType::kInt16:
-        return SampleManyAvx2<int16_t>(s, ux, uy, uz, count, out);
-      case VoxelType::kUint16:
-        return SampleManyAvx2<uint16_t>(s, ux, uy, uz, count, out);
-      case VoxelType::kInt32:
-        return SampleManyAvx2<int32_t>(s, ux, uy, uz, count, out);
-      case VoxelType::kFloat32:
-        return SampleManyAvx2<float>(s, ux, uy, uz, count, out);
-      case VoxelType::kFloat64:
-        return SampleManyAvx2<double>(s, ux, uy, uz, count, out);
-    }
+  if (SimdSwitch().load(std::memory_order_relaxed) && FitsAvx2(s) &&
+      WithVoxelType(volume.type(), [&](auto voxel) {
+        SampleManyAvx2<decltype(voxel)>(s, ux, uy, uz, count, out);
+      })) {
+    return;
   }
 #endif
   for (int64_t i = 0; i < count; ++i) out[i] = volume.SampleIndex({ux[i], uy[i], uz[i]});

@@ -222,6 +222,21 @@ std::vector<Case> EveryCase() {
   return cases;
 }
 
+// Calls body(rng, volume, seed) for `seeds` seeds and every case (voxel type, direction, slab),
+// the volume drawn from rng first, with the case in the failure trace.
+void ForEachVolume(int seeds,
+                   const std::function<void(std::mt19937_64&, const Volume&, uint64_t)>& body) {
+  for (uint64_t seed : testing::Seeds(seeds)) {
+    std::mt19937_64 rng(seed);
+    for (const Case& c : EveryCase()) {
+      SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
+                                        << " oblique " << c.oblique << " slab " << c.slab);
+      const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
+      body(rng, volume, seed);
+    }
+  }
+}
+
 // Runs body with the portable kernel and, where the CPU has AVX2, with the AVX2 one: both must
 // give the reference's bits.
 void ForEachKernel(const std::function<void()>& body) {
@@ -236,28 +251,22 @@ void ForEachKernel(const std::function<void()>& body) {
 
 TEST(LatticeKernel, SampleTetLatticeEqualsThePointByPointScanToTheBit) {
   ForEachKernel([] {
-    for (uint64_t seed : testing::Seeds(6)) {
-      std::mt19937_64 rng(seed);
-      for (const Case& c : EveryCase()) {
-        SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
-                                          << " oblique " << c.oblique << " slab " << c.slab);
-        const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
-        const Mesh mesh = RandomTets(rng, volume, 6);
-        const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
-        // Epsilon 0 counts every nonzero point above it; the others split the points.
-        const double epsilon =
-            rng() % 3 == 0 ? 0.0 : std::uniform_real_distribution<double>(0, 0.2)(rng);
-        for (int n : {1, 2, 8, 13}) {
-          for (bool clamp : {false, true}) {
-            for (int64_t t = 0; t < static_cast<int64_t>(mesh.tets.size()); ++t) {
-              SCOPED_TRACE(::testing::Message() << "n " << n << " clamp " << clamp << " tet " << t);
-              ExpectSame(SampleTetLattice(volume, mesh, t, n, norm, epsilon, clamp),
-                         ReferenceTetLattice(volume, mesh, t, n, norm, epsilon, clamp));
-            }
+    ForEachVolume(6, [](std::mt19937_64& rng, const Volume& volume, uint64_t /*seed*/) {
+      const Mesh mesh = RandomTets(rng, volume, 6);
+      const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
+      // Epsilon 0 counts every nonzero point above it; the others split the points.
+      const double epsilon =
+          rng() % 3 == 0 ? 0.0 : std::uniform_real_distribution<double>(0, 0.2)(rng);
+      for (int n : {1, 2, 8, 13}) {
+        for (bool clamp : {false, true}) {
+          for (int64_t t = 0; t < static_cast<int64_t>(mesh.tets.size()); ++t) {
+            SCOPED_TRACE(::testing::Message() << "n " << n << " clamp " << clamp << " tet " << t);
+            ExpectSame(SampleTetLattice(volume, mesh, t, n, norm, epsilon, clamp),
+                       ReferenceTetLattice(volume, mesh, t, n, norm, epsilon, clamp));
           }
         }
       }
-    }
+    });
   });
 }
 
@@ -265,102 +274,83 @@ TEST(LatticeKernel, SampleTetLatticeEqualsThePointByPointScanToTheBit) {
 // reference's over the same tets (every tet, and a drawn sample of them).
 TEST(LatticeKernel, SampleLatticeAgreesWithThePointByPointScan) {
   ForEachKernel([] {
-    for (uint64_t seed : testing::Seeds(4)) {
-      std::mt19937_64 rng(seed);
-      for (const Case& c : EveryCase()) {
-        SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
-                                          << " oblique " << c.oblique << " slab " << c.slab);
-        const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
-        const Mesh mesh = RandomTets(rng, volume, 40);
-        const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
-        const double epsilon = std::uniform_real_distribution<double>(0, 0.1)(rng);
-        const LatticeStats all = SampleLattice(volume, mesh, 8, 0, seed, norm, epsilon, true);
-        double max_error = 0.0;
-        int64_t points = 0, above = 0;
-        for (int64_t t = 0; t < static_cast<int64_t>(mesh.tets.size()); ++t) {
-          const TetLattice r = ReferenceTetLattice(volume, mesh, t, 8, norm, epsilon, true);
-          max_error = std::max(max_error, r.max_error);
-          points += r.points;
-          above += r.above_epsilon;
-        }
-        EXPECT_EQ(Bits(all.max_error), Bits(max_error));
-        EXPECT_EQ(all.points_sampled, points);
-        EXPECT_EQ(Bits(all.share_above_epsilon),
-                  Bits(static_cast<double>(above) / static_cast<double>(points)));
+    ForEachVolume(4, [](std::mt19937_64& rng, const Volume& volume, uint64_t seed) {
+      const Mesh mesh = RandomTets(rng, volume, 40);
+      const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
+      const double epsilon = std::uniform_real_distribution<double>(0, 0.1)(rng);
+      const LatticeStats all = SampleLattice(volume, mesh, 8, 0, seed, norm, epsilon, true);
+      double max_error = 0.0;
+      int64_t points = 0, above = 0;
+      for (int64_t t = 0; t < static_cast<int64_t>(mesh.tets.size()); ++t) {
+        const TetLattice r = ReferenceTetLattice(volume, mesh, t, 8, norm, epsilon, true);
+        max_error = std::max(max_error, r.max_error);
+        points += r.points;
+        above += r.above_epsilon;
       }
-    }
+      EXPECT_EQ(Bits(all.max_error), Bits(max_error));
+      EXPECT_EQ(all.points_sampled, points);
+      EXPECT_EQ(Bits(all.share_above_epsilon),
+                Bits(static_cast<double>(above) / static_cast<double>(points)));
+    });
   });
 }
 
 TEST(LatticeKernel, CertifiedMaximumEqualsThePointByPointScanToTheBit) {
   ForEachKernel([] {
-    for (uint64_t seed : testing::Seeds(6)) {
-      std::mt19937_64 rng(seed);
-      for (const Case& c : EveryCase()) {
-        SCOPED_TRACE(::testing::Message() << "seed " << seed << " type " << VoxelTypeName(c.type)
-                                          << " oblique " << c.oblique << " slab " << c.slab);
-        const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
-        const Mesh mesh = RandomTets(rng, volume, 6);
-        const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
-        for (int n : {1, 2, 8, 13}) {
-          const lattice_internal::LatticePoints points(n, /*with_corners=*/false);
-          for (const Tet& tet : mesh.tets) {
-            const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]],
-                                           mesh.points[tet[2]], mesh.points[tet[3]]};
-            const std::array<double, 4> v = {mesh.values[tet[0]], mesh.values[tet[1]],
-                                             mesh.values[tet[2]], mesh.values[tet[3]]};
-            // A huge epsilon scans every point; the others stop at different points.
-            for (double epsilon : {1e300, 0.0, 0.01, 0.05}) {
-              for (bool clamp : {false, true}) {
-                SCOPED_TRACE(::testing::Message() << "n " << n << " epsilon " << epsilon);
-                EXPECT_EQ(
-                    Bits(lattice_internal::LatticeMaxUntil(volume, points, p, v, norm, epsilon)),
-                    Bits(ReferenceTetLatticeMax(volume, p, v, n, norm, epsilon, clamp)));
-              }
+    ForEachVolume(6, [](std::mt19937_64& rng, const Volume& volume, uint64_t /*seed*/) {
+      const Mesh mesh = RandomTets(rng, volume, 6);
+      const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
+      for (int n : {1, 2, 8, 13}) {
+        const lattice_internal::LatticePoints points(n, /*with_corners=*/false);
+        for (const Tet& tet : mesh.tets) {
+          const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]],
+                                         mesh.points[tet[2]], mesh.points[tet[3]]};
+          const std::array<double, 4> v = {mesh.values[tet[0]], mesh.values[tet[1]],
+                                           mesh.values[tet[2]], mesh.values[tet[3]]};
+          // A huge epsilon scans every point; the others stop at different points.
+          for (double epsilon : {1e300, 0.0, 0.01, 0.05}) {
+            for (bool clamp : {false, true}) {
+              SCOPED_TRACE(::testing::Message() << "n " << n << " epsilon " << epsilon);
+              EXPECT_EQ(
+                  Bits(lattice_internal::LatticeMaxUntil(volume, points, p, v, norm, epsilon)),
+                  Bits(ReferenceTetLatticeMax(volume, p, v, n, norm, epsilon, clamp)));
             }
           }
         }
       }
-    }
+    });
   });
 }
 
-// The table keeps the scan order and the reference's point count, with and without corners.
 // The batch sampler the edge test uses gives SampleIndex's bits at any index, inside the slab,
 // on its cell faces and clamped from outside the grid, for counts that leave every tail length.
 TEST(LatticeKernel, SampleIndicesEqualsSampleIndexToTheBit) {
   ForEachKernel([] {
-    for (uint64_t seed : testing::Seeds(6)) {
-      std::mt19937_64 rng(seed);
-      for (const Case& c : EveryCase()) {
-        SCOPED_TRACE(::testing::Message()
-                     << "seed " << seed << " type " << VoxelTypeName(c.type) << " slab " << c.slab);
-        const Volume volume = RandomVolume(rng, c.type, c.oblique, c.slab);
-        for (int64_t count : {0, 1, 3, 4, 5, 64, 67}) {
-          std::vector<double> u[3];
-          for (int a = 0; a < 3; ++a) {
-            const double lo = static_cast<double>(volume.lo()[a]);
-            const double hi = static_cast<double>(volume.hi()[a] - 1);
-            std::uniform_real_distribution<double> inside(lo, hi);
-            for (int64_t i = 0; i < count; ++i) {
-              // Mostly inside the slab; some on a sample plane, some outside the grid.
-              const int64_t kind = static_cast<int64_t>(rng() % 8);
-              u[a].push_back(kind == 0   ? std::floor(inside(rng))
-                             : kind == 1 ? inside(rng) - 3.0 * hi
-                             : kind == 2 ? inside(rng) + 3.0 * hi
-                                         : inside(rng));
-            }
-          }
-          std::vector<double> got(static_cast<size_t>(count));
-          lattice_internal::SampleIndices(volume, u[0].data(), u[1].data(), u[2].data(), count,
-                                          got.data());
+    ForEachVolume(6, [](std::mt19937_64& rng, const Volume& volume, uint64_t /*seed*/) {
+      for (int64_t count : {0, 1, 3, 4, 5, 64, 67}) {
+        std::vector<double> u[3];
+        for (int a = 0; a < 3; ++a) {
+          const double lo = static_cast<double>(volume.lo()[a]);
+          const double hi = static_cast<double>(volume.hi()[a] - 1);
+          std::uniform_real_distribution<double> inside(lo, hi);
           for (int64_t i = 0; i < count; ++i) {
-            EXPECT_EQ(Bits(got[i]), Bits(volume.SampleIndex({u[0][i], u[1][i], u[2][i]})))
-                << "count " << count << " point " << i;
+            // Mostly inside the slab; some on a sample plane, some outside the grid.
+            const int64_t kind = static_cast<int64_t>(rng() % 8);
+            u[a].push_back(kind == 0   ? std::floor(inside(rng))
+                           : kind == 1 ? inside(rng) - 3.0 * hi
+                           : kind == 2 ? inside(rng) + 3.0 * hi
+                                       : inside(rng));
           }
         }
+        std::vector<double> got(static_cast<size_t>(count));
+        lattice_internal::SampleIndices(volume, u[0].data(), u[1].data(), u[2].data(), count,
+                                        got.data());
+        for (int64_t i = 0; i < count; ++i) {
+          EXPECT_EQ(Bits(got[i]), Bits(volume.SampleIndex({u[0][i], u[1][i], u[2][i]})))
+              << "count " << count << " point " << i;
+        }
       }
-    }
+    });
   });
 }
 
@@ -374,6 +364,7 @@ TEST(LatticeKernel, UsesAvx2WhereTheCpuHasIt) {
 #endif
 }
 
+// The table keeps the scan order and the reference's point count, with and without corners.
 TEST(LatticeKernel, PointTableHoldsTheLatticeInScanOrder) {
   for (int n : {1, 2, 8, 13, 64}) {
     const lattice_internal::LatticePoints all(n, true), inner(n, false);
