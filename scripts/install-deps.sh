@@ -8,7 +8,7 @@ if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
 packages=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
-  libabsl-dev libspdlog-dev libtbb-dev zlib1g-dev libpugixml-dev liblzma-dev liblz4-dev libdeflate-dev
+  libabsl-dev libspdlog-dev libtbb-dev zlib1g-dev libpugixml-dev liblzma-dev liblz4-dev libdeflate-dev libisal-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   prometheus-cpp-dev libssl-dev openssl clang-format
   python3 python3-grpcio python3-numpy python3-meshio python3-yaml

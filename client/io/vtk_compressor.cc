@@ -1,5 +1,6 @@
 #include "client/io/vtk_compressor.h"
 
+#include <isa-l/igzip_lib.h>
 #include <libdeflate.h>
 #include <lz4.h>
 #include <lzma.h>
@@ -11,6 +12,7 @@
 #include <memory>
 #include <new>
 #include <stdexcept>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 
@@ -171,10 +173,47 @@ struct BlockCompressor::LzmaCoder {
   }
 };
 
+// A zlib stream per block from ISA-L's igzip at its level 1, with a stream and level buffer kept
+// between blocks.
+struct BlockCompressor::IsalCoder {
+  isal_zstream stream;
+  std::vector<uint8_t> level_buffer = std::vector<uint8_t>(ISAL_DEF_LVL1_DEFAULT);
+
+  // The most a block of n bytes can take: igzip falls back to stored blocks (5 bytes of header
+  // per 64 KiB) after at most one Huffman header, inside zlib's 6 bytes.
+  static size_t Bound(size_t n) { return n + n / 8 + ISAL_DEF_MAX_HDR_SIZE + 1024; }
+
+  // Compresses `raw` into out[0 .. capacity); the compressed size, or 0 if igzip failed.
+  size_t Compress(absl::string_view raw, char* out, size_t capacity) {
+    if (raw.size() > std::numeric_limits<uint32_t>::max() / 2 ||
+        capacity > std::numeric_limits<uint32_t>::max()) {
+      return 0;
+    }
+    isal_deflate_stateless_init(&stream);
+    stream.level = 1;
+    stream.level_buf = level_buffer.data();
+    stream.level_buf_size = static_cast<uint32_t>(level_buffer.size());
+    stream.gzip_flag = IGZIP_ZLIB;
+    stream.flush = NO_FLUSH;
+    stream.end_of_stream = 1;
+    // igzip does not write through next_in.
+    stream.next_in = const_cast<uint8_t*>(reinterpret_cast<const uint8_t*>(raw.data()));
+    stream.avail_in = static_cast<uint32_t>(raw.size());
+    stream.next_out = reinterpret_cast<uint8_t*>(out);
+    stream.avail_out = static_cast<uint32_t>(capacity);
+    if (isal_deflate_stateless(&stream) != COMP_OK) return 0;
+    return stream.total_out;
+  }
+};
+
 BlockCompressor::BlockCompressor(VtkCompressor compressor, int level)
     : compressor_(compressor), level_(level) {
   if (compressor_ == VtkCompressor::kZlib) {
-    deflate_ = libdeflate_alloc_compressor(std::clamp(level_, 1, 12));
+    if (level_ == kFastestZlibLevel) {
+      isal_ = std::make_unique<IsalCoder>();
+    } else {
+      deflate_ = libdeflate_alloc_compressor(std::clamp(level_, 1, 12));
+    }
   }
 }
 
@@ -186,6 +225,14 @@ void BlockCompressor::Compress(absl::string_view raw, std::string& out) {
   size_t size = 0;
   switch (compressor_) {
     case VtkCompressor::kZlib: {
+      if (isal_ != nullptr) {
+        const size_t bound = IsalCoder::Bound(raw.size());
+        if (scratch_.size() < bound) scratch_.resize(bound);
+        size = isal_->Compress(raw, scratch_.data(), bound);
+        if (size > 0) break;
+        // Not seen (the bound holds igzip's worst case): libdeflate's fastest level takes over.
+        if (deflate_ == nullptr) deflate_ = libdeflate_alloc_compressor(1);
+      }
       // Only out of memory leaves no coder; writing the block uncompressed would corrupt the file.
       if (deflate_ == nullptr) throw std::bad_alloc();
       const size_t bound = libdeflate_zlib_compress_bound(deflate_, raw.size());

@@ -34,10 +34,16 @@ size_t MaxExpansion(VtkCompressor compressor);
 absl::Status DecompressBlock(VtkCompressor compressor, absl::string_view compressed, char* out,
                              size_t decoded_size);
 
+// zlib's level for BlockCompressor that asks for ISA-L's igzip (level 1), the fastest coder.
+inline constexpr int kFastestZlibLevel = 0;
+
 // Compresses blocks one after another, reusing its coder state: one per thread.
-// `level` is the compressor's own scale (zlib 1-12 as libdeflate counts, lzma 0-9; LZ4 ignores
-// it). zlib streams are made by libdeflate: the same format VTK reads, about 2.3x faster than
-// zlib's own deflate at level 1 on refined meshes for 6% more bytes (bench/mesh_io_bench).
+// `level` is the compressor's own scale: zlib kFastestZlibLevel (ISA-L) or 1-12 as libdeflate
+// counts, lzma 0-9; LZ4 ignores it. Every zlib coder writes the format VTK reads: libdeflate is
+// about 2.3x faster than zlib's own deflate at level 1 on refined meshes for 6% more bytes, and
+// ISA-L 1.9x faster than libdeflate's level 1 for 2% more (bench/mesh_io_bench; vtu_writer.cc).
+// ISA-L picks its SIMD code for the CPU at run time, so its bytes may differ from one CPU
+// generation to another; what they decode to never does.
 class BlockCompressor {
  public:
   BlockCompressor(VtkCompressor compressor, int level);
@@ -52,6 +58,8 @@ class BlockCompressor {
   VtkCompressor compressor_;
   int level_;
   ::libdeflate_compressor* deflate_ = nullptr;
+  struct IsalCoder;  // ISA-L's stream and level buffer, kept between blocks
+  std::unique_ptr<IsalCoder> isal_;
   struct LzmaCoder;  // an lzma_stream kept between blocks
   std::unique_ptr<LzmaCoder> lzma_;
   // Where a block is compressed before its compressed bytes are appended to `out`: sized to the

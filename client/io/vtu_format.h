@@ -33,8 +33,9 @@ struct VtuWriteOptions {
   };
   Layout layout = Layout::kAppendedRaw;
   VtkCompressor compressor = VtkCompressor::kZlib;
-  // The compressor's level: zlib and lzma 1 (fastest) to 9 (smallest). The default was chosen
-  // by measurement on refined meshes (see kDefaultVtuLevel in vtu_writer.cc).
+  // The compressor's level: zlib kFastestZlibLevel (0, ISA-L) or 1 (fastest) to 12 (smallest)
+  // as libdeflate counts, lzma 0 to 9. The defaults were chosen by measurement on refined meshes
+  // (see kDefaultZlibLevel in vtu_writer.cc).
   int level = -1;             // -1: the default
   size_t block_size = 32768;  // VTK's default block size
 };

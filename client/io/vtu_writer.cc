@@ -1,10 +1,12 @@
 // Writing VTK XML unstructured grids (.vtu). See vtu_format.h for the layout.
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -22,12 +24,17 @@
 namespace tetrefine::io {
 namespace {
 
-// Level 1 when the caller does not choose: on a refined 1.6 M-tet mesh (value, iteration,
-// quality and labels; bench/mesh_io_bench) libdeflate's level 1 writes 16.2 bytes per tet and
-// level 6 16.1 at 1.8x the time; zlib's own deflate gave 15.2 (level 1) and 14.9 (level 6) at
-// 2.3x and 7x the time of libdeflate level 1. Speed wins: the file is well under the 25 bytes
-// per tet aimed at either way.
-constexpr int kDefaultZlibLevel = 1;
+// zlib's fastest coder when the caller does not choose: ISA-L's igzip (kFastestZlibLevel).
+// Measured 2026-11-25 on bench/file_to_file.sh's output (2.82 M tets with value, iteration,
+// quality and labels): its 108 MB of blocks, one thread, took libdeflate's level 1 0.70 s for
+// 42.6 MB, ISA-L's level 1 0.37 s for 43.4 MB (15.4 bytes per tet) and ISA-L's level 0 0.30 s for
+// 54 MB; bench/mesh_io_bench on 2 threads, both coders in one run: encode 0.27-0.31 s against
+// 0.57-0.70 s. Before that, on a refined 1.6 M-tet mesh, libdeflate's level 1 wrote 16.2 bytes
+// per tet and its level 6 16.1 at 1.8x the time; zlib's own deflate 15.2 (level 1) and 14.9
+// (level 6) at 2.3x and 7x the time of libdeflate's level 1. Speed wins: the file is well under
+// the 25 bytes per tet aimed at either way. Levels 1-12 (VtuWriteOptions::level) still choose
+// libdeflate's.
+constexpr int kDefaultZlibLevel = kFastestZlibLevel;
 constexpr int kDefaultLzmaLevel = 1;
 
 // One array to write: where it goes, its XML attributes, its little-endian bytes (a view of the
@@ -106,13 +113,19 @@ void CompressAll(std::vector<OutArray>& arrays, const VtuWriteOptions& options) 
     a.blocks.resize((a.raw.size() + block - 1) / block);
     for (size_t b = 0; b < a.blocks.size(); ++b) jobs.push_back({&a, b});
   }
+  // One coder per thread: a coder per task range made 181 of them for the 3,312 blocks of
+  // bench/file_to_file.sh's output, and ISA-L's holds 365 KB of fresh memory.
+  tbb::enumerable_thread_specific<std::unique_ptr<BlockCompressor>> coders;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, jobs.size(), 4),
                     [&](const tbb::blocked_range<size_t>& range) {
-                      BlockCompressor coder(options.compressor, level);
+                      std::unique_ptr<BlockCompressor>& coder = coders.local();
+                      if (coder == nullptr) {
+                        coder = std::make_unique<BlockCompressor>(options.compressor, level);
+                      }
                       for (size_t j = range.begin(); j != range.end(); ++j) {
                         const Job& job = jobs[j];
-                        coder.Compress(job.array->raw.substr(job.index * block, block),
-                                       job.array->blocks[job.index]);
+                        coder->Compress(job.array->raw.substr(job.index * block, block),
+                                        job.array->blocks[job.index]);
                       }
                     });
 }
