@@ -306,9 +306,8 @@ const SubdivisionEntry& TilingEntry(uint32_t tiling_key) {
   return AlternativeTilingTable()[key].entries[which - 1];
 }
 
-uint32_t BestTiling(uint32_t key, const std::array<Vec3, 4>& corners) {
+TilingChoice ChooseTiling(uint32_t key, const std::array<Vec3, 4>& corners) {
   const AlternativeTilings& alternatives = AlternativeTilingTable()[key];
-  if (alternatives.count == 0) return key;
   const SubdivisionEntry& table_entry = SubdivisionTable()[key];
   const auto local = LocalPoints(corners, table_entry);
   int best = 0;
@@ -333,7 +332,13 @@ uint32_t BestTiling(uint32_t key, const std::array<Vec3, 4>& corners) {
       best_quality = q;
     }
   }
-  return key | (static_cast<uint32_t>(best) << kTilingShift);
+  return {key | (static_cast<uint32_t>(best) << kTilingShift), best_quality};
+}
+
+uint32_t BestTiling(uint32_t key, const std::array<Vec3, 4>& corners) {
+  // A key without other tilings needs no measuring.
+  if (AlternativeTilingTable()[key].count == 0) return key;
+  return ChooseTiling(key, corners).tiling;
 }
 
 }  // namespace tetrefine

@@ -48,4 +48,13 @@ const SubdivisionEntry& TilingEntry(uint32_t tiling_key);
 // lexicographically smallest sorted list of children (each child as its sorted corner points).
 uint32_t BestTiling(uint32_t key, const std::array<Vec3, 4>& corners);
 
+// BestTiling's answer with the mean ratio of its worst child (at most 1). Each child is measured
+// with its points in lexicographic order, so `worst` is the same bits under every numbering of
+// the corners, and callers may rank tets' tilings by it (the guard's remedy, core/edge_marking.h).
+struct TilingChoice {
+  uint32_t tiling = 0;  // a tiling key
+  double worst = 0.0;   // mean ratio of its worst child
+};
+TilingChoice ChooseTiling(uint32_t key, const std::array<Vec3, 4>& corners);
+
 }  // namespace tetrefine

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <vector>
 
@@ -122,7 +123,68 @@ class EdgeOrder {
   std::array<double, 6> length_;
 };
 
+// Whether split pattern q holds, within the tet, what the closure would add to it: the tet's
+// longest edge, and the longest edge of every face with a split edge (targets: ClosureTargets).
+bool ClosedWithinTet(uint32_t q, uint32_t targets) {
+  if ((q & EdgeBit(static_cast<int>(targets & 7u))) == 0) return false;
+  for (int f = 0; f < 4; ++f) {
+    if ((q & kFaceEdgeBits[f]) == 0) continue;
+    if ((q & EdgeBit(static_cast<int>((targets >> (3 + 3 * f)) & 7u))) == 0) return false;
+  }
+  return true;
+}
+
+// Whether the edges of `a` (a set of local edges) are longer than those of `b`, a set of as
+// many: both sorted longest first, the first place they differ decides.
+bool LongerEdges(uint32_t a, uint32_t b, const EdgeOrder& order) {
+  std::array<int, 6> ea{}, eb{};
+  int na = 0, nb = 0;
+  for (int k = 0; k < 6; ++k) {
+    if ((a & EdgeBit(k)) != 0) ea[na++] = k;
+    if ((b & EdgeBit(k)) != 0) eb[nb++] = k;
+  }
+  const auto longer = [&](int x, int y) { return order.Longer(x, y); };
+  std::sort(ea.begin(), ea.begin() + na, longer);
+  std::sort(eb.begin(), eb.begin() + nb, longer);
+  for (int i = 0; i < na && i < nb; ++i) {
+    if (ea[i] != eb[i]) return order.Longer(ea[i], eb[i]);
+  }
+  return false;
+}
+
 }  // namespace
+
+GuardRemedy FewestGuardEdges(uint32_t pattern, const std::array<Vec3, 4>& corners,
+                             double threshold) {
+  const EdgeOrder order(corners);
+  const uint32_t targets = ClosureTargets(corners);
+  std::array<Vec3, 10> p;
+  for (int c = 0; c < 4; ++c) p[c] = corners[c];
+  for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+  const uint32_t unsplit = 63u & ~pattern;
+  GuardRemedy best;
+  double best_worst = -1.0;
+  // By the number of added edges: the first size that has a remedy gives the answer. All six
+  // (regular 1:8 refinement) is the fallback, taken without a look, as the guard always took it.
+  for (int size = 1; size < std::popcount(unsplit); ++size) {
+    for (uint32_t add = unsplit; add != 0; add = (add - 1) & unsplit) {
+      if (std::popcount(add) != size) continue;
+      const uint32_t q = pattern | add;
+      if (!ClosedWithinTet(q, targets)) continue;
+      const TilingChoice choice = ChooseTiling(SubdivisionKey(q, p), corners);
+      if (choice.worst < threshold) continue;
+      const bool better =
+          choice.worst > best_worst ||
+          (choice.worst == best_worst && LongerEdges(add, best.pattern & ~pattern, order));
+      if (!better) continue;
+      best.pattern = q;
+      best.tiling = choice.tiling;
+      best_worst = choice.worst;
+    }
+    if (best.pattern != 63) break;
+  }
+  return best;
+}
 
 EdgeErrors EvaluateEdges(const Volume& volume, const State& m, const EdgeTable& edges,
                          const EdgeTestParams& params, const KnownEdges* known,
@@ -341,8 +403,17 @@ int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                            threshold);
     }
     if (!bad) return;
+    uint32_t remedy = 63;
+    if (best_tiling) {
+      const GuardRemedy r = FewestGuardEdges(pattern, corners, threshold);
+      remedy = r.pattern;
+      // The key the tet will most likely be cut by; Subdivide checks that it is still its key.
+      if (tilings != nullptr && r.tiling != kUnknownTiling) {
+        (*tilings)[t] = static_cast<uint16_t>(r.tiling);
+      }
+    }
     for (int k = 0; k < 6; ++k) {
-      if (!split[te[k]]) next.Add(b, te[k]);
+      if ((remedy & EdgeBit(k)) != 0 && !split[te[k]]) next.Add(b, te[k]);
     }
   };
   ForEachVisitedTet(static_cast<int64_t>(tets.size()), visit, rule, cancel);

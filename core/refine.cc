@@ -84,7 +84,8 @@ float TetQuality(const std::vector<Vec3>& p, const Tet& t) {
 //    bounded in radius; replacing the table by longest-marked-edge bisection (Plaza-like)
 //    did not help either (mean 0.80-0.88x: bisection's 8-way split keeps 0.85, red 0.99).
 //  - A quality guard that acts on the tets concerned: a tet whose split would make a child below
-//    kGuardRatio of its own quality splits all six edges instead (regular refinement); two
+//    kGuardRatio of its own quality splits all six edges instead (regular refinement; since
+//    2026-11-27 the fewest edges that avoid it, below); two
 //    rounds, each followed by the closure. With ratio 0.65 mean quality stays at 0.85-0.98x;
 //    0.75 keeps 0.92-1.0x but doubles to quadruples the tets; 0.5 barely acts.
 //  - The midpoint test with closure and guard converges as reliably as the exact segment test
@@ -123,6 +124,14 @@ float TetQuality(const std::vector<Vec3>& p, const Tet& t) {
 //    it, guard ratio 0.65 costs 8% more tets and 0.55 leaves as many runs below 0.5x. On six
 //    meshes outside the reproduction: tets -4% to +2%, min and mean equal or better in all
 //    (anatomical 2-voxel blocks: min 0.218 -> 0.336).
+//  - The guard gives a flagged tet the fewest more edges that make a split it accepts, closed
+//    within the tet, instead of all six (FewestGuardEdges, core/edge_marking.h; all six only when
+//    no smaller set does). Each needless edge of a 1:8 promotion brought the tets around it into
+//    the closure. 2026-11-27, all 20 reproduction runs (docs/schemes.md "A guard that adds the
+//    fewest edges"): 1.9% fewer tets (6,242,126 -> 6,126,072; certify 7,073,191 -> 6,940,064),
+//    the same stop reasons and the same worst tet in all 40 runs, the mean at most 0.008 lower
+//    (the same runs below 0.9x). With it, guard ratio 0.65 costs 3.4% more tets and 0.55 puts
+//    one more run below 0.5x: 0.6 stays.
 // Every rule reads only the tets around an edge, a bounded number of times per iteration
 // (closure and guard: at most 8 + 2 * (1 + 8) = 26 rings of tets), so decisions stay local.
 struct SchemeRules {

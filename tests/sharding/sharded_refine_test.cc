@@ -422,9 +422,10 @@ TEST_F(ShardedRefineTest, CertifyEqualsUnsharded) {
 TEST_F(ShardedRefineTest, TheHaloIsWideEnoughAndANarrowOneIsNot) {
   const Volume volume = TestVolume({66, 10, 8}, VoxelType::kInt16);
   const Mesh mesh = FiveTetMesh({0.5, 0.5, 0.5}, {64.5, 8.5, 6.5}, {48, 6, 4});
-  // eps 0.012: at 0.016 a one-ring halo happened to decide every owned tet as the whole mesh
-  // does once the closure also read faces (2026-11-24); the check below compares the tets.
-  client::RefineRequestOptions options = Options(0.012, 3);
+  // eps 0.010: at 0.016 a one-ring halo happened to decide every owned tet as the whole mesh
+  // does once the closure also read faces (2026-11-24), and at 0.012-0.014 once the guard added
+  // the fewest edges instead of all six (2026-11-27); the check below compares the tets.
+  client::RefineRequestOptions options = Options(0.010, 3);
   options.refine.scheme = RefineScheme::kLongestEdge;
   const client::ClientResult whole = Unsharded(volume, mesh, options);
   ASSERT_GE(whole.result.iterations.size(), 2u);

@@ -23,8 +23,9 @@ inline constexpr Scheme kSchemes[] = {
      [](RefineOptions& o) { o.scheme = RefineScheme::kPaper; }},
     {"longest-edge",
      "`RefineScheme::kLongestEdge` (the default; docs/schemes.md): the "
-     "paper's midpoint marks, then the longest edge of every tet with a split edge, and regular "
-     "1:8 refinement where a split would make a much flatter child",
+     "paper's midpoint marks, then the longest edge of every tet and of every face with a split "
+     "edge, and, where a split would make a much flatter child, the fewest more edges that "
+     "avoid it (all six at most)",
      [](RefineOptions& o) { o.scheme = RefineScheme::kLongestEdge; }},
     {"certify",
      "longest-edge with `certify`: edges judged by their exact maximum discrepancy and every tet "
