@@ -372,8 +372,8 @@ int64_t CloseToLongestEdges(const std::vector<Vec3>& points, const std::vector<T
 }
 
 int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                  const EdgeTable& edges, double ratio, bool best_tiling, FillLater<uint8_t>& split,
-                  CancelFlag& cancel, const std::vector<uint32_t>* visit,
+                  const EdgeTable& edges, double ratio, double floor, bool best_tiling,
+                  FillLater<uint8_t>& split, CancelFlag& cancel, const std::vector<uint32_t>* visit,
                   std::vector<uint32_t>* fresh, FillLater<uint16_t>* tilings) {
   const auto& table = SubdivisionTable();
   PendingMarks next(PassSize(static_cast<int64_t>(tets.size()), visit));
@@ -395,7 +395,8 @@ int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
     if (best_tiling && tilings != nullptr) (*tilings)[t] = static_cast<uint16_t>(tiling);
     const SubdivisionEntry& entry = best_tiling ? TilingEntry(tiling) : table[key];
     const auto local = LocalPoints(corners, entry);
-    const double threshold = ratio * MeanRatio(corners[0], corners[1], corners[2], corners[3]);
+    const double threshold =
+        std::max(ratio * MeanRatio(corners[0], corners[1], corners[2], corners[3]), floor);
     bool bad = false;
     for (int i = 0; i < entry.tet_count && !bad; ++i) {
       const auto& c = entry.tets[i];
@@ -422,9 +423,9 @@ int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
 }
 
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                         const EdgeTable& edges, double ratio, bool best_tiling,
+                         const EdgeTable& edges, double ratio, double floor, bool best_tiling,
                          FillLater<uint8_t>& split, CancelFlag& cancel) {
-  return GuardPass(points, tets, edges, ratio, best_tiling, split, cancel, nullptr, nullptr);
+  return GuardPass(points, tets, edges, ratio, floor, best_tiling, split, cancel, nullptr, nullptr);
 }
 
 int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,

@@ -121,13 +121,14 @@ GuardRemedy FewestGuardEdges(uint32_t pattern, const std::array<Vec3, 4>& corner
                              double threshold);
 
 // One round of the quality guard: every tet whose split (by the paper's table, or with
-// best_tiling by its best tiling) would make a child of mean-ratio quality below `ratio` times
-// its own gets more split edges: with best_tiling the fewest that make a good split
-// (FewestGuardEdges), else all six (regular 1:8 refinement keeps at least 0.77 of the parent's
-// quality, measured). Returns edges added.
+// best_tiling by its best tiling) would make a child of mean-ratio quality below
+// max(`ratio` times its own, `floor`) gets more split edges: with best_tiling the fewest that
+// make a split above that threshold (FewestGuardEdges), else all six (regular 1:8 refinement
+// keeps at least 0.77 of the parent's quality, measured). `floor` is an absolute mean ratio, the
+// same for every tet of a run (0: none). Returns edges added.
 // Polls `cancel` as CloseToLongestEdges does.
 int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                         const EdgeTable& edges, double ratio, bool best_tiling,
+                         const EdgeTable& edges, double ratio, double floor, bool best_tiling,
                          FillLater<uint8_t>& split, CancelFlag& cancel);
 
 // PromoteBadSplits over the tets in `visit` (all when null), as ClosureRound is to a closure
@@ -136,8 +137,8 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
 // it there: for its key, or for a tet given more edges the key of its remedy (Subdivide reuses
 // it while the tet's subdivision key is that key).
 int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
-                  const EdgeTable& edges, double ratio, bool best_tiling, FillLater<uint8_t>& split,
-                  CancelFlag& cancel, const std::vector<uint32_t>* visit,
+                  const EdgeTable& edges, double ratio, double floor, bool best_tiling,
+                  FillLater<uint8_t>& split, CancelFlag& cancel, const std::vector<uint32_t>* visit,
                   std::vector<uint32_t>* fresh, FillLater<uint16_t>* tilings = nullptr);
 
 // Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165

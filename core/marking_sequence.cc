@@ -136,8 +136,8 @@ MarkingCounts CloseAndGuard(const std::vector<Vec3>& points, const std::vector<T
   close();
   for (int r = 0; r < rules.guard_rounds && !cancel.IsSet(); ++r) {
     const std::vector<uint32_t>* visit = next_visit(guard_work);
-    counts.guard_edges += GuardPass(points, tets, edges, rules.guard_ratio, rules.best_tiling,
-                                    split, cancel, visit, &fresh, tilings);
+    counts.guard_edges += GuardPass(points, tets, edges, rules.guard_ratio, rules.guard_floor,
+                                    rules.best_tiling, split, cancel, visit, &fresh, tilings);
     if (cancel.IsSet()) break;
     marked();
     close();

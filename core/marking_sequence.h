@@ -14,7 +14,8 @@ namespace tetrefine::refine_internal {
 struct MarkingRules {
   int closure_rounds = 0;  // CloseToLongestEdges' rounds per call; 0: no closure
   double guard_ratio = 0.0;
-  int guard_rounds = 0;  // guard passes, each followed by a closure call
+  double guard_floor = 0.0;  // absolute mean ratio (PromoteBadSplits); 0: none
+  int guard_rounds = 0;      // guard passes, each followed by a closure call
   bool best_tiling = false;
 };
 
@@ -25,7 +26,8 @@ struct MarkingCounts {
 
 // Exactly the marks and counts of
 //   CloseToLongestEdges(closure_rounds);
-//   guard_rounds times: PromoteBadSplits(guard_ratio, best_tiling); CloseToLongestEdges(...)
+//   guard_rounds times: PromoteBadSplits(guard_ratio, guard_floor, best_tiling);
+//                       CloseToLongestEdges(...)
 // (a closure call only when closure_rounds > 0), on `split` (E entries), given edges.tet_edges.
 //
 // Both rules read a tet's split pattern and its corners only, and marks are only ever added, so

@@ -5,6 +5,8 @@
 #include <cmath>
 
 #include "core/mesh.h"
+#include "core/parallel.h"
+#include "core/vec3_ops.h"
 
 namespace tetrefine {
 namespace {
@@ -92,6 +94,22 @@ double MinMeanRatio(const MeanRatioParts* parts, int count) {
     if (cubes[i] <= bound) worst = std::min(worst, MeanRatioOf(parts[i]));
   }
   return worst;
+}
+
+double QualityReference(const std::vector<Vec3>& points, const std::vector<Tet>& tets) {
+  const int64_t n = static_cast<int64_t>(tets.size());
+  std::vector<double> worst(static_cast<size_t>(BlockCount(n)), 1.0);
+  ForEachBlock(n, [&](int64_t b, int64_t begin, int64_t end) {
+    double w = 1.0;
+    for (int64_t t = begin; t < end; ++t) {
+      std::array<Vec3, 4> c = {points[tets[t][0]], points[tets[t][1]], points[tets[t][2]],
+                               points[tets[t][3]]};
+      std::sort(c.begin(), c.end(), LexLess);
+      w = std::min(w, MeanRatio(c[0], c[1], c[2], c[3]));
+    }
+    worst[b] = w;
+  });
+  return worst.empty() ? 1.0 : *std::min_element(worst.begin(), worst.end());
 }
 
 }  // namespace tetrefine

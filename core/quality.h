@@ -1,7 +1,9 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
+#include "core/mesh.h"
 #include "core/volume.h"
 
 namespace tetrefine {
@@ -35,6 +37,11 @@ bool MeanRatioBelow(const MeanRatioParts& parts, double threshold);
 
 // Exactly the smallest MeanRatioOf(parts[i]) for i in [0, count), count >= 1.
 double MinMeanRatio(const MeanRatioParts* parts, int count);
+
+// The mean ratio of the worst tet of `tets` (1 for no tets), each measured with its corners in
+// lexicographic order: the same bits whatever the order of a tet's corners (a reoriented tet
+// has two swapped) or of the tets. The default of RefineOptions::quality_reference.
+double QualityReference(const std::vector<Vec3>& points, const std::vector<Tet>& tets);
 
 struct QualityStats {
   double min = 0.0;

@@ -132,6 +132,17 @@ float TetQuality(const std::vector<Vec3>& p, const Tet& t) {
 //    the same stop reasons and the same worst tet in all 40 runs, the mean at most 0.008 lower
 //    (the same runs below 0.9x). With it, guard ratio 0.65 costs 3.4% more tets and 0.55 puts
 //    one more run below 0.5x: 0.6 stays.
+//  - The guard also keeps every child at kGuardFloor of the input's worst tet where it can
+//    (RefineOptions::quality_reference): the threshold is max(0.6 x own, 0.5 x reference). The
+//    guard's relative rule lets quality compound down over iterations (0.6 x 0.6 = 0.36); a floor
+//    measured 2026-11-23 with regular 1:8 refinement as the only remedy made things worse (1:8
+//    cannot keep 0.5 below parents of 0.65 x reference, and its extra edges made more unguarded
+//    splits), but with the fewest-edges remedy it works (2026-11-27, all 20 runs, docs/schemes.md
+//    "A floor under the guard"): runs below 0.5x of the input's min 6 -> 4 (certify 7 -> 3) for
+//    0.9% more tets (certify 0.4%), the same runs converge, the mean within 0.01; heart2 at eps
+//    0.05 takes 23% more tets. Floor 0.55: 5% more tets for no more runs above 0.5x; the floor
+//    only where 1:8 could keep it (<= 0.77 x own): no run gains; 3-4 guard rounds with it: 1-2
+//    more runs above 0.5x but up to 3.3x Plaza's tets on heart2.
 // Every rule reads only the tets around an edge, a bounded number of times per iteration
 // (closure and guard: at most 8 + 2 * (1 + 8) = 26 rings of tets), so decisions stay local.
 struct SchemeRules {
@@ -144,13 +155,16 @@ struct SchemeRules {
 constexpr int kClosureRounds = 8;
 constexpr double kGuardRatio = 0.6;
 constexpr int kGuardRounds = 2;
+constexpr double kGuardFloor = 0.5;
 
-SchemeRules RulesOf(const RefineOptions& options) {
+// quality_reference: RefineOptions::quality_reference, or the input's QualityReference.
+SchemeRules RulesOf(const RefineOptions& options, double quality_reference) {
   SchemeRules r;
   if (options.scheme == RefineScheme::kLongestEdge) {
     r.test = options.certify ? EdgeTest::kSegment : EdgeTest::kMidpoint;
     r.marking.closure_rounds = kClosureRounds;
     r.marking.guard_ratio = kGuardRatio;
+    r.marking.guard_floor = kGuardFloor * quality_reference;
     r.marking.guard_rounds = kGuardRounds;
     r.marking.best_tiling = true;
   }
@@ -239,7 +253,12 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   }
   if (options.certify) state.tet_lattice_error.assign(nt0, -1.0);
 
-  const SchemeRules rules = RulesOf(options);
+  // Only the longest-edge scheme's guard reads it.
+  const double quality_reference =
+      options.quality_reference.has_value()          ? *options.quality_reference
+      : options.scheme == RefineScheme::kLongestEdge ? QualityReference(*state.points, *state.tets)
+                                                     : 1.0;
+  const SchemeRules rules = RulesOf(options, quality_reference);
   EdgeTestParams params;
   params.test = rules.test;
   params.norm = norm;

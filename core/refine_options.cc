@@ -66,6 +66,10 @@ absl::Status ValidateRefineOptions(const RefineOptions& o) {
   if (o.scheme != RefineScheme::kPaper && o.scheme != RefineScheme::kLongestEdge) {
     return Invalid("scheme", static_cast<int>(o.scheme), "not a scheme");
   }
+  if (o.quality_reference.has_value() &&
+      !(*o.quality_reference > 0.0 && *o.quality_reference <= 1.0)) {
+    return Invalid("quality_reference", *o.quality_reference, "must be in (0, 1]");
+  }
   if (o.lattice_max_tets < 0) {
     return Invalid("lattice_max_tets", o.lattice_max_tets, "must be >= 0");
   }

@@ -86,6 +86,12 @@ struct RefineOptions {
   // stops with needles (docs/schemes.md; SchemeRules in core/refine.cc). kPaper stays available
   // and unchanged to the bit (tests/core/scheme_test.cc pins it).
   RefineScheme scheme = RefineScheme::kLongestEdge;
+  // The mean-ratio quality the longest-edge scheme's quality guard keeps every new tet at half of,
+  // where it can (SchemeRules in core/refine.cc). Unset: the input mesh's worst tet
+  // (QualityReference, core/quality.h). A caller that refines a mesh in pieces or one iteration
+  // at a time passes the whole input's value here, so that every piece guards as the whole run
+  // would (client/sharding does). Set: in (0, 1].
+  std::optional<double> quality_reference;
   // Certified mode: refinement also goes on until the discrepancy at every point of the
   // lattice of order lattice_n (the paper's 165 points for 8) of every tet is <= epsilon; each
   // tet that fails has its longest edge split. The result's `certified_max_error` is then the

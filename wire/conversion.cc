@@ -133,6 +133,7 @@ void RequestOptionsToWire(const RequestOptions& o, v1::RefineOptions* out) {
   out->set_lattice_seed(r.lattice_seed);
   if (r.min_edge_length.has_value()) out->set_min_edge_length(*r.min_edge_length);
   out->set_min_quality(r.min_quality);
+  if (r.quality_reference.has_value()) out->set_quality_reference(*r.quality_reference);
   out->set_scheme(RefineSchemeToWire(r.scheme));
   out->set_certify(r.certify);
   out->set_track_parents(r.track_parents);
@@ -185,6 +186,7 @@ absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& i
   if (in.has_lattice_seed()) r.lattice_seed = in.lattice_seed();
   if (in.has_min_edge_length()) r.min_edge_length = in.min_edge_length();
   if (in.has_min_quality()) r.min_quality = in.min_quality();
+  if (in.has_quality_reference()) r.quality_reference = in.quality_reference();
   switch (in.scheme()) {
     case v1::REFINE_SCHEME_UNSPECIFIED:
       break;  // the core's default

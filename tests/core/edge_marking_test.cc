@@ -72,16 +72,18 @@ TEST(EdgeMarkingTest, ClosureAndGuardMarkNothingOnceCancelled) {
     CancelFlag running(never);
     EXPECT_GT(CloseToLongestEdges(m.mesh.points, m.mesh.tets, m.edges, 4, m.split, running), 0)
         << "the case gives the closure nothing to do";
-    EXPECT_GT(PromoteBadSplits(m.mesh.points, m.mesh.tets, m.edges, 0.99, false, m.split, running),
-              0)
+    EXPECT_GT(
+        PromoteBadSplits(m.mesh.points, m.mesh.tets, m.edges, 0.99, 0.0, false, m.split, running),
+        0)
         << "the case gives the guard nothing to do";
   }
   Marked m;
   const FillLater<uint8_t> before = m.split;
   CancelFlag cancelled(always);
   EXPECT_EQ(CloseToLongestEdges(m.mesh.points, m.mesh.tets, m.edges, 4, m.split, cancelled), 0);
-  EXPECT_EQ(PromoteBadSplits(m.mesh.points, m.mesh.tets, m.edges, 0.99, false, m.split, cancelled),
-            0);
+  EXPECT_EQ(
+      PromoteBadSplits(m.mesh.points, m.mesh.tets, m.edges, 0.99, 0.0, false, m.split, cancelled),
+      0);
   EXPECT_TRUE(cancelled.IsSet());
   EXPECT_TRUE(m.split == before);
 }
@@ -102,8 +104,8 @@ TEST(EdgeMarkingTest, SharedLongestEdgeCacheChangesNoMark) {
     CancelFlag running(never);
     for (int call = 0; call < 3; ++call) {
       if (call > 0) {
-        PromoteBadSplits(mesh.points, mesh.tets, edges, 0.65, false, fresh, running);
-        PromoteBadSplits(mesh.points, mesh.tets, edges, 0.65, false, cached, running);
+        PromoteBadSplits(mesh.points, mesh.tets, edges, 0.65, 0.0, false, fresh, running);
+        PromoteBadSplits(mesh.points, mesh.tets, edges, 0.65, 0.0, false, cached, running);
       }
       const int64_t a = CloseToLongestEdges(mesh.points, mesh.tets, edges, 4, fresh, running);
       const int64_t b =

@@ -85,8 +85,8 @@ MarkingCounts FullPasses(const Case& c, const MarkingRules& rules, FillLater<uin
         CloseToLongestEdges(p, t, c.edges, rules.closure_rounds, split, cancel, &targets);
   }
   for (int r = 0; r < rules.guard_rounds; ++r) {
-    counts.guard_edges +=
-        PromoteBadSplits(p, t, c.edges, rules.guard_ratio, rules.best_tiling, split, cancel);
+    counts.guard_edges += PromoteBadSplits(p, t, c.edges, rules.guard_ratio, rules.guard_floor,
+                                           rules.best_tiling, split, cancel);
     if (rules.closure_rounds > 0) {
       counts.closure_edges +=
           CloseToLongestEdges(p, t, c.edges, rules.closure_rounds, split, cancel, &targets);
@@ -132,11 +132,14 @@ TEST(MarkingSequenceTest, MarksWhatTheFullPassesMark) {
               rules.closure_rounds = closure_rounds;
               rules.guard_rounds = guard_rounds;
               rules.guard_ratio = ratio;
+              // A floor on every other case: the default scheme's is half the input's worst tet.
+              rules.guard_floor = k % 2 == 1 ? 0.0 : 0.4;
               rules.best_tiling = best_tiling;
               ExpectSameMarks(cases[k], start, rules,
                               "case " + std::to_string(k) + ", density " + std::to_string(density) +
                                   ", closure " + std::to_string(closure_rounds) + ", guard " +
                                   std::to_string(guard_rounds) + " x " + std::to_string(ratio) +
+                                  ", floor " + std::to_string(rules.guard_floor) +
                                   (best_tiling ? ", best tiling" : ""),
                               &with_work);
             }

@@ -392,6 +392,24 @@ TEST_F(ShardedRefineTest, LongestEdgeEqualsUnsharded) {
   ExpectShardedEqualsUnsharded(c.volume, c.mesh, options, {2, 3, 4});
 }
 
+// The longest-edge guard's floor is half the whole input's worst tet
+// (RefineOptions::quality_reference). A part far from that tet, or a later iteration's mesh, has
+// another worst tet: the client sends the whole input's value with every part. A mesh much longer
+// than the halo (the parts do not all hold the input's worst tets), refined until refinement has
+// made tets worse than the input's, where the floor acts.
+TEST_F(ShardedRefineTest, GuardFloorIsTheWholeInputsInEveryPart) {
+  const Volume volume = TestVolume({66, 10, 8}, VoxelType::kInt16);
+  Mesh mesh = FiveTetMesh({0.5, 0.5, 0.5}, {64.5, 8.5, 6.5}, {48, 6, 4});
+  client::RefineRequestOptions options = Options(0.008, 3);
+  options.refine.scheme = RefineScheme::kLongestEdge;
+  const client::ClientResult whole = Unsharded(volume, mesh, options);
+  client::RefineRequestOptions no_floor = options;
+  no_floor.refine.quality_reference = 1e-6;
+  ASSERT_FALSE(SameTets(Unsharded(volume, mesh, no_floor).result, whole.result))
+      << "the floor does not act on this case";
+  ExpectShardedEqualsUnsharded(volume, mesh, options, {2, 3});
+}
+
 TEST_F(ShardedRefineTest, CertifyEqualsUnsharded) {
   const StructuredCase c;
   client::RefineRequestOptions options = Options(0.02, 8);

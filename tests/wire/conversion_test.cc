@@ -53,6 +53,7 @@ RequestOptions RandomOptions(std::mt19937_64& rng) {
   r.lattice_seed = rng();
   if (coin()) r.min_edge_length = unit(rng);
   r.min_quality = 0.5 * unit(rng);
+  if (coin()) r.quality_reference = 1.0 - unit(rng);
   r.scheme = coin() ? RefineScheme::kPaper : RefineScheme::kLongestEdge;
   r.certify = r.lattice_n >= 2 && coin();  // certify needs points inside the tets
   r.track_parents = coin();
@@ -78,6 +79,7 @@ void ExpectSameOptions(const RequestOptions& expected, const RequestOptions& act
   EXPECT_EQ(e.lattice_max_tets, a.lattice_max_tets);
   EXPECT_EQ(e.lattice_seed, a.lattice_seed);
   EXPECT_EQ(e.min_edge_length, a.min_edge_length);
+  EXPECT_EQ(e.quality_reference, a.quality_reference);
   EXPECT_EQ(std::bit_cast<uint64_t>(e.min_quality), std::bit_cast<uint64_t>(a.min_quality));
   EXPECT_EQ(e.scheme, a.scheme);
   EXPECT_EQ(e.certify, a.certify);
@@ -165,6 +167,7 @@ TEST(WireConversion, CoreOptionsSurviveTheWire) {
   core.lattice_seed = 42;
   core.min_edge_length = 0.25;
   core.min_quality = 0.01;
+  core.quality_reference = 0.375;
   core.threads = 3;  // the server's business: not sent
   v1::RefineOptions message;
   const RequestOptions request = RequestOptionsFromCore(core);
@@ -186,6 +189,7 @@ TEST(WireConversion, CoreOptionsSurviveTheWire) {
   EXPECT_EQ(back.lattice_seed, core.lattice_seed);
   EXPECT_EQ(back.min_edge_length, core.min_edge_length);
   EXPECT_EQ(back.min_quality, core.min_quality);
+  EXPECT_EQ(back.quality_reference, core.quality_reference);
   EXPECT_EQ(back.threads, 0);
 }
 
@@ -225,6 +229,8 @@ const BadOption kBadOptions[] = {
     {"min_edge_length", [](v1::RefineOptions* o) { o->set_min_edge_length(-0.5); }},
     {"min_quality", [](v1::RefineOptions* o) { o->set_min_quality(1.0); }},
     {"min_quality", [](v1::RefineOptions* o) { o->set_min_quality(-0.1); }},
+    {"quality_reference", [](v1::RefineOptions* o) { o->set_quality_reference(0.0); }},
+    {"quality_reference", [](v1::RefineOptions* o) { o->set_quality_reference(std::nan("")); }},
 };
 
 TEST(WireConversion, EachBadOptionIsRefusedNamingItsField) {
