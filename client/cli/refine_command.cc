@@ -63,10 +63,15 @@ struct RefineSettings {
 // The flag of each RefineOptions field the command line sets, so that the core's message
 // ("options.max_iterations: must be >= 0, got -1") names the flag the user typed.
 constexpr std::pair<absl::string_view, absl::string_view> kFlagOfField[] = {
-    {"epsilon", "epsilon"},     {"max_iterations", "max-iterations"},
-    {"max_tets", "max-tets"},   {"norm_coeff", "norm-coeff"},
-    {"scheme", "scheme"},       {"certify", "certify"},
-    {"lattice_n", "lattice-n"}, {"lattice_max_tets", "lattice-max-tets"},
+    {"epsilon", "epsilon"},
+    {"max_iterations", "max-iterations"},
+    {"max_tets", "max-tets"},
+    {"norm_coeff", "norm-coeff"},
+    {"scheme", "scheme"},
+    {"certify", "certify"},
+    {"lattice_n", "lattice-n"},
+    {"lattice_max_tets", "lattice-max-tets"},
+    {"quality_reference", "quality-reference"},
 };
 
 absl::Status AsFlagError(const absl::Status& status) {
@@ -104,6 +109,11 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
     absl::StatusOr<double> x = ParseFiniteDouble("norm-coeff", *text);
     if (!x.ok()) return x.status();
     s->options.refine.norm_coeff = *x;
+  }
+  if (auto text = args.Get("quality-reference")) {
+    absl::StatusOr<double> x = ParseFiniteDouble("quality-reference", *text);
+    if (!x.ok()) return x.status();
+    s->options.refine.quality_reference = *x;
   }
   if (auto text = args.Get("threads")) {
     absl::StatusOr<int64_t> n = ParseInteger("threads", *text, 0, 4096);
@@ -690,10 +700,11 @@ const CommandSpec& RefineSpec() {
                               wire::ServiceLimits{}.max_output_tets, ")")},
                 {"scheme", "NAME",
                  absl::StrCat("which edges are split: longest-edge (the midpoint test, then "
-                              "each marked tet's longest edge, and 1:8 where a split would "
-                              "flatten a tet; each tet cut by the tiling with the best worst "
-                              "child: reaches epsilon with bounded quality) or paper (the "
-                              "midpoint test and the paper's table alone, as published). Default ",
+                              "each marked tet's and face's longest edge, and the fewest more "
+                              "edges where a split would flatten a tet; each tet cut by the "
+                              "tiling with the best worst child: reaches epsilon with bounded "
+                              "quality) or paper (the midpoint test and the paper's table alone, "
+                              "as published). Default ",
                               std::string(RefineSchemeName(RefineOptions{}.scheme)))},
                 {"certify", "",
                  "also refine until every lattice point of every tet is within epsilon; the "
@@ -731,6 +742,10 @@ const CommandSpec& RefineSpec() {
                  "unsharded result"},
                 {"threads", "N", "worker threads of the embedded service (default 0: all cores)"},
                 {"norm-coeff", "X", "normCoeff of the error (default: the volume's max - min)"},
+                {"quality-reference", "Q",
+                 "longest-edge keeps new tets at 0.5 Q mean ratio where it can, in (0, 1] "
+                 "(default: the input's worst tet; pass the first input's when refining a "
+                 "result again)"},
                 {"clamp", "", "sample vertices outside the volume at the nearest point of its box"},
                 {"fix-orientation", "", "flip inverted input tets instead of refusing the mesh"},
                 {"fit-mesh-to-volume", "",

@@ -84,6 +84,12 @@ void WriteOptions(JsonWriter& json, const RunDescription& run) {
   } else {
     json.Null();
   }
+  json.Key("quality_reference");
+  if (o.refine.quality_reference.has_value()) {
+    json.Number(*o.refine.quality_reference);
+  } else {
+    json.Null();
+  }
   json.Key("scheme");
   json.String(RefineSchemeName(o.refine.scheme));
   json.Key("certify");

@@ -92,6 +92,26 @@ def test_each_scheme_matches_the_cli(server, cli_binary, tmp_path, scheme):
     assert_same_as_cli_output(result, tmp_path / "cli.vtu")
 
 
+def test_quality_reference_matches_the_cli(server, cli_binary, tmp_path):
+    """quality_reference= sends what the CLI's --quality-reference sends: the same mesh, bit for
+    bit; out of (0, 1] the server refuses it by name."""
+    data = smooth_volume((13, 11, 9))
+    points, tets = box_mesh((0.5, 0.5, 0.5), (11.5, 9.5, 7.5), (3, 3, 2))
+    nibabel.save(nibabel.Nifti1Image(data, np.eye(4)), tmp_path / "v.nii")
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(points, [("tetra", tets)]))
+    run_cli(cli_binary, "refine", "--server", server.target, "--volume", str(tmp_path / "v.nii"),
+            "--mesh", str(tmp_path / "m.vtu"), "--epsilon", "0.02", "--quality-reference", "0.9",
+            "--quiet", "--output", str(tmp_path / "cli.vtu"))
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(data, (1, 1, 1), (0, 0, 0), points, tets, 0.02,
+                               quality_reference=0.9)
+        assert_same_as_cli_output(result, tmp_path / "cli.vtu")
+        with pytest.raises(tetrefine.TetrefineError) as error:
+            client.refine(data, (1, 1, 1), (0, 0, 0), points, tets, 0.02, quality_reference=1.5)
+    assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "quality_reference" in error.value.details
+
+
 def test_certify_labels_and_parents(server):
     """certify=True bounds the lattice error of every tet; labels and parents follow each child
     (every region and every input tet keeps its volume)."""
@@ -261,6 +281,7 @@ def test_the_servers_message_for_bad_input(server):
     (dict(max_iterations=2**40), r"max_iterations: must be in \[0, 2147483647\]"),
     (dict(max_tets=float("inf")), "max_tets: expected a whole number, got inf"),
     (dict(norm_coeff="x"), "norm_coeff: expected a number"),
+    (dict(quality_reference="x"), "quality_reference: expected a number"),
     (dict(certify="no"), "certify: expected True or False, got 'no'"),
     (dict(timeout="5"), "timeout: expected a number"),
     (dict(timeout=-1), "timeout: must be >= 0"),

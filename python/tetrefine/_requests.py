@@ -213,7 +213,7 @@ def _direction(direction):
 
 def build_options(pb, protocol, epsilon, *, max_iterations=None, max_tets=None, scheme=None,
                   certify=False, norm_coeff=None, clamp=False, fix_orientation=False,
-                  track_parents=False):
+                  track_parents=False, quality_reference=None):
     """The RefineOptions message; an unset argument leaves the server's default."""
     # Types are checked here (a string epsilon, a float iteration count, certify="no" were
     # coerced or raised numpy's and protobuf's own exceptions); ranges are the server's.
@@ -246,6 +246,10 @@ def build_options(pb, protocol, epsilon, *, max_iterations=None, max_tets=None, 
         if "track_parents" not in pb.RefineOptions.DESCRIPTOR.fields_by_name:
             raise unsupported("track_parents", "RefineOptions.track_parents field")
         setattr(options, "track_parents", True)
+    if quality_reference is not None:
+        if "quality_reference" not in pb.RefineOptions.DESCRIPTOR.fields_by_name:
+            raise unsupported("quality_reference", "RefineOptions.quality_reference field")
+        setattr(options, "quality_reference", real_number("quality_reference", quality_reference))
     return options
 
 

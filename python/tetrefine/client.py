@@ -177,7 +177,7 @@ class Client:
     def refine(self, volume, spacing, origin, points, tets, epsilon, *, direction=None,
                labels=None, scheme=None, certify=False, max_iterations=None, max_tets=None,
                on_iteration=None, timeout=None, norm_coeff=None, clamp=False,
-               fix_orientation=False, track_parents=False):
+               fix_orientation=False, track_parents=False, quality_reference=None):
         """Refines the tet mesh (points, tets) immersed in a voxel volume.
 
         Args:
@@ -209,6 +209,9 @@ class Client:
           norm_coeff: normCoeff of eq. 3 (default: the volume's max - min).
           clamp: sample vertices outside the volume at the nearest point of its box.
           fix_orientation: flip inverted tets instead of refusing them.
+          quality_reference: the mean ratio in (0, 1] the longest-edge scheme keeps new tets at
+            half of where it can (default: the input's worst tet; pass the first input's when
+            refining a result again).
 
         direction, labels, scheme and certify need a protocol that has them: without it they
         raise TetrefineError with code UNIMPLEMENTED naming the missing field.
@@ -224,7 +227,8 @@ class Client:
         options = _requests.build_options(
             pb, self._protocol, epsilon, max_iterations=max_iterations, max_tets=max_tets,
             scheme=scheme, certify=certify, norm_coeff=norm_coeff, clamp=clamp,
-            fix_orientation=fix_orientation, track_parents=track_parents)
+            fix_orientation=fix_orientation, track_parents=track_parents,
+            quality_reference=quality_reference)
         timeout = _timeout(timeout)
         # One deadline for the whole call, the server-info round trip included.
         deadline = None if timeout is None else time.monotonic() + timeout

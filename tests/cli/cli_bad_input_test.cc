@@ -176,6 +176,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "--lattice-n: certify needs a lattice with points inside the tets"},
         BadCase{"ThreadsText", Refine({"--epsilon", "0.1", "--threads", "many"}), "--threads"},
         BadCase{"NormCoeffZero", Refine({"--epsilon", "0.1", "--norm-coeff", "0"}), "--norm-coeff"},
+        BadCase{"QualityReferenceAboveOne",
+                Refine({"--epsilon", "0.1", "--quality-reference", "1.5"}), "--quality-reference"},
         BadCase{"UnknownFlag", Refine({"--epsilon", "0.1", "--shards", "4"}), "--shards"},
         BadCase{"VolumeMissing", RefineWith("--volume", "$D/nothere.nii"), "$D/nothere.nii"},
         BadCase{"VolumeTruncatedHeader", RefineWith("--volume", "$D/truncated.nii"),
