@@ -35,6 +35,21 @@ TetLattice OneTet(const Volume& volume, const Mesh& mesh, int64_t t,
       norm_coeff, epsilon);
 }
 
+// Tet t's statistics from `known` when it has them (KnownTetLattices: no point above epsilon, so
+// none counted), else sampled.
+TetLattice KnownOrSampled(const Volume& volume, const Mesh& mesh, int64_t t,
+                          const lattice_internal::LatticePoints& points, double norm_coeff,
+                          double epsilon, const KnownTetLattices& known) {
+  if (known.sum_error != nullptr && !std::isnan((*known.sum_error)[t])) {
+    TetLattice r;
+    r.max_error = (*known.max_error)[t];
+    r.sum_error = (*known.sum_error)[t];
+    r.points = points.size();
+    return r;
+  }
+  return OneTet(volume, mesh, t, points, norm_coeff, epsilon);
+}
+
 }  // namespace
 
 // `clamp` changes nothing here or in SampleLattice (sampling clamps to the grid's box anyway, see
@@ -47,7 +62,8 @@ TetLattice SampleTetLattice(const Volume& volume, const Mesh& mesh, int64_t t, i
 
 LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_t max_tets,
                            uint64_t seed, double norm_coeff, double epsilon, bool /*clamp*/,
-                           const std::function<bool()>& should_stop) {
+                           const std::function<bool()>& should_stop,
+                           const KnownTetLattices& known) {
   LatticeStats stats;
   stats.n = n;
   const int64_t num_tets = static_cast<int64_t>(mesh.tets.size());
@@ -76,7 +92,7 @@ LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_
     for (int64_t i = begin; i < end; ++i) {
       if (should_stop && (i - begin) % poll_every == 0 && should_stop()) break;
       const int64_t t = sample ? chosen[i] : i;
-      const TetLattice r = OneTet(volume, mesh, t, points, norm_coeff, epsilon);
+      const TetLattice r = KnownOrSampled(volume, mesh, t, points, norm_coeff, epsilon, known);
       acc.sums.max_error = std::max(acc.sums.max_error, r.max_error);
       acc.sums.sum_error += r.sum_error;
       acc.sums.points += r.points;

@@ -304,23 +304,27 @@ TetLattice ScanTetLattice(const Volume& volume, const LatticePoints& points,
   return out;
 }
 
-double LatticeMaxUntil(const Volume& volume, const LatticePoints& points,
-                       const std::array<Vec3, 4>& p, const std::array<double, 4>& v, double norm,
-                       double epsilon) {
+LatticeCheck CheckLatticeUntil(const Volume& volume, const LatticePoints& points,
+                               const std::array<Vec3, 4>& p, const std::array<double, 4>& v,
+                               double norm, double epsilon) {
   // Smaller than the kernel's chunk: a failing tet often fails early, and the rest of its chunk
   // is wasted.
   constexpr int64_t kChunk = 32;
   double errors[kChunk];
-  double worst = 0.0;
+  LatticeCheck out;
   for (int64_t begin = 0; begin < points.size(); begin += kChunk) {
     const int64_t end = std::min(points.size(), begin + kChunk);
     LatticeErrors(volume, points, p, v, norm, begin, end, errors);
     for (int64_t i = 0; i < end - begin; ++i) {
-      worst = std::max(worst, errors[i]);
-      if (worst > epsilon) return worst;
+      out.max_error = std::max(out.max_error, errors[i]);
+      out.sum_error += errors[i];
+      if (errors[i] > epsilon) {
+        out.passed = false;
+        return out;
+      }
     }
   }
-  return worst;
+  return out;
 }
 
 }  // namespace tetrefine::lattice_internal

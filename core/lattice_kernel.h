@@ -65,13 +65,19 @@ TetLattice ScanTetLattice(const Volume& volume, const LatticePoints& points,
                           const std::array<Vec3, 4>& p, const std::array<double, 4>& v, double norm,
                           double epsilon);
 
-// Certified mode's test of one tet: the largest discrepancy over `points` (built without its
-// corners), scanning in order and stopping at the first point that takes it above epsilon (the
-// caller only needs to know whether the tet passes), so the value is the largest up to there.
-// Points are evaluated a chunk at a time; the scan stops where a point-by-point one would, so the
-// value is the same.
-double LatticeMaxUntil(const Volume& volume, const LatticePoints& points,
-                       const std::array<Vec3, 4>& p, const std::array<double, 4>& v, double norm,
-                       double epsilon);
+// Certified mode's test of one tet: the discrepancy over `points` scanned in order, stopping at
+// the first point above epsilon (the caller only needs to know whether the tet fails). Points
+// are evaluated a chunk at a time; the scan stops where a point-by-point one would.
+struct LatticeCheck {
+  bool passed = true;      // no point above epsilon
+  double max_error = 0.0;  // the largest discrepancy up to where the scan stopped
+  // For a tet that passed, over every point: ScanTetLattice's sum_error, to the bit (summed in
+  // the same order from the same errors), so that a final verification over the same points
+  // can take the tet's statistics from here (SampleLattice's `known`). Unspecified otherwise.
+  double sum_error = 0.0;
+};
+LatticeCheck CheckLatticeUntil(const Volume& volume, const LatticePoints& points,
+                               const std::array<Vec3, 4>& p, const std::array<double, 4>& v,
+                               double norm, double epsilon);
 
 }  // namespace tetrefine::lattice_internal

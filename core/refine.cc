@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string_view>
 
@@ -256,7 +257,10 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     state.tet_parent.resize(nt0);
     for (int64_t t = 0; t < nt0; ++t) state.tet_parent[t] = static_cast<uint32_t>(t);
   }
-  if (options.certify) state.tet_lattice_error.assign(nt0, -1.0);
+  if (options.certify) {
+    state.tet_lattice_error.assign(nt0, -1.0);
+    state.tet_lattice_sum.assign(nt0, std::numeric_limits<double>::quiet_NaN());
+  }
 
   // Only the longest-edge scheme's guard reads it.
   const double quality_reference =
@@ -402,9 +406,18 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   result.tet_quality = std::move(state.tet_quality);
   result.tet_parent = std::move(state.tet_parent);
   if (options.lattice_n > 0 && result.stop_reason != StopReason::kCancelled) {
-    result.lattice = SampleLattice(volume, result.mesh, options.lattice_n, options.lattice_max_tets,
-                                   options.lattice_seed, norm, options.epsilon, clamp,
-                                   [&cancel] { return cancel.Check(); });
+    // Certified mode sampled every tet that passed on this lattice already (MarkFailingTets):
+    // those are read, not sampled again, and a converged certified call verifies its result for
+    // free. Same bits (tests/core/scheme_test.cc). Measured 2026-11-27, one thread, side by side
+    // with the commit before, three runs each: the demo at eps 0.05 with --certify (192 k tets)
+    // 0.95 -> 0.73 s for the Refine call, 1.13-1.21 -> 0.74-0.89 s for the whole CLI run;
+    // bench/core_bench BM_Certified (one iteration, which stops with tets still failing, whose
+    // lattices are sampled here) 1.15-1.44 -> 1.01-1.09 s. Memory: a double per tet.
+    KnownTetLattices known;
+    if (options.certify) known = {&state.tet_lattice_error, &state.tet_lattice_sum};
+    result.lattice = SampleLattice(
+        volume, result.mesh, options.lattice_n, options.lattice_max_tets, options.lattice_seed,
+        norm, options.epsilon, clamp, [&cancel] { return cancel.Check(); }, known);
     // An incomplete lattice is not a result: say the refinement was cancelled.
     if (cancel.IsSet()) result.stop_reason = StopReason::kCancelled;
   }

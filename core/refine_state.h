@@ -28,6 +28,9 @@ struct State {
   // vertices and their values until it is split, so a tet is sampled once in its life; a tet
   // above epsilon is split in the same iteration.
   std::vector<double> tet_lattice_error;
+  // Certified mode: T sums of each sampled tet's lattice discrepancies (CheckLatticeUntil's
+  // sum_error, for the final verification), NaN where the tet was not sampled yet or failed.
+  std::vector<double> tet_lattice_sum;
 
   // Points `points` and `tets` at the state's own mesh (after it was made or moved).
   void UseOwnMesh() {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <vector>
 
 #include "core/alternative_tilings.h"
@@ -140,6 +141,7 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
         if (!state.tet_label.empty()) sized(next.tet_label, total_children);
         if (!state.tet_parent.empty()) sized(next.tet_parent, total_children);
         if (!state.tet_lattice_error.empty()) sized(next.tet_lattice_error, total_children);
+        if (!state.tet_lattice_sum.empty()) sized(next.tet_lattice_sum, total_children);
       });
   const bool labels = !state.tet_label.empty();
   const bool parents = !state.tet_parent.empty();
@@ -170,7 +172,10 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
       next.tet_iteration[out] = iteration;
       if (labels) next.tet_label[out] = state.tet_label[t];
       if (parents) next.tet_parent[out] = state.tet_parent[t];
-      if (certified) next.tet_lattice_error[out] = -1.0;
+      if (certified) {
+        next.tet_lattice_error[out] = -1.0;
+        next.tet_lattice_sum[out] = std::numeric_limits<double>::quiet_NaN();
+      }
       const auto& np = next.mesh.points;
       const Vec3 &a = np[child[0]], &b = np[child[1]], &c = np[child[2]], &d = np[child[3]];
       const double v6 = SignedVolume6(a, b, c, d);
@@ -188,7 +193,10 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
         next.tet_quality[out] = state.tet_quality[t];
         if (labels) next.tet_label[out] = state.tet_label[t];
         if (parents) next.tet_parent[out] = state.tet_parent[t];
-        if (certified) next.tet_lattice_error[out] = state.tet_lattice_error[t];
+        if (certified) {
+          next.tet_lattice_error[out] = state.tet_lattice_error[t];
+          next.tet_lattice_sum[out] = state.tet_lattice_sum[t];
+        }
         ++out;
         continue;
       }

@@ -708,7 +708,7 @@ const CommandSpec& RefineSpec() {
                               std::string(RefineSchemeName(RefineOptions{}.scheme)))},
                 {"certify", "",
                  "also refine until every lattice point of every tet is within epsilon; the "
-                 "report gives the certified maximum (about 2.5x the CPU time: the demo at "
+                 "report gives the certified maximum (about twice the CPU time: the demo at "
                  "epsilon 0.05)"},
                 {"lattice-n", "N",
                  absl::StrCat("order of the verification lattice, (N+1)(N+2)(N+3)/6 points a "

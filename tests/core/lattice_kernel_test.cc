@@ -295,6 +295,40 @@ TEST(LatticeKernel, SampleLatticeAgreesWithThePointByPointScan) {
   });
 }
 
+// With the corners in its points, a passing check's maximum and sum are ScanTetLattice's bits:
+// certified mode's final verification reads them instead of sampling the tet again.
+TEST(LatticeKernel, PassingCheckGivesTheScansMaximumAndSumToTheBit) {
+  ForEachKernel([] {
+    ForEachVolume(6, [](std::mt19937_64& rng, const Volume& volume, uint64_t /*seed*/) {
+      const Mesh mesh = RandomTets(rng, volume, 6);
+      const double norm = std::uniform_real_distribution<double>(0.5, 3e4)(rng);
+      int passed = 0;
+      for (int n : {1, 2, 8, 13}) {
+        const lattice_internal::LatticePoints points(n, /*with_corners=*/true);
+        for (const Tet& tet : mesh.tets) {
+          const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]],
+                                         mesh.points[tet[2]], mesh.points[tet[3]]};
+          const std::array<double, 4> v = {mesh.values[tet[0]], mesh.values[tet[1]],
+                                           mesh.values[tet[2]], mesh.values[tet[3]]};
+          for (double epsilon : {1e300, 0.05, 0.3}) {
+            SCOPED_TRACE(::testing::Message() << "n " << n << " epsilon " << epsilon);
+            const lattice_internal::LatticeCheck check =
+                lattice_internal::CheckLatticeUntil(volume, points, p, v, norm, epsilon);
+            const TetLattice scan =
+                lattice_internal::ScanTetLattice(volume, points, p, v, norm, epsilon);
+            EXPECT_EQ(check.passed, scan.above_epsilon == 0);
+            if (!check.passed) continue;
+            ++passed;
+            EXPECT_EQ(Bits(check.max_error), Bits(scan.max_error));
+            EXPECT_EQ(Bits(check.sum_error), Bits(scan.sum_error));
+          }
+        }
+      }
+      EXPECT_GT(passed, 0);
+    });
+  });
+}
+
 TEST(LatticeKernel, CertifiedMaximumEqualsThePointByPointScanToTheBit) {
   ForEachKernel([] {
     ForEachVolume(6, [](std::mt19937_64& rng, const Volume& volume, uint64_t /*seed*/) {
@@ -312,7 +346,8 @@ TEST(LatticeKernel, CertifiedMaximumEqualsThePointByPointScanToTheBit) {
             for (bool clamp : {false, true}) {
               SCOPED_TRACE(::testing::Message() << "n " << n << " epsilon " << epsilon);
               EXPECT_EQ(
-                  Bits(lattice_internal::LatticeMaxUntil(volume, points, p, v, norm, epsilon)),
+                  Bits(lattice_internal::CheckLatticeUntil(volume, points, p, v, norm, epsilon)
+                           .max_error),
                   Bits(ReferenceTetLatticeMax(volume, p, v, n, norm, epsilon, clamp)));
             }
           }

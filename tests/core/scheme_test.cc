@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <random>
+#include <utility>
 
 #include "core/lattice.h"
 #include "core/refine.h"
@@ -125,6 +127,58 @@ TEST_P(EveryScheme, CertifiedModeBoundsEveryTetsLattice) {
     EXPECT_EQ(r->certified_max_error, all.max_error);
     EXPECT_LE(r->final_max_error, o.epsilon);
   }
+}
+
+bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
+
+// Certified mode's final verification reads the lattices its checks measured instead of sampling
+// the tets again: the statistics must be the bits a fresh SampleLattice gives, whether the call
+// converged or stopped on its budget (failing tets sampled afresh), over every tet or a sample,
+// with the input as given or with every tet reoriented (the corners, and so the points, in
+// another order).
+TEST_P(EveryScheme, CertifiedVerificationEqualsAFreshLatticeToTheBit) {
+  int stopped_early = 0;
+  for (const testing::PinnedCase& c : testing::PinnedCases()) {
+    for (bool reoriented : {false, true}) {
+      for (int64_t max_tets : {int64_t{1'000'000}, int64_t{3'000}}) {
+        for (int64_t lattice_max_tets : {int64_t{200'000}, int64_t{500}}) {
+          SCOPED_TRACE(::testing::Message()
+                       << c.name << (reoriented ? " reoriented" : "") << " max_tets " << max_tets
+                       << " lattice_max_tets " << lattice_max_tets);
+          Mesh mesh = c.mesh;
+          RefineOptions o;
+          if (reoriented) {
+            for (Tet& t : mesh.tets) std::swap(t[2], t[3]);
+            o.orientation = OrientationPolicy::kNormalize;
+          }
+          o.scheme = GetParam();
+          o.certify = true;
+          o.epsilon = 0.05;
+          o.max_iterations = 32;
+          o.min_quality = 0.0;
+          o.max_tets = max_tets;
+          o.lattice_max_tets = lattice_max_tets;
+          auto r = Refine(c.volume, mesh, o);
+          ASSERT_TRUE(r.ok()) << r.status();
+          if (r->stop_reason != StopReason::kConverged) ++stopped_early;
+          const LatticeStats fresh =
+              SampleLattice(c.volume, r->mesh, o.lattice_n, o.lattice_max_tets, o.lattice_seed,
+                            r->norm_coeff, o.epsilon, false);
+          EXPECT_EQ(r->lattice.tets_sampled, fresh.tets_sampled);
+          EXPECT_EQ(r->lattice.points_sampled, fresh.points_sampled);
+          EXPECT_TRUE(SameBits(r->lattice.max_error, fresh.max_error));
+          EXPECT_TRUE(SameBits(r->lattice.mean_error, fresh.mean_error));
+          EXPECT_TRUE(SameBits(r->lattice.share_above_epsilon, fresh.share_above_epsilon));
+          EXPECT_TRUE(SameBits(r->lattice.volume_mean_error, fresh.volume_mean_error));
+          EXPECT_TRUE(
+              SameBits(r->lattice.volume_share_above_epsilon, fresh.volume_share_above_epsilon));
+        }
+      }
+    }
+  }
+  // The budget of 3000 tets stops some calls with tets above epsilon, whose lattices the
+  // verification must sample itself.
+  EXPECT_GT(stopped_early, 0);
 }
 
 TEST(LongestEdgeScheme, ConvergesWithBoundedQualityOnEveryPinnedCase) {
