@@ -143,7 +143,9 @@ int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
 
 // Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165
 // points for n = 8) and keeps its discrepancy in state.tet_lattice_error (final until the tet is
-// split); a tet above epsilon gets its longest edge split. Returns the number of failing tets.
+// split), and for a tet that passes the sum of its errors in state.tet_lattice_sum (the final
+// verification reads both, SampleLattice's `known`); a tet above epsilon gets its longest edge
+// split. Returns the number of failing tets.
 // Splitting instead the edge nearest the tet's lattice maximum (largest sum of the point's two
 // barycentric weights, longest on ties) was measured 2026-11-24 on the unit cube fitted to the
 // three real volumes at eps 0.1 and 0.05 (`refine --certify --fit-mesh-to-volume`): 7-12% more
