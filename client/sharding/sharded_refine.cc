@@ -343,9 +343,10 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
   client::RefineRequestOptions round = options;
   round.refine.norm_coeff = result.norm_coeff;
   // The guard's floor is half the whole input's worst tet, not a part's or an iteration's mesh's
-  // (RefineOptions::quality_reference).
-  round.refine.quality_reference = options.refine.quality_reference.value_or(
-      QualityReference(whole.mesh.points, whole.mesh.tets));
+  // (RefineOptions::quality_reference). Measured only when the caller did not give it.
+  if (!round.refine.quality_reference.has_value()) {
+    round.refine.quality_reference = QualityReference(whole.mesh.points, whole.mesh.tets);
+  }
   round.refine.orientation = OrientationPolicy::kReject;
   round.refine.max_iterations = 1;
   round.refine.min_quality = 0.0;
