@@ -29,7 +29,7 @@ absl::StatusOr<io::VolumeFile> LoadVolume(const std::string& path, const std::st
   if (IsMeshPath(path)) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": is a mesh, but ", flag,
                                                    " takes a volume (.nii, .nii.gz, .nrrd, .nhdr, "
-                                                   ".mha, .mhd)"));
+                                                   ".mha, .mhd, .vti)"));
   }
   return io::ReadVolume(path);
 }

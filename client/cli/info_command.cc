@@ -152,7 +152,7 @@ const CommandSpec& InfoSpec() {
       .summary = "Describe a volume or mesh file as tetrefine reads it",
       .usage = "tetrefine info FILE",
       .description =
-          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd): dims, voxel type, spacing, origin\n"
+          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti): dims, voxel type, spacing, origin\n"
           "and world box in RAS mm, value range, the file's own index-to-world affine, reading\n"
           "warnings. A mesh (.vtu .vtk .msh .mesh .meshb): vertices, tets, bounding box, volume,\n"
           "boundary area, mean-ratio quality, inverted tets, which arrays it carries.",
@@ -170,7 +170,7 @@ int RunInfo(const std::vector<std::string>& args) {
   if (IsMeshPath(path)) return MeshInfo(path);
   return Fail(absl::StrCat(path,
                            ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
-                           ".nhdr, .mha, .mhd) or a mesh (.vtu, .vtk, .msh, .mesh, .meshb)"),
+                           ".nhdr, .mha, .mhd, .vti) or a mesh (.vtu, .vtk, .msh, .mesh, .meshb)"),
               kExitUsage);
 }
 

@@ -5,6 +5,7 @@
 #include "client/io/metaimage_reader.h"
 #include "client/io/nifti_reader.h"
 #include "client/io/nrrd_reader.h"
+#include "client/io/vti_reader.h"
 
 namespace tetrefine::io {
 
@@ -15,6 +16,7 @@ absl::StatusOr<VolumeFile> ReadVolume(const std::string& path) {
   if (has(".nii") || has(".nii.gz") || has(".hdr") || has(".hdr.gz")) return ReadNifti(path);
   if (has(".nrrd") || has(".nhdr")) return ReadNrrd(path);
   if (has(".mha") || has(".mhd")) return ReadMetaImage(path);
+  if (has(".vti")) return ReadVti(path);
   if (has(".img") || has(".img.gz")) {
     return FileError(path, "an .img file holds only samples: read its .hdr");
   }
@@ -22,7 +24,7 @@ absl::StatusOr<VolumeFile> ReadVolume(const std::string& path) {
   // per-vendor geometry rules. Convert it first, e.g. with dcm2niix, and read the NIfTI.
   return FileError(path,
                    "unknown extension for a volume: expected .nii, .nii.gz, .hdr, .nrrd, .nhdr, "
-                   ".mha or .mhd (DICOM is not read: convert it to NIfTI with dcm2niix)");
+                   ".mha, .mhd or .vti (DICOM is not read: convert it to NIfTI with dcm2niix)");
 }
 
 }  // namespace tetrefine::io

@@ -264,6 +264,12 @@ absl::StatusOr<std::vector<int64_t>> VtuArrayReader::Int64s(pugi::xml_node array
   return out;
 }
 
+absl::StatusOr<std::string> VtuArrayReader::StoredBytes(pugi::xml_node array, VtkScalar type,
+                                                        uint64_t count) {
+  if (count > kMaxValues) return Error(array, "is too large");
+  return Bytes(array, static_cast<int64_t>(count * VtkScalarSize(type)));
+}
+
 absl::StatusOr<std::string> VtuArrayReader::StringBytes(pugi::xml_node array) {
   if (absl::string_view(array.attribute("type").value()) != "String") {
     return Error(array, "is not a String array");

@@ -10,6 +10,7 @@
 #include "absl/strings/string_view.h"
 #include "client/io/byte_order.h"
 #include "client/io/vtk_compressor.h"
+#include "client/io/vtk_scalar.h"
 #include "pugixml.hpp"
 
 namespace tetrefine::io {
@@ -46,6 +47,10 @@ class VtuArrayReader {
   absl::StatusOr<std::vector<double>> Doubles(pugi::xml_node array, uint64_t count);
   // The `count` values as integers; floating-point values must be whole.
   absl::StatusOr<std::vector<int64_t>> Int64s(pugi::xml_node array, uint64_t count);
+  // The `count` values of a numeric array with format "binary" or "appended", as stored (after
+  // decompression): count * VtkScalarSize(type) bytes in the file's byte order. For readers
+  // that keep the file's own type (a volume's samples) rather than converting every value.
+  absl::StatusOr<std::string> StoredBytes(pugi::xml_node array, VtkScalar type, uint64_t count);
   // The bytes of a type="String" array: its strings, each ended by a NUL.
   absl::StatusOr<std::string> StringBytes(pugi::xml_node array);
 

@@ -1,18 +1,17 @@
 // Reading VTK XML unstructured grids (.vtu) with pugixml. See vtu_format.h for what is read.
 #include <algorithm>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
-#include "absl/strings/strip.h"
 #include "client/io/io_error.h"
 #include "client/io/label_names.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
 #include "client/io/vtk_cells.h"
+#include "client/io/vtk_xml_file.h"
 #include "client/io/vtu_data_array.h"
 #include "client/io/vtu_format.h"
 #include "core/huge_pages.h"
@@ -20,59 +19,6 @@
 
 namespace tetrefine::io {
 namespace {
-
-// The XML part of the file, ready for pugixml, and the appended section cut off from it. Raw
-// appended data is not XML (any byte may follow the '_'), so the document handed to the parser
-// ends with the <AppendedData> start tag, closed by hand; VTK's own reader does the same.
-struct SplitFile {
-  std::string xml;
-  VtuAppended appended;
-};
-
-bool IsXmlSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
-
-absl::StatusOr<SplitFile> Split(absl::string_view text, absl::string_view path) {
-  SplitFile split;
-  const size_t tag = text.find("<AppendedData");
-  if (tag == absl::string_view::npos) {
-    split.xml.assign(text.data(), text.size());
-    return split;
-  }
-  const size_t gt = text.find('>', tag);
-  if (gt == absl::string_view::npos) return FileError(path, "<AppendedData> tag is not closed");
-  if (text[gt - 1] == '/') {  // <AppendedData .../>: an empty section
-    split.xml = absl::StrCat(text.substr(0, gt + 1), "</VTKFile>");
-    return split;
-  }
-  size_t underscore = gt + 1;
-  while (underscore < text.size() && IsXmlSpace(text[underscore])) {
-    ++underscore;
-  }
-  if (underscore >= text.size() || text[underscore] != '_') {
-    return FileError(path, "<AppendedData> does not start with the '_' marker");
-  }
-  // Appended data is read by offsets, so a file cut short after its last array would still
-  // read; the closing tags VTK writes after the data tell a complete file from a truncated one.
-  absl::string_view tail = text.substr(underscore + 1);
-  while (!tail.empty() && IsXmlSpace(tail.back())) tail.remove_suffix(1);
-  if (!absl::ConsumeSuffix(&tail, "</VTKFile>")) {
-    return FileError(path, "truncated: the file does not end with </VTKFile>");
-  }
-  while (!tail.empty() && IsXmlSpace(tail.back())) tail.remove_suffix(1);
-  if (!absl::EndsWith(tail, "</AppendedData>")) {
-    return FileError(path, "truncated: </AppendedData> does not end the file");
-  }
-  split.appended.present = true;
-  split.appended.data = text.substr(underscore + 1);
-  split.xml = absl::StrCat(text.substr(0, gt + 1), "</AppendedData></VTKFile>");
-  return split;
-}
-
-int64_t LineAt(absl::string_view text, ptrdiff_t offset) {
-  if (offset < 0) return 0;
-  const size_t end = std::min<size_t>(offset, text.size());
-  return 1 + std::count(text.begin(), text.begin() + end, '\n');
-}
 
 bool AttributeInt(pugi::xml_node node, const char* key, int64_t& out) {
   const pugi::xml_attribute a = node.attribute(key);
@@ -103,66 +49,10 @@ absl::StatusOr<MeshFrame> FieldDataFrame(pugi::xml_node grid, VtuArrayReader& ar
 }  // namespace
 
 absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path) {
-  absl::StatusOr<SplitFile> split = Split(text, path);
-  if (!split.ok()) return split.status();
-  pugi::xml_document doc;
-  const pugi::xml_parse_result parsed = doc.load_buffer_inplace(
-      split->xml.data(), split->xml.size(), pugi::parse_default, pugi::encoding_utf8);
-  if (!parsed) {
-    return FileLineError(path, LineAt(text, parsed.offset),
-                         absl::StrCat("not well-formed XML: ", parsed.description()));
-  }
-  // pugixml's offsets point into its own buffer, a copy of the file's first bytes.
-  const char* base = split->xml.data();
-  const auto line_of = [text, base](pugi::xml_node node) {
-    return node.type() == pugi::node_element && node.name()[0] != '\0'
-               ? LineAt(text, node.name() - base)
-               : int64_t{0};
-  };
-
-  const pugi::xml_node root = doc.document_element();
-  if (absl::string_view(root.name()) != "VTKFile") {
-    return FileError(path, "root element is not <VTKFile>");
-  }
-  const absl::string_view type = root.attribute("type").value();
-  if (type != "UnstructuredGrid") {
-    return FileError(
-        path, absl::StrCat("VTKFile type \"", type.substr(0, 40), "\" is not UnstructuredGrid"));
-  }
-  VtuEncoding enc;
-  const absl::string_view order = root.attribute("byte_order").value();
-  if (order == "BigEndian") {
-    enc.order = ByteOrder::kBig;
-  } else if (!order.empty() && order != "LittleEndian") {
-    return FileError(path, absl::StrCat("unknown byte_order \"", order.substr(0, 40), "\""));
-  }
-  const absl::string_view header_type = root.attribute("header_type").value();
-  if (header_type == "UInt64") {
-    enc.header_bytes = 8;
-  } else if (!header_type.empty() && header_type != "UInt32") {
-    return FileError(path, absl::StrCat("unknown header_type \"", header_type.substr(0, 40), "\""));
-  }
-  if (const pugi::xml_attribute compressor = root.attribute("compressor")) {
-    const std::optional<VtkCompressor> c = VtkCompressorFromName(compressor.value());
-    if (!c) {
-      return FileUnsupported(
-          path, absl::StrCat("compressor \"", absl::string_view(compressor.value()).substr(0, 40),
-                             "\" is not supported (zlib, lzma and lz4 are)"));
-    }
-    enc.compressor = *c;
-  }
-  if (split->appended.present) {
-    const absl::string_view encoding = root.child("AppendedData").attribute("encoding").value();
-    if (encoding == "base64") {
-      split->appended.base64 = true;
-    } else if (encoding != "raw") {
-      return FileError(path, absl::StrCat("<AppendedData> encoding \"", encoding.substr(0, 40),
-                                          "\" is neither raw nor base64"));
-    }
-  }
-
-  const pugi::xml_node grid = root.child("UnstructuredGrid");
-  if (!grid) return FileError(path, "no <UnstructuredGrid>");
+  VtkXmlFile xml;
+  if (absl::Status s = OpenVtkXml(text, path, "UnstructuredGrid", xml); !s.ok()) return s;
+  const auto line_of = [&xml](pugi::xml_node node) { return xml.LineOf(node); };
+  const pugi::xml_node grid = xml.dataset;
   std::vector<pugi::xml_node> pieces;
   for (pugi::xml_node piece : grid.children("Piece")) pieces.push_back(piece);
   if (pieces.empty()) return FileError(path, "no <Piece>");
@@ -180,7 +70,7 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
                          "Piece needs valid NumberOfPoints and NumberOfCells");
   }
 
-  VtuArrayReader arrays(path, enc, split->appended, line_of);
+  VtuArrayReader arrays(path, xml.encoding, xml.appended, line_of);
   MeshFile file;
   absl::StatusOr<MeshFrame> frame = FieldDataFrame(grid, arrays);
   if (!frame.ok()) return frame.status();

@@ -1,0 +1,325 @@
+// Reading VTK XML images (.vti) with pugixml. See vti_reader.h for what is read.
+#include "client/io/vti_reader.h"
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
+#include "client/io/byte_order.h"
+#include "client/io/file_bytes.h"
+#include "client/io/grid_placement.h"
+#include "client/io/io_error.h"
+#include "client/io/number_text.h"
+#include "client/io/voxel_decode.h"
+#include "client/io/vtk_scalar.h"
+#include "client/io/vtk_xml_file.h"
+#include "client/io/vtu_data_array.h"
+#include "client/io/world_frame.h"
+
+namespace tetrefine::io {
+namespace {
+
+using Extent = std::array<int64_t, 6>;  // x0 x1 y0 y1 z0 z1, inclusive sample indices
+
+// Whitespace-separated numbers of attribute `key` of `node`: exactly `n` of them, finite.
+absl::StatusOr<std::vector<double>> Numbers(const VtkXmlFile& xml, absl::string_view path,
+                                            pugi::xml_node node, const char* key, size_t n) {
+  std::vector<double> out;
+  for (absl::string_view word :
+       absl::StrSplit(node.attribute(key).value(), absl::ByAnyChar(" \t\r\n"), absl::SkipEmpty())) {
+    double value;
+    if (!ParseDouble(word, value) || !std::isfinite(value)) {
+      return FileLineError(path, xml.LineOf(node),
+                           absl::StrCat(node.name(), " ", key, ": \"", word.substr(0, 30),
+                                        "\" is not a finite number"));
+    }
+    out.push_back(value);
+  }
+  if (out.size() != n) {
+    return FileLineError(
+        path, xml.LineOf(node),
+        absl::StrCat(node.name(), " ", key, " has ", out.size(), " numbers, expected ", n));
+  }
+  return out;
+}
+
+absl::StatusOr<Extent> ReadExtent(const VtkXmlFile& xml, absl::string_view path,
+                                  pugi::xml_node node, const char* key) {
+  Extent extent{};
+  size_t n = 0;
+  for (absl::string_view word :
+       absl::StrSplit(node.attribute(key).value(), absl::ByAnyChar(" \t\r\n"), absl::SkipEmpty())) {
+    int64_t value;
+    // Indices beyond +-2^40 are corrupt: no axis holds more than 2^20 samples.
+    if (n == 6 || !ParseInt64(word, value) || std::abs(value) > (int64_t{1} << 40)) {
+      return FileLineError(
+          path, xml.LineOf(node),
+          absl::StrCat(node.name(), " ", key, " needs 6 integers x0 x1 y0 y1 z0 z1"));
+    }
+    extent[n++] = value;
+  }
+  if (n != 6) {
+    return FileLineError(
+        path, xml.LineOf(node),
+        absl::StrCat(node.name(), " ", key, " needs 6 integers x0 x1 y0 y1 z0 z1"));
+  }
+  return extent;
+}
+
+int64_t ComponentCount(pugi::xml_node array) {
+  int64_t n = 1;
+  if (array.attribute("NumberOfComponents") &&
+      !ParseInt64(array.attribute("NumberOfComponents").value(), n)) {
+    return -1;
+  }
+  return n;
+}
+
+// The point data array that holds the samples: the one <PointData Scalars="..."> names, else the
+// first with one component.
+absl::StatusOr<pugi::xml_node> SampleArray(const VtkXmlFile& xml, absl::string_view path,
+                                           pugi::xml_node piece) {
+  const pugi::xml_node point_data = piece.child("PointData");
+  const absl::string_view active = point_data.attribute("Scalars").value();
+  pugi::xml_node first_vector;
+  for (pugi::xml_node array : point_data.children("DataArray")) {
+    const absl::string_view name = array.attribute("Name").value();
+    if (!active.empty() && name != active) continue;
+    if (ComponentCount(array) == 1) return array;
+    if (!first_vector) first_vector = array;
+  }
+  if (first_vector) {
+    return FileLineError(
+        path, xml.LineOf(first_vector),
+        absl::StrCat("PointData \"", first_vector.attribute("Name").value(), "\" has ",
+                     first_vector.attribute("NumberOfComponents").value(),
+                     " components: a volume needs one value per sample"));
+  }
+  if (!active.empty()) {
+    return FileLineError(path, xml.LineOf(point_data),
+                         absl::StrCat("PointData names Scalars \"", active.substr(0, 40),
+                                      "\" but holds no such array"));
+  }
+  if (const pugi::xml_node cell = piece.child("CellData").child("DataArray")) {
+    return FileLineError(
+        path, xml.LineOf(cell),
+        absl::StrCat("the image holds only cell data (CellData \"", cell.attribute("Name").value(),
+                     "\"): tetrefine samples point data, the values at the "
+                     "grid's points (ParaView: Cell Data to Point Data)"));
+  }
+  return FileLineError(path, xml.LineOf(piece), "Piece has no PointData array: no samples");
+}
+
+// The VoxelType a VTK array type is kept as, when it is one.
+std::optional<VoxelType> KeptType(VtkScalar type) {
+  switch (type) {
+    case VtkScalar::kUInt8:
+      return VoxelType::kUint8;
+    case VtkScalar::kInt16:
+      return VoxelType::kInt16;
+    case VtkScalar::kUInt16:
+      return VoxelType::kUint16;
+    case VtkScalar::kInt32:
+      return VoxelType::kInt32;
+    case VtkScalar::kFloat32:
+      return VoxelType::kFloat32;
+    case VtkScalar::kFloat64:
+      return VoxelType::kFloat64;
+    default:
+      return std::nullopt;
+  }
+}
+
+template <typename T>
+void AppendSample(std::vector<std::byte>& out, T value) {
+  const size_t at = out.size();
+  out.resize(at + sizeof(T));
+  std::memcpy(out.data() + at, &value, sizeof(T));
+}
+
+// One piece's samples as Volume storage (little-endian `type`, x fastest).
+struct PieceSamples {
+  VoxelType type = VoxelType::kFloat64;
+  std::vector<std::byte> data;
+};
+
+absl::StatusOr<PieceSamples> ReadSamples(const VtkXmlFile& xml, VtuArrayReader& arrays,
+                                         pugi::xml_node array, uint64_t count) {
+  const std::optional<VtkScalar> type = VtkScalarFromXml(array.attribute("type").value());
+  if (!type) {
+    return arrays.Error(array, absl::StrCat("has type \"", array.attribute("type").value(),
+                                            "\", expected a numeric type"));
+  }
+  PieceSamples out;
+  const absl::string_view format = array.attribute("format").value();
+  if (format.empty() || format == "ascii") {
+    absl::StatusOr<std::vector<double>> values = arrays.Doubles(array, count);
+    if (!values.ok()) return values.status();
+    out.type = VoxelType::kFloat64;
+    out.data.reserve(count * sizeof(double));
+    for (double v : *values) AppendSample(out.data, v);
+    return out;
+  }
+  absl::StatusOr<std::string> bytes = arrays.StoredBytes(array, *type, count);
+  if (!bytes.ok()) return bytes.status();
+  if (const std::optional<VoxelType> kept = KeptType(*type)) {
+    absl::StatusOr<DecodedVoxels> voxels = DecodeVoxels(*bytes, *kept, xml.encoding.order, 0, 0);
+    if (!voxels.ok()) return arrays.Error(array, voxels.status().message());
+    out.type = voxels->type;
+    out.data = std::move(voxels->data);
+    return out;
+  }
+  const ByteOrder order = xml.encoding.order;
+  if (*type == VtkScalar::kInt8) {
+    out.type = VoxelType::kInt16;
+    out.data.reserve(count * 2);
+    for (uint64_t i = 0; i < count; ++i) {
+      AppendSample(out.data, static_cast<int16_t>(LoadAs<int8_t>(*bytes, i, order)));
+    }
+    return out;
+  }
+  // UInt32, Int64, UInt64: float64, exact for |v| <= 2^53.
+  out.type = VoxelType::kFloat64;
+  out.data.reserve(count * sizeof(double));
+  const size_t width = VtkScalarSize(*type);
+  for (uint64_t i = 0; i < count; ++i) {
+    double v;
+    bool exact = true;
+    if (*type == VtkScalar::kUInt32) {
+      v = LoadAs<uint32_t>(*bytes, i * width, order);
+    } else if (*type == VtkScalar::kInt64) {
+      const int64_t x = LoadAs<int64_t>(*bytes, i * width, order);
+      exact = x >= -(int64_t{1} << 53) && x <= (int64_t{1} << 53);
+      v = static_cast<double>(x);
+    } else {
+      const uint64_t x = LoadAs<uint64_t>(*bytes, i * width, order);
+      exact = x <= (uint64_t{1} << 53);
+      v = static_cast<double>(x);
+    }
+    if (!exact) {
+      return arrays.Error(array, absl::StrCat("value ", i,
+                                              " is beyond 2^53 and has no exact "
+                                              "float64 (tetrefine's widest sample type)"));
+    }
+    AppendSample(out.data, v);
+  }
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view path) {
+  VtkXmlFile xml;
+  if (absl::Status s = OpenVtkXml(text, path, "ImageData", xml); !s.ok()) return s;
+  const pugi::xml_node image = xml.dataset;
+  absl::StatusOr<Extent> whole = ReadExtent(xml, path, image, "WholeExtent");
+  if (!whole.ok()) return whole.status();
+  Index3 dims;
+  for (int a = 0; a < 3; ++a) {
+    dims[a] = (*whole)[2 * a + 1] - (*whole)[2 * a] + 1;
+    if (dims[a] < 2 || dims[a] > kMaxVolumeAxis) {
+      return FileLineError(
+          path, xml.LineOf(image),
+          absl::StrCat("WholeExtent gives ", dims[a], " samples along ", std::string(1, "xyz"[a]),
+                       ": a volume needs 2 to 2^20 per axis (trilinear needs a cell)"));
+    }
+  }
+  absl::StatusOr<std::vector<double>> origin = Numbers(xml, path, image, "Origin", 3);
+  if (!origin.ok()) return origin.status();
+  absl::StatusOr<std::vector<double>> spacing = Numbers(xml, path, image, "Spacing", 3);
+  if (!spacing.ok()) return spacing.status();
+  std::vector<double> direction = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  if (image.attribute("Direction")) {
+    absl::StatusOr<std::vector<double>> d = Numbers(xml, path, image, "Direction", 9);
+    if (!d.ok()) return d.status();
+    direction = *std::move(d);
+  }
+  // Column a of the affine is Direction's column a times Spacing[a]; the extent's first sample
+  // lies at Origin + Direction (Spacing * first index).
+  std::array<Vec3, 3> axes;
+  Vec3 first = {(*origin)[0], (*origin)[1], (*origin)[2]};
+  for (int a = 0; a < 3; ++a) {
+    for (int row = 0; row < 3; ++row) {
+      axes[a][row] = direction[3 * row + a] * (*spacing)[a];
+      first[row] += axes[a][row] * static_cast<double>((*whole)[2 * a]);
+    }
+  }
+  const Affine affine = AffineFromAxes(axes, first);
+
+  VtuArrayReader arrays(path, xml.encoding, xml.appended,
+                        [&xml](pugi::xml_node node) { return xml.LineOf(node); });
+  const uint64_t total = static_cast<uint64_t>(dims[0]) * dims[1] * dims[2];
+  std::optional<VoxelType> type;
+  std::vector<std::byte> data;
+  std::vector<bool> covered;
+  uint64_t covered_count = 0;
+  bool any_piece = false;
+  for (pugi::xml_node piece : image.children("Piece")) {
+    any_piece = true;
+    absl::StatusOr<Extent> extent = ReadExtent(xml, path, piece, "Extent");
+    if (!extent.ok()) return extent.status();
+    Index3 n, offset;
+    for (int a = 0; a < 3; ++a) {
+      n[a] = (*extent)[2 * a + 1] - (*extent)[2 * a] + 1;
+      offset[a] = (*extent)[2 * a] - (*whole)[2 * a];
+      if (n[a] < 1 || offset[a] < 0 || offset[a] + n[a] > dims[a]) {
+        return FileLineError(path, xml.LineOf(piece),
+                             "Piece Extent is empty or outside WholeExtent");
+      }
+    }
+    absl::StatusOr<pugi::xml_node> array = SampleArray(xml, path, piece);
+    if (!array.ok()) return array.status();
+    const uint64_t count = static_cast<uint64_t>(n[0]) * n[1] * n[2];
+    absl::StatusOr<PieceSamples> samples = ReadSamples(xml, arrays, *array, count);
+    if (!samples.ok()) return samples.status();
+    if (!type && count == total) {  // the first piece holds the whole image: no copy
+      type = samples->type;
+      data = std::move(samples->data);
+      covered_count = total;
+      continue;
+    }
+    if (!type) {
+      type = samples->type;
+      data.assign(total * VoxelSize(*type), std::byte{0});
+      covered.assign(total, false);
+    } else if (*type != samples->type) {
+      return arrays.Error(*array, "has another type than the first piece's samples");
+    }
+    if (covered.empty()) continue;  // an earlier piece held the whole image
+    const size_t width = VoxelSize(*type);
+    for (int64_t z = 0; z < n[2]; ++z) {
+      for (int64_t y = 0; y < n[1]; ++y) {
+        const uint64_t row = static_cast<uint64_t>(y + n[1] * z) * n[0];
+        const uint64_t at =
+            static_cast<uint64_t>(offset[0]) +
+            dims[0] * static_cast<uint64_t>(offset[1] + y + dims[1] * (offset[2] + z));
+        std::memcpy(data.data() + at * width, samples->data.data() + row * width, n[0] * width);
+        for (int64_t x = 0; x < n[0]; ++x) {
+          if (!covered[at + x]) {
+            covered[at + x] = true;
+            ++covered_count;
+          }
+        }
+      }
+    }
+  }
+  if (!any_piece) return FileError(path, "no <Piece>");
+  if (covered_count != total) {
+    return FileError(path, absl::StrCat("the pieces cover ", covered_count, " of the ", total,
+                                        " samples of WholeExtent"));
+  }
+  return PlaceOnGrid(path, affine, dims, *type, std::move(data));
+}
+
+absl::StatusOr<VolumeFile> ReadVti(const std::string& path) {
+  absl::StatusOr<FileView> file = FileView::Open(path);
+  if (!file.ok()) return file.status();
+  return ParseVti(file->bytes(), path);
+}
+
+}  // namespace tetrefine::io
