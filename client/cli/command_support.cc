@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "client/cli/exit_codes.h"
 #include "client/cli/file_kind.h"
@@ -26,10 +27,11 @@ std::optional<ParsedArgs> ParseCommandLine(const CommandSpec& spec,
 }
 
 absl::StatusOr<io::VolumeFile> LoadVolume(const std::string& path, const std::string& flag) {
-  if (IsMeshPath(path)) {
+  // A .vtk is a mesh or an image (STRUCTURED_POINTS): the reader says which it found.
+  if (IsMeshPath(path) && !absl::EndsWithIgnoreCase(path, ".vtk")) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": is a mesh, but ", flag,
                                                    " takes a volume (.nii, .nii.gz, .nrrd, .nhdr, "
-                                                   ".mha, .mhd, .vti)"));
+                                                   ".mha, .mhd, .vti, .vtk)"));
   }
   return io::ReadVolume(path);
 }

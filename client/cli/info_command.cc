@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -17,6 +18,7 @@
 #include "client/cli/file_kind.h"
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_report.h"
+#include "client/io/vtk_legacy_format.h"
 
 namespace tetrefine::cli {
 namespace {
@@ -152,7 +154,8 @@ const CommandSpec& InfoSpec() {
       .summary = "Describe a volume or mesh file as tetrefine reads it",
       .usage = "tetrefine info FILE",
       .description =
-          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti): dims, voxel type, spacing, origin\n"
+          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti, .vtk STRUCTURED_POINTS): dims, "
+          "voxel type, spacing, origin\n"
           "and world box in RAS mm, value range, the file's own index-to-world affine, reading\n"
           "warnings. A mesh (.vtu .vtk .msh .mesh .meshb): vertices, tets, bounding box, volume,\n"
           "boundary area, mean-ratio quality, inverted tets, which arrays it carries.",
@@ -166,12 +169,17 @@ int RunInfo(const std::vector<std::string>& args) {
   std::optional<ParsedArgs> parsed = ParseCommandLine(InfoSpec(), args, &exit_code);
   if (!parsed.has_value()) return exit_code;
   const std::string& path = parsed->positional();
-  if (IsVolumePath(path)) return VolumeInfo(path);
+  if (IsVolumePath(path) ||
+      (absl::EndsWithIgnoreCase(path, ".vtk") && io::IsVtkLegacyImage(path))) {
+    return VolumeInfo(path);
+  }
   if (IsMeshPath(path)) return MeshInfo(path);
-  return Fail(absl::StrCat(path,
-                           ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
-                           ".nhdr, .mha, .mhd, .vti) or a mesh (.vtu, .vtk, .msh, .mesh, .meshb)"),
-              kExitUsage);
+  return Fail(
+      absl::StrCat(
+          path,
+          ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
+          ".nhdr, .mha, .mhd, .vti, .vtk image) or a mesh (.vtu, .vtk, .msh, .mesh, .meshb)"),
+      kExitUsage);
 }
 
 }  // namespace tetrefine::cli

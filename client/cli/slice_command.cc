@@ -104,7 +104,7 @@ const CommandSpec& SliceSpec() {
           "Prints the discrepancy on the plane per mesh (max, mean over covered pixels).",
       .flags =
           {
-              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti", true},
+              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk", true},
               {"mesh", "FILE", "tet mesh: .vtu .vtk .msh .mesh .meshb (first row, e.g. before)",
                true},
               {"mesh-after", "FILE", "a second mesh for a second row (e.g. after refinement)"},

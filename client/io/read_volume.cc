@@ -6,6 +6,7 @@
 #include "client/io/nifti_reader.h"
 #include "client/io/nrrd_reader.h"
 #include "client/io/vti_reader.h"
+#include "client/io/vtk_legacy_format.h"
 
 namespace tetrefine::io {
 
@@ -17,14 +18,16 @@ absl::StatusOr<VolumeFile> ReadVolume(const std::string& path) {
   if (has(".nrrd") || has(".nhdr")) return ReadNrrd(path);
   if (has(".mha") || has(".mhd")) return ReadMetaImage(path);
   if (has(".vti")) return ReadVti(path);
+  if (has(".vtk")) return ReadVtkLegacyImage(path);  // a mesh .vtk says so
   if (has(".img") || has(".img.gz")) {
     return FileError(path, "an .img file holds only samples: read its .hdr");
   }
   // DICOM (.dcm or extension-less series) is out of scope: a series needs slice sorting and
   // per-vendor geometry rules. Convert it first, e.g. with dcm2niix, and read the NIfTI.
-  return FileError(path,
-                   "unknown extension for a volume: expected .nii, .nii.gz, .hdr, .nrrd, .nhdr, "
-                   ".mha, .mhd or .vti (DICOM is not read: convert it to NIfTI with dcm2niix)");
+  return FileError(
+      path,
+      "unknown extension for a volume: expected .nii, .nii.gz, .hdr, .nrrd, .nhdr, "
+      ".mha, .mhd, .vti or .vtk (DICOM is not read: convert it to NIfTI with dcm2niix)");
 }
 
 }  // namespace tetrefine::io

@@ -12,6 +12,7 @@ namespace tetrefine::io {
 //   .nrrd .nhdr                NRRD        (ReadNrrd)
 //   .mha .mhd                  MetaImage   (ReadMetaImage)
 //   .vti                       VTK XML image (ReadVti)
+//   .vtk                       legacy VTK STRUCTURED_POINTS (ReadVtkLegacyImage)
 // Any other extension is an "unknown extension" error naming the file. The result is in world
 // RAS mm (see VolumeFile).
 absl::StatusOr<VolumeFile> ReadVolume(const std::string& path);

@@ -12,14 +12,18 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/strip.h"
 #include "client/io/byte_order.h"
+#include "client/io/file_bytes.h"
+#include "client/io/grid_placement.h"
 #include "client/io/label_names.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
 #include "client/io/vtk_cells.h"
 #include "client/io/vtk_scalar.h"
+#include "client/io/world_frame.h"
 #include "core/huge_pages.h"
 
 namespace tetrefine::io {
@@ -68,11 +72,20 @@ std::string Escape(absl::string_view text) {
 
 class LegacyParser {
  public:
-  LegacyParser(absl::string_view text, absl::string_view path) : in_(text, path), path_(path) {}
+  // What the caller reads the file as: an UNSTRUCTURED_GRID mesh or a STRUCTURED_POINTS image.
+  enum class Want { kMesh, kImage };
+  LegacyParser(absl::string_view text, absl::string_view path, Want want)
+      : in_(text, path), path_(path), want_(want) {}
 
-  absl::StatusOr<MeshFile> Parse();
+  absl::StatusOr<MeshFile> ParseMesh();
+  absl::StatusOr<VolumeFile> ParseImage();
 
  private:
+  // The header lines and every section, into the members below.
+  absl::Status Parse();
+  // DIMENSIONS, SPACING (ASPECT_RATIO), ORIGIN and DIRECTION of a STRUCTURED_POINTS dataset.
+  absl::Status ReadImageGeometry(const std::string& keyword);
+
   // Reads `count` values stored as `type` (a legacy type token) into `out`, ASCII or binary.
   // In a binary file the values start on the line after the header, so the rest of the header
   // line is consumed first.
@@ -110,6 +123,16 @@ class LegacyParser {
   VtkCellData cell_data_;
   MeshFrame frame_ = MeshFrame::kUntagged;
   std::vector<std::string> dropped_;  // MeshFile::dropped_arrays
+
+  Want want_;
+  // STRUCTURED_POINTS: the grid, and the first one-component point array as its samples.
+  bool have_dimensions_ = false;
+  Index3 dimensions_{0, 0, 0};
+  std::array<double, 3> spacing_{1.0, 1.0, 1.0};
+  std::array<double, 3> origin_{0.0, 0.0, 0.0};
+  std::array<double, 9> direction_{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::optional<VtkScalar> sample_type_;
+  std::vector<double> samples_;
 };
 
 absl::StatusOr<absl::string_view> LegacyParser::BinaryBlock(int64_t count, size_t width,
@@ -280,6 +303,7 @@ absl::Status LegacyParser::ReadCells() {
 }
 
 std::vector<double>* LegacyParser::DoubleDestination(bool point_section, absl::string_view name) {
+  if (want_ == Want::kImage) return point_section && !sample_type_ ? &samples_ : nullptr;
   if (point_section) return name == "value" ? &values_ : nullptr;
   if (name == "iteration") return &cell_data_.iteration;
   if (name == "quality") return &cell_data_.quality;
@@ -287,7 +311,7 @@ std::vector<double>* LegacyParser::DoubleDestination(bool point_section, absl::s
 }
 
 bool LegacyParser::IsLabel(bool point_section, absl::string_view name) const {
-  if (point_section) return false;
+  if (point_section || want_ == Want::kImage) return false;
   const int rank = LabelNameRank(name);
   return rank >= 0 && (cell_data_.label_rank < 0 || rank < cell_data_.label_rank);
 }
@@ -297,6 +321,12 @@ absl::Status LegacyParser::ReadArray(absl::string_view raw_name, int64_t compone
   const std::string name = Unescape(raw_name);
   if (components == 1) {
     if (std::vector<double>* out = DoubleDestination(point_section, name)) {
+      if (want_ == Want::kImage) {  // the image's samples, whatever their name
+        sample_type_ = VtkScalarFromLegacy(type);
+        if (!sample_type_) {
+          return in_.Error(absl::StrCat("unsupported data type ", QuoteToken(type), " for ", name));
+        }
+      }
       return ReadDoubles(n, type, name, *out);
     }
     if (IsLabel(point_section, name)) {
@@ -412,6 +442,17 @@ absl::Status LegacyParser::ReadAttribute(const std::string& keyword, int64_t n,
     // Floats in ASCII files, unsigned chars in binary ones.
     absl::StatusOr<int64_t> dim = in_.IntIn("the attribute width", 1, 16);
     if (!dim.ok()) return dim.status();
+    if (*dim == 1 && point_section && want_ == Want::kImage && !sample_type_) {
+      // vtkStructuredPointsWriter stores unsigned char scalars this way: the image's samples.
+      // ASCII holds them as v / 255 with 6 digits; VTK's reader takes 255 f + 0.5 back to the
+      // byte, and so does this one.
+      dropped_.pop_back();
+      sample_type_ = VtkScalar::kUInt8;
+      if (binary_) return ReadDoubles(n, "unsigned_char", "color scalars", samples_);
+      if (absl::Status s = ReadDoubles(n, "float", "color scalars", samples_); !s.ok()) return s;
+      for (double& v : samples_) v = std::floor(255.0 * std::clamp(v, 0.0, 1.0) + 0.5);
+      return absl::OkStatus();
+    }
     return SkipValues(n * *dim, binary_ ? "unsigned_char" : "float", keyword);
   }
   if (keyword == "lookup_table") {
@@ -424,7 +465,30 @@ absl::Status LegacyParser::ReadAttribute(const std::string& keyword, int64_t n,
   return in_.Error(absl::StrCat("unknown keyword ", QuoteToken(keyword)));
 }
 
-absl::StatusOr<MeshFile> LegacyParser::Parse() {
+absl::Status LegacyParser::ReadImageGeometry(const std::string& keyword) {
+  if (keyword == "dimensions") {
+    for (int a = 0; a < 3; ++a) {
+      absl::StatusOr<int64_t> n = in_.IntIn("a DIMENSIONS size", 1, kMaxVolumeAxis);
+      if (!n.ok()) return n.status();
+      dimensions_[a] = *n;
+    }
+    have_dimensions_ = true;
+    return absl::OkStatus();
+  }
+  const auto read = [this, &keyword](double* out, int n) -> absl::Status {
+    for (int i = 0; i < n; ++i) {
+      absl::StatusOr<double> value = in_.FiniteDouble(absl::AsciiStrToUpper(keyword));
+      if (!value.ok()) return value.status();
+      out[i] = *value;
+    }
+    return absl::OkStatus();
+  };
+  if (keyword == "spacing" || keyword == "aspect_ratio") return read(spacing_.data(), 3);
+  if (keyword == "origin") return read(origin_.data(), 3);
+  return read(direction_.data(), 9);  // "direction": row-major, as vtkImageData's
+}
+
+absl::Status LegacyParser::Parse() {
   absl::string_view header = in_.RestOfLine();
   if (!absl::ConsumePrefix(&header, "# vtk DataFile Version ")) {
     return in_.Error("not a legacy VTK file: first line is not \"# vtk DataFile Version x.y\"");
@@ -450,10 +514,25 @@ absl::StatusOr<MeshFile> LegacyParser::Parse() {
     if (keyword == "dataset") {
       absl::StatusOr<absl::string_view> kind = in_.Token("the dataset type");
       if (!kind.ok()) return kind.status();
-      if (!absl::EqualsIgnoreCase(*kind, "UNSTRUCTURED_GRID")) {
+      const bool image = absl::EqualsIgnoreCase(*kind, "STRUCTURED_POINTS");
+      if (want_ == Want::kMesh && image) {
+        return in_.Error(
+            "DATASET STRUCTURED_POINTS is a volume (an image), not a tetrahedral mesh: read it "
+            "as a volume (--volume)");
+      }
+      if (want_ == Want::kImage && !image) {
+        return in_.Error(absl::StrCat(
+            "DATASET ", QuoteToken(*kind), ": only STRUCTURED_POINTS holds a volume",
+            absl::EqualsIgnoreCase(*kind, "UNSTRUCTURED_GRID") ? " (this is a mesh: --mesh)" : ""));
+      }
+      if (!image && !absl::EqualsIgnoreCase(*kind, "UNSTRUCTURED_GRID")) {
         return in_.Error(absl::StrCat("DATASET ", QuoteToken(*kind),
                                       ": only UNSTRUCTURED_GRID holds a tetrahedral mesh"));
       }
+    } else if (want_ == Want::kImage && section_size < 0 &&
+               (keyword == "dimensions" || keyword == "spacing" || keyword == "aspect_ratio" ||
+                keyword == "origin" || keyword == "direction")) {
+      if (absl::Status s = ReadImageGeometry(keyword); !s.ok()) return s;
     } else if (keyword == "points") {
       absl::StatusOr<int64_t> n = in_.IntIn("the POINTS count", 0, (int64_t{1} << 32) - 1);
       if (!n.ok()) return n.status();
@@ -481,7 +560,15 @@ absl::StatusOr<MeshFile> LegacyParser::Parse() {
       if (!n.ok()) return n.status();
       section_size = *n;
       point_section = keyword == "point_data";
-      const size_t expected = point_section ? points_.size() / 3 : cells_.types.size();
+      size_t expected = point_section ? points_.size() / 3 : cells_.types.size();
+      if (want_ == Want::kImage) {
+        if (!have_dimensions_) return in_.Error(absl::StrCat(*token, " before DIMENSIONS"));
+        expected = 1;
+        for (int a = 0; a < 3; ++a) {
+          expected *= static_cast<size_t>(point_section ? dimensions_[a]
+                                                        : std::max<int64_t>(dimensions_[a] - 1, 1));
+        }
+      }
       if (static_cast<size_t>(*n) != expected) {
         return in_.Error(absl::StrCat(*token, " ", *n, " does not match the ", expected,
                                       point_section ? " points" : " cells"));
@@ -494,6 +581,11 @@ absl::StatusOr<MeshFile> LegacyParser::Parse() {
       return in_.Error(absl::StrCat("unexpected keyword ", QuoteToken(*token)));
     }
   }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<MeshFile> LegacyParser::ParseMesh() {
+  if (absl::Status s = Parse(); !s.ok()) return s;
   if (!have_points_ || !have_cells_ || !have_types_) {
     return in_.Error("truncated: POINTS, CELLS and CELL_TYPES are all required");
   }
@@ -515,6 +607,90 @@ absl::StatusOr<MeshFile> LegacyParser::Parse() {
   FrameToRas(file);
   if (absl::Status s = ValidateMeshFile(file, path_); !s.ok()) return s;
   return file;
+}
+
+// Packs `values` as `T` when every value is one (binary files: always, they were read from T),
+// into `out`; false otherwise (an ASCII "short" array holding 3.5 or 1e6).
+template <typename T>
+bool PackExactly(const std::vector<double>& values, std::vector<std::byte>& out) {
+  out.resize(values.size() * sizeof(T));
+  for (size_t i = 0; i < values.size(); ++i) {
+    const double v = values[i];
+    if constexpr (!std::is_floating_point_v<T>) {
+      if (!(v >= static_cast<double>(std::numeric_limits<T>::min()) &&
+            v <= static_cast<double>(std::numeric_limits<T>::max())) ||
+          v != std::floor(v)) {
+        return false;
+      }
+    }
+    const T x = static_cast<T>(v);
+    if (static_cast<double>(x) != v && !std::isnan(v)) return false;
+    std::memcpy(out.data() + i * sizeof(T), &x, sizeof(T));
+  }
+  return true;
+}
+
+absl::StatusOr<VolumeFile> LegacyParser::ParseImage() {
+  if (absl::Status s = Parse(); !s.ok()) return s;
+  if (!have_dimensions_) return in_.Error("truncated: DATASET STRUCTURED_POINTS needs DIMENSIONS");
+  for (int a = 0; a < 3; ++a) {
+    if (dimensions_[a] < 2) {
+      return in_.Error(absl::StrCat("DIMENSIONS gives ", dimensions_[a], " samples along ",
+                                    std::string(1, "xyz"[a]),
+                                    ": a volume needs at least 2 per axis (trilinear needs a "
+                                    "cell)"));
+    }
+  }
+  if (!sample_type_) {
+    return in_.Error(
+        dropped_.empty()
+            ? std::string("no POINT_DATA SCALARS: the image has no samples")
+            : absl::StrCat("no one-component POINT_DATA array to sample (the file has ",
+                           absl::StrJoin(dropped_, ", "), ")"));
+  }
+  // The file's own type where a volume can keep it and every value is one; float64 otherwise.
+  VoxelType type = VoxelType::kFloat64;
+  std::vector<std::byte> data;
+  bool packed = false;
+  switch (*sample_type_) {
+    case VtkScalar::kUInt8:
+      packed = PackExactly<uint8_t>(samples_, data);
+      type = VoxelType::kUint8;
+      break;
+    case VtkScalar::kInt8:
+    case VtkScalar::kInt16:
+      packed = PackExactly<int16_t>(samples_, data);
+      type = VoxelType::kInt16;
+      break;
+    case VtkScalar::kUInt16:
+      packed = PackExactly<uint16_t>(samples_, data);
+      type = VoxelType::kUint16;
+      break;
+    case VtkScalar::kInt32:
+      packed = PackExactly<int32_t>(samples_, data);
+      type = VoxelType::kInt32;
+      break;
+    case VtkScalar::kFloat32:
+      packed = PackExactly<float>(samples_, data);
+      type = VoxelType::kFloat32;
+      break;
+    default:
+      break;
+  }
+  if (!packed) {
+    type = VoxelType::kFloat64;
+    PackExactly<double>(samples_, data);
+  }
+  samples_.clear();
+  samples_.shrink_to_fit();
+  // Sample (i, j, k) at ORIGIN + DIRECTION (SPACING * (i, j, k)), as vtkImageData places it.
+  std::array<Vec3, 3> axes;
+  for (int a = 0; a < 3; ++a) {
+    for (int row = 0; row < 3; ++row) axes[a][row] = direction_[3 * row + a] * spacing_[a];
+  }
+  Affine affine = AffineFromAxes(axes, {origin_[0], origin_[1], origin_[2]});
+  if (frame_ == MeshFrame::kLps) affine = LpsToRas(affine);
+  return PlaceOnGrid(path_, affine, dimensions_, type, std::move(data));
 }
 
 // Appends `values` in the file's format: ASCII text (one value per line) or big-endian bytes.
@@ -547,7 +723,28 @@ void AppendValues(std::string& out, const T* values, size_t n, bool binary) {
 }  // namespace
 
 absl::StatusOr<MeshFile> ParseVtkLegacy(absl::string_view text, absl::string_view path) {
-  return LegacyParser(text, path).Parse();
+  return LegacyParser(text, path, LegacyParser::Want::kMesh).ParseMesh();
+}
+
+absl::StatusOr<VolumeFile> ParseVtkLegacyImage(absl::string_view text, absl::string_view path) {
+  return LegacyParser(text, path, LegacyParser::Want::kImage).ParseImage();
+}
+
+absl::StatusOr<VolumeFile> ReadVtkLegacyImage(const std::string& path) {
+  absl::StatusOr<FileView> file = FileView::Open(path);
+  if (!file.ok()) return file.status();
+  return ParseVtkLegacyImage(file->bytes(), path);
+}
+
+bool IsVtkLegacyImage(const std::string& path) {
+  absl::StatusOr<FileView> file = FileView::Open(path);
+  if (!file.ok()) return false;
+  // The DATASET line follows the three header lines; 1 KiB holds it in any file VTK writes.
+  TextScanner in(file->bytes().substr(0, 1024), path);
+  for (int line = 0; line < 3 && !in.AtEndOfInput(); ++line) in.RestOfLine();
+  if (!in.ConsumeIf("DATASET")) return false;
+  absl::StatusOr<absl::string_view> kind = in.Token("the dataset type");
+  return kind.ok() && absl::EqualsIgnoreCase(*kind, "STRUCTURED_POINTS");
 }
 
 std::string FormatVtkLegacy(const MeshFile& file, const VtkLegacyWriteOptions& options) {

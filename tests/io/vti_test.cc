@@ -2,7 +2,6 @@
 // (compared with VTK's own trilinear probe), and errors that name the file and the array.
 #include <cmath>
 #include <filesystem>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -13,7 +12,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tests/io/io_test_util.h"
-#include "tests/support/child_process.h"
+#include "tests/io/vtk_probe.h"
 
 namespace tetrefine::io::vti_test {
 namespace {
@@ -294,37 +293,16 @@ for n, (type_name, mode, comp, header, order, oblique) in enumerate(variants):
 )PY";
 
 TEST(IoVtiTest, EveryStorageVtkWritesSamplesAsVtkProbes) {
-  if (!std::filesystem::exists(kPython) ||
-      testing::RunProcess({kPython, "-c", "import vtk, numpy"}).exit_code != 0) {
+  if (!iotest::HaveVtkPython()) {
     GTEST_SKIP() << "python3-vtk9 is not installed (scripts/install-deps.sh installs it)";
   }
   ScratchDir dir;
-  WriteBytes(dir.File("write.py"), kVtkScript);
-  const testing::ProcessResult run =
-      testing::RunProcess({kPython, dir.File("write.py"), dir.path()});
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  std::istringstream lines(run.out);
-  std::string name, last;
-  Vec3 p;
-  double expected;
-  int files = 0, points = 0;
-  absl::StatusOr<VolumeFile> file = absl::UnknownError("none");
-  while (lines >> name >> p[0] >> p[1] >> p[2] >> expected) {
-    if (name != last) {
-      file = ReadVolume(name);
-      ASSERT_TRUE(file.ok()) << file.status();
-      EXPECT_EQ(file->volume.grid().dims, (Index3{7, 5, 6})) << name;
-      EXPECT_EQ(file->volume.axis_aligned(), name.find("oblique") == std::string::npos) << name;
-      last = name;
-      ++files;
-    }
-    // VTK interpolates in float64 from its own weights: the same value up to rounding.
-    EXPECT_NEAR(file->volume.Sample(p), expected, 1e-9 * (1.0 + std::abs(expected)))
-        << name << " at " << p[0] << " " << p[1] << " " << p[2];
-    ++points;
-  }
+  const int files = iotest::ExpectVolumesSampleAsVtkProbes(
+      kVtkScript, dir, [](const std::string& name, const VolumeFile& file) {
+        EXPECT_EQ(file.volume.grid().dims, (Index3{7, 5, 6})) << name;
+        EXPECT_EQ(file.volume.axis_aligned(), name.find("oblique") == std::string::npos) << name;
+      });
   EXPECT_EQ(files, 31);
-  EXPECT_GT(points, 31 * 30);
 }
 
 }  // namespace
