@@ -38,8 +38,9 @@ absl::StatusOr<io::VolumeFile> LoadVolume(const std::string& path, const std::st
 
 absl::StatusOr<io::MeshFile> LoadMesh(const std::string& path, const std::string& flag) {
   if (IsVolumePath(path)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        path, ": is a volume, but ", flag, " takes a mesh (.vtu, .vtk, .msh, .mesh, .meshb)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": is a volume, but ", flag,
+                     " takes a mesh (.vtu, .pvtu, .vtk, .msh, .mesh, .meshb)"));
   }
   return io::ReadMesh(path);
 }

@@ -57,7 +57,7 @@ std::string FileStem(const std::string& path) {
 
 absl::Status CheckOutputPath(const std::string& path, const std::string& flag, bool mesh) {
   if (path.empty()) return absl::InvalidArgumentError(absl::StrCat(flag, ": empty path"));
-  if (mesh && !IsMeshPath(path)) {
+  if (mesh && !io::IsWritableMeshPath(path)) {
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": unknown extension for a mesh (", flag,
                      "): expected .vtu, .vtk, .msh, .mesh or .meshb"));

@@ -154,11 +154,11 @@ const CommandSpec& InfoSpec() {
       .summary = "Describe a volume or mesh file as tetrefine reads it",
       .usage = "tetrefine info FILE",
       .description =
-          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti, .vtk STRUCTURED_POINTS): dims, "
-          "voxel type, spacing, origin\n"
-          "and world box in RAS mm, value range, the file's own index-to-world affine, reading\n"
-          "warnings. A mesh (.vtu .vtk .msh .mesh .meshb): vertices, tets, bounding box, volume,\n"
-          "boundary area, mean-ratio quality, inverted tets, which arrays it carries.",
+          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti, or a .vtk holding\n"
+          "STRUCTURED_POINTS): dims, voxel type, spacing, origin and world box in RAS mm, value\n"
+          "range, the file's own index-to-world affine, reading warnings. A mesh (.vtu .pvtu\n"
+          ".vtk .msh .mesh .meshb): vertices, tets, bounding box, volume, boundary area,\n"
+          "mean-ratio quality, inverted tets, which arrays it carries.",
       .flags = {},
       .positional = "FILE"};
   return spec;
@@ -174,12 +174,11 @@ int RunInfo(const std::vector<std::string>& args) {
     return VolumeInfo(path);
   }
   if (IsMeshPath(path)) return MeshInfo(path);
-  return Fail(
-      absl::StrCat(
-          path,
-          ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
-          ".nhdr, .mha, .mhd, .vti, .vtk image) or a mesh (.vtu, .vtk, .msh, .mesh, .meshb)"),
-      kExitUsage);
+  return Fail(absl::StrCat(path,
+                           ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
+                           ".nhdr, .mha, .mhd, .vti, .vtk image) or a mesh (.vtu, .pvtu, .vtk, "
+                           ".msh, .mesh, .meshb)"),
+              kExitUsage);
 }
 
 }  // namespace tetrefine::cli

@@ -688,8 +688,9 @@ const CommandSpec& RefineSpec() {
             "failure, 2 bad flags or input.",
         .flags =
             {
-                {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk", true},
-                {"mesh", "FILE", "input tet mesh: .vtu .vtk .msh .mesh .meshb", true},
+                {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk",
+                 true},
+                {"mesh", "FILE", "input tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb", true},
                 {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},
                 {"max-iterations", "N",
                  absl::StrCat("stop after N iterations (default ", RefineOptions{}.max_iterations,

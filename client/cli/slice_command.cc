@@ -105,8 +105,8 @@ const CommandSpec& SliceSpec() {
       .flags =
           {
               {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk", true},
-              {"mesh", "FILE", "tet mesh: .vtu .vtk .msh .mesh .meshb (first row, e.g. before)",
-               true},
+              {"mesh", "FILE",
+               "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb (first row, e.g. before)", true},
               {"mesh-after", "FILE", "a second mesh for a second row (e.g. after refinement)"},
               {"axis", "x|y|z", "normal of the plane (default z)"},
               {"position", "P",

@@ -8,16 +8,18 @@
 #include "client/io/io_error.h"
 #include "client/io/medit_format.h"
 #include "client/io/mesh_frame.h"
+#include "client/io/pvtu_reader.h"
 #include "client/io/vtk_legacy_format.h"
 #include "client/io/vtu_format.h"
 
 namespace tetrefine::io {
 namespace {
 
-enum class MeshFormat { kVtu, kVtkLegacy, kGmsh, kMedit, kMeshb, kUnknown };
+enum class MeshFormat { kVtu, kPvtu, kVtkLegacy, kGmsh, kMedit, kMeshb, kUnknown };
 
 MeshFormat FormatOf(const std::string& path) {
   if (absl::EndsWithIgnoreCase(path, ".vtu")) return MeshFormat::kVtu;
+  if (absl::EndsWithIgnoreCase(path, ".pvtu")) return MeshFormat::kPvtu;
   if (absl::EndsWithIgnoreCase(path, ".vtk")) return MeshFormat::kVtkLegacy;
   if (absl::EndsWithIgnoreCase(path, ".msh")) return MeshFormat::kGmsh;
   if (absl::EndsWithIgnoreCase(path, ".mesh")) return MeshFormat::kMedit;
@@ -27,16 +29,28 @@ MeshFormat FormatOf(const std::string& path) {
 
 absl::Status UnknownExtension(const std::string& path) {
   return FileError(path,
-                   "unknown extension for a mesh: expected .vtu, .vtk, .msh, .mesh or .meshb");
+                   "unknown extension for a mesh: expected .vtu, .pvtu, .vtk, .msh, .mesh or "
+                   ".meshb");
 }
 
 }  // namespace
 
 bool IsMeshPath(const std::string& path) { return FormatOf(path) != MeshFormat::kUnknown; }
 
+bool IsWritableMeshPath(const std::string& path) {
+  const MeshFormat format = FormatOf(path);
+  return format != MeshFormat::kUnknown && format != MeshFormat::kPvtu;
+}
+
 absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
+  if (format == MeshFormat::kPvtu) {
+    absl::StatusOr<MeshFile> merged = ReadPvtu(path);
+    if (!merged.ok()) return merged.status();
+    if (absl::Status s = ValidateMeshFile(*merged, path); !s.ok()) return s;
+    return merged;
+  }
   absl::StatusOr<FileView> view = FileView::Open(path);
   if (!view.ok()) return view.status();
   const absl::string_view text = view->bytes();
@@ -57,6 +71,7 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
     case MeshFormat::kMeshb:
       file = ParseMeshb(text, path);
       break;
+    case MeshFormat::kPvtu:
     case MeshFormat::kUnknown:
       break;
   }
@@ -79,7 +94,7 @@ bool CarriesFrameTag(MeshFormat format) {
 bool LpsTagLost(const std::string& path, const MeshFile& file) {
   const MeshFormat format = FormatOf(path);
   return file.frame == MeshFrame::kLps && format != MeshFormat::kUnknown &&
-         !CarriesFrameTag(format);
+         format != MeshFormat::kPvtu && !CarriesFrameTag(format);
 }
 
 std::vector<int32_t> NegativeGmshLabels(const std::string& path, const MeshFile& file) {
@@ -97,6 +112,11 @@ absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& 
                                        const MeshWriteOptions& options) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
+  if (format == MeshFormat::kPvtu) {
+    return FileError(path,
+                     "a .pvtu is written as pieces, one per shard (refine --shards K --pvtu, or "
+                     "io::WritePvtu), not as one mesh");
+  }
   if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
   if (file.frame == MeshFrame::kLps && !CarriesFrameTag(format)) {
     // No place for the tag: the input's own numbers are written, so that every input vertex
@@ -127,6 +147,7 @@ absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& 
     case MeshFormat::kMeshb:
       bytes = FormatMeshb(file, {.version = options.meshb_version});
       break;
+    case MeshFormat::kPvtu:
     case MeshFormat::kUnknown:
       break;
   }

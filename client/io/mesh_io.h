@@ -12,6 +12,7 @@ namespace tetrefine::io {
 
 // Reads a tetrahedral mesh, choosing the format from the extension (case-insensitive):
 //   .vtu    VTK XML unstructured grid (every encoding and compressor VTK writes)
+//   .pvtu   its parallel index: the .vtu pieces it names, merged (ReadPvtu); read only
 //   .vtk    legacy VTK, ASCII or BINARY, versions 2 to 5.1
 //   .msh    Gmsh 2.2 or 4.1, ASCII or binary
 //   .mesh   Medit ASCII          .meshb  Medit binary (libMeshb versions 1 to 4)
@@ -57,7 +58,9 @@ bool LpsTagLost(const std::string& path, const MeshFile& file);
 // MSH 2.2 merges -L into L and turns those tets inside out). Empty otherwise. For a warning.
 std::vector<int32_t> NegativeGmshLabels(const std::string& path, const MeshFile& file);
 
-// True when `path` has one of the mesh extensions above.
+// True when `path` has one of the mesh extensions above (ReadMesh reads it).
 bool IsMeshPath(const std::string& path);
+// True when WriteMesh writes `path`: every extension above but .pvtu (written as pieces).
+bool IsWritableMeshPath(const std::string& path);
 
 }  // namespace tetrefine::io

@@ -254,52 +254,61 @@ absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view pa
   VtuArrayReader arrays(path, xml.encoding, xml.appended,
                         [&xml](pugi::xml_node node) { return xml.LineOf(node); });
   const uint64_t total = static_cast<uint64_t>(dims[0]) * dims[1] * dims[2];
-  std::optional<VoxelType> type;
-  std::vector<std::byte> data;
-  std::vector<bool> covered;
-  uint64_t covered_count = 0;
-  bool any_piece = false;
+  // Every piece is decoded first (each checked against the bytes it really has), so that the
+  // whole image is allocated only once the pieces hold at least as many samples: a WholeExtent
+  // of 2^60 samples over one small piece is an error, not a 2^60-byte allocation.
+  struct Decoded {
+    Index3 n, offset;
+    PieceSamples samples;
+  };
+  std::vector<Decoded> pieces;
+  uint64_t held = 0;
   for (pugi::xml_node piece : image.children("Piece")) {
-    any_piece = true;
     absl::StatusOr<Extent> extent = ReadExtent(xml, path, piece, "Extent");
     if (!extent.ok()) return extent.status();
-    Index3 n, offset;
+    Decoded d;
     for (int a = 0; a < 3; ++a) {
-      n[a] = (*extent)[2 * a + 1] - (*extent)[2 * a] + 1;
-      offset[a] = (*extent)[2 * a] - (*whole)[2 * a];
-      if (n[a] < 1 || offset[a] < 0 || offset[a] + n[a] > dims[a]) {
+      d.n[a] = (*extent)[2 * a + 1] - (*extent)[2 * a] + 1;
+      d.offset[a] = (*extent)[2 * a] - (*whole)[2 * a];
+      if (d.n[a] < 1 || d.offset[a] < 0 || d.offset[a] + d.n[a] > dims[a]) {
         return FileLineError(path, xml.LineOf(piece),
                              "Piece Extent is empty or outside WholeExtent");
       }
     }
     absl::StatusOr<pugi::xml_node> array = SampleArray(xml, path, piece);
     if (!array.ok()) return array.status();
-    const uint64_t count = static_cast<uint64_t>(n[0]) * n[1] * n[2];
+    const uint64_t count = static_cast<uint64_t>(d.n[0]) * d.n[1] * d.n[2];
     absl::StatusOr<PieceSamples> samples = ReadSamples(xml, arrays, *array, count);
     if (!samples.ok()) return samples.status();
-    if (!type && count == total) {  // the first piece holds the whole image: no copy
-      type = samples->type;
-      data = std::move(samples->data);
-      covered_count = total;
-      continue;
-    }
-    if (!type) {
-      type = samples->type;
-      data.assign(total * VoxelSize(*type), std::byte{0});
-      covered.assign(total, false);
-    } else if (*type != samples->type) {
+    if (!pieces.empty() && samples->type != pieces[0].samples.type) {
       return arrays.Error(*array, "has another type than the first piece's samples");
     }
-    if (covered.empty()) continue;  // an earlier piece held the whole image
-    const size_t width = VoxelSize(*type);
-    for (int64_t z = 0; z < n[2]; ++z) {
-      for (int64_t y = 0; y < n[1]; ++y) {
-        const uint64_t row = static_cast<uint64_t>(y + n[1] * z) * n[0];
+    d.samples = *std::move(samples);
+    held += count;
+    pieces.push_back(std::move(d));
+  }
+  if (pieces.empty()) return FileError(path, "no <Piece>");
+  const VoxelType type = pieces[0].samples.type;
+  if (pieces.size() == 1 && held == total) {  // one piece holds the whole image: no copy
+    return PlaceOnGrid(path, affine, dims, type, std::move(pieces[0].samples.data));
+  }
+  if (held < total) {
+    return FileError(path, absl::StrCat("the pieces hold ", held, " samples, fewer than the ",
+                                        total, " of WholeExtent"));
+  }
+  const size_t width = VoxelSize(type);
+  std::vector<std::byte> data(total * width);
+  std::vector<bool> covered(total, false);
+  uint64_t covered_count = 0;
+  for (Decoded& d : pieces) {
+    for (int64_t z = 0; z < d.n[2]; ++z) {
+      for (int64_t y = 0; y < d.n[1]; ++y) {
+        const uint64_t row = static_cast<uint64_t>(y + d.n[1] * z) * d.n[0];
         const uint64_t at =
-            static_cast<uint64_t>(offset[0]) +
-            dims[0] * static_cast<uint64_t>(offset[1] + y + dims[1] * (offset[2] + z));
-        std::memcpy(data.data() + at * width, samples->data.data() + row * width, n[0] * width);
-        for (int64_t x = 0; x < n[0]; ++x) {
+            static_cast<uint64_t>(d.offset[0]) +
+            dims[0] * static_cast<uint64_t>(d.offset[1] + y + dims[1] * (d.offset[2] + z));
+        std::memcpy(data.data() + at * width, d.samples.data.data() + row * width, d.n[0] * width);
+        for (int64_t x = 0; x < d.n[0]; ++x) {
           if (!covered[at + x]) {
             covered[at + x] = true;
             ++covered_count;
@@ -307,13 +316,13 @@ absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view pa
         }
       }
     }
+    d.samples.data = {};
   }
-  if (!any_piece) return FileError(path, "no <Piece>");
   if (covered_count != total) {
     return FileError(path, absl::StrCat("the pieces cover ", covered_count, " of the ", total,
                                         " samples of WholeExtent"));
   }
-  return PlaceOnGrid(path, affine, dims, *type, std::move(data));
+  return PlaceOnGrid(path, affine, dims, type, std::move(data));
 }
 
 absl::StatusOr<VolumeFile> ReadVti(const std::string& path) {

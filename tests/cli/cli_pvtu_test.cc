@@ -171,6 +171,18 @@ TEST_F(CliPvtu, PiecesHoldExactlyTheMergedResult) {
       const double volume = TotalVolume(*merged);
       EXPECT_NEAR(pieces_volume, volume, 1e-9 * volume);
 
+      // Read back as one mesh, the pieces' shared vertices merged: the unsharded result's
+      // vertices and tets, which `verify` finds conformal.
+      absl::StatusOr<io::MeshFile> read_back = io::ReadMesh(pvtu);
+      ASSERT_TRUE(read_back.ok()) << read_back.status();
+      EXPECT_EQ(read_back->mesh.points.size(), merged->mesh.points.size());
+      std::vector<TetRecord> again = Records(*read_back);
+      std::sort(again.begin(), again.end());
+      EXPECT_EQ(again, whole);
+      const ProcessResult verified = RunTetrefine({"verify", "--volume", volume_, "--mesh", pvtu});
+      EXPECT_EQ(verified.exit_code, 0) << verified.out << verified.err;
+      EXPECT_TRUE(absl::StrContains(verified.out, "valid")) << verified.out;
+
       if (!vtk) continue;
       const ProcessResult read = RunProcess({kPython, "-c", kVtkScript, pvtu});
       ASSERT_EQ(read.exit_code, 0) << read.out << read.err;

@@ -128,7 +128,16 @@ TEST(IoVtiTest, PiecesThatTileTheExtentAreAssembled) {
 
   WriteBytes(path, AsciiVti(kGeometry, {{1, 1}}));
   EXPECT_THAT(std::string(ReadVolume(path).status().message()),
+              HasSubstr("the pieces hold 12 samples, fewer than the 24 of WholeExtent"));
+  // Two pieces holding the same layer: enough samples, not all of them.
+  WriteBytes(path, AsciiVti(kGeometry, {{1, 1}, {1, 1}}));
+  EXPECT_THAT(std::string(ReadVolume(path).status().message()),
               HasSubstr("the pieces cover 12 of the 24 samples"));
+  // A WholeExtent of 2^60 samples and a small piece: an error, before any allocation.
+  WriteBytes(path, Replaced(AsciiVti(kGeometry, {{0, 0}, {1, 1}}), "WholeExtent=\"1 3 -1 2 0 1\"",
+                            "WholeExtent=\"1 1048576 -1 1048574 0 1048575\""));
+  EXPECT_THAT(std::string(ReadVolume(path).status().message()),
+              HasSubstr("the pieces hold 24 samples, fewer than the 1152921504606846976"));
 }
 
 TEST(IoVtiTest, ErrorsNameTheFileAndWhatIsWrong) {

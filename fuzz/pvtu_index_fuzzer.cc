@@ -1,0 +1,20 @@
+// libFuzzer target: the .pvtu index parser on arbitrary text (the pieces it names are not read:
+// they are the user's own files, read by the .vtu reader, which has its own target).
+
+#include "absl/strings/string_view.h"
+#include "client/io/pvtu_reader.h"
+#include "fuzz/fuzz_support.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const absl::string_view text(reinterpret_cast<const char*>(data), size);
+  const auto sources = tetrefine::io::ParsePvtuIndex(text, "dir/input.pvtu");
+  if (!sources.ok()) {
+    TETREFINE_FUZZ_CHECK(!sources.status().message().empty(), "an error without a message");
+    return 0;
+  }
+  TETREFINE_FUZZ_CHECK(!sources->empty(), "an index accepted with no pieces");
+  for (const std::string& source : *sources) {
+    TETREFINE_FUZZ_CHECK(source.size() > 4, "an empty piece path");
+  }
+  return 0;
+}
