@@ -20,10 +20,10 @@ packages=(
   # tetrefine plot reads refine's --stats-json files with it (header-only).
   nlohmann-json3-dev
 )
-# Independent readers and writers the tests compare against (VTK 9 and Gmsh, beside meshio
+# Independent readers and writers the tests compare against (VTK 9, Gmsh and TetGen, beside meshio
 # above); the container's build stage sets TETREFINE_WITH_TEST_TOOLS=0 as it builds no tests.
 if [ "${TETREFINE_WITH_TEST_TOOLS:-1}" = "1" ]; then
-  packages+=(python3-vtk9 gmsh)
+  packages+=(python3-vtk9 gmsh tetgen)
 fi
 # Fuzzing and sanitizer runs (clang's libFuzzer) only when asked: TETREFINE_WITH_FUZZ=1.
 if [ "${TETREFINE_WITH_FUZZ:-0}" = "1" ]; then

@@ -60,7 +60,7 @@ absl::Status CheckOutputPath(const std::string& path, const std::string& flag, b
   if (mesh && !io::IsWritableMeshPath(path)) {
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": unknown extension for a mesh (", flag,
-                     "): expected .vtu, .vtk, .msh, .mesh or .meshb"));
+                     "): expected .vtu, .vtk, .msh, .mesh, .meshb or .ele"));
   }
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {

@@ -157,7 +157,7 @@ const CommandSpec& InfoSpec() {
           "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti, or a .vtk holding\n"
           "STRUCTURED_POINTS): dims, voxel type, spacing, origin and world box in RAS mm, value\n"
           "range, the file's own index-to-world affine, reading warnings. A mesh (.vtu .pvtu\n"
-          ".vtk .msh .mesh .meshb): vertices, tets, bounding box, volume, boundary area,\n"
+          ".vtk .msh .mesh .meshb .ele): vertices, tets, bounding box, volume, boundary area,\n"
           "mean-ratio quality, inverted tets, which arrays it carries.",
       .flags = {},
       .positional = "FILE"};
@@ -177,7 +177,7 @@ int RunInfo(const std::vector<std::string>& args) {
   return Fail(absl::StrCat(path,
                            ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
                            ".nhdr, .mha, .mhd, .vti, .vtk image) or a mesh (.vtu, .pvtu, .vtk, "
-                           ".msh, .mesh, .meshb)"),
+                           ".msh, .mesh, .meshb, .ele)"),
               kExitUsage);
 }
 

@@ -35,7 +35,7 @@ const CommandSpec& MeshSpec() {
             {
                 {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk",
                  true},
-                {"output", "FILE", "mesh to write: .vtu .vtk .msh .mesh .meshb", true},
+                {"output", "FILE", "mesh to write: .vtu .vtk .msh .mesh .meshb .ele", true},
                 {"block", "B", "voxels per cell edge (default 1)"},
                 {"mask-threshold", "T", "mesh only cells whose 8 corner samples are all >= T"},
             },

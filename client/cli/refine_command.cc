@@ -690,7 +690,7 @@ const CommandSpec& RefineSpec() {
             {
                 {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk",
                  true},
-                {"mesh", "FILE", "input tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb", true},
+                {"mesh", "FILE", "input tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele", true},
                 {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},
                 {"max-iterations", "N",
                  absl::StrCat("stop after N iterations (default ", RefineOptions{}.max_iterations,
@@ -723,7 +723,7 @@ const CommandSpec& RefineSpec() {
                      "service's cap on sampled points (tetrefine_server "
                      "--max_lattice_points, 2e8 by default: 1.2 M tets at --lattice-n 8)")},
                 {"output", "FILE",
-                 "refined mesh, .vtu .vtk .msh .mesh .meshb, or .pvtu with --shards (default "
+                 "refined mesh, .vtu .vtk .msh .mesh .meshb .ele, or .pvtu with --shards (default "
                  "<mesh name>.refined.vtu "
                  "in the working directory)"},
                 {"pvtu", "",

@@ -106,7 +106,7 @@ const CommandSpec& SliceSpec() {
           {
               {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk", true},
               {"mesh", "FILE",
-               "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb (first row, e.g. before)", true},
+               "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele (first row, e.g. before)", true},
               {"mesh-after", "FILE", "a second mesh for a second row (e.g. after refinement)"},
               {"axis", "x|y|z", "normal of the plane (default z)"},
               {"position", "P",

@@ -77,7 +77,7 @@ const CommandSpec& VerifySpec() {
       .flags =
           {
               {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk", true},
-              {"mesh", "FILE", "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb", true},
+              {"mesh", "FILE", "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele", true},
               {"epsilon", "E", "tolerance for the share of lattice points above it (default 0.1)"},
               {"norm-coeff", "X", "normCoeff of the error (default: the volume's max - min)"},
               {"clamp", "", "accept vertices outside the volume, sampled at the nearest point"},

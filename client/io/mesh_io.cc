@@ -1,21 +1,25 @@
 #include "client/io/mesh_io.h"
 
 #include <algorithm>
+#include <string>
+#include <vector>
 
 #include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
 #include "client/io/file_bytes.h"
 #include "client/io/gmsh_format.h"
 #include "client/io/io_error.h"
 #include "client/io/medit_format.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/pvtu_reader.h"
+#include "client/io/tetgen_format.h"
 #include "client/io/vtk_legacy_format.h"
 #include "client/io/vtu_format.h"
 
 namespace tetrefine::io {
 namespace {
 
-enum class MeshFormat { kVtu, kPvtu, kVtkLegacy, kGmsh, kMedit, kMeshb, kUnknown };
+enum class MeshFormat { kVtu, kPvtu, kVtkLegacy, kGmsh, kMedit, kMeshb, kTetgen, kUnknown };
 
 MeshFormat FormatOf(const std::string& path) {
   if (absl::EndsWithIgnoreCase(path, ".vtu")) return MeshFormat::kVtu;
@@ -24,13 +28,14 @@ MeshFormat FormatOf(const std::string& path) {
   if (absl::EndsWithIgnoreCase(path, ".msh")) return MeshFormat::kGmsh;
   if (absl::EndsWithIgnoreCase(path, ".mesh")) return MeshFormat::kMedit;
   if (absl::EndsWithIgnoreCase(path, ".meshb")) return MeshFormat::kMeshb;
+  if (absl::EndsWithIgnoreCase(path, ".ele")) return MeshFormat::kTetgen;
   return MeshFormat::kUnknown;
 }
 
 absl::Status UnknownExtension(const std::string& path) {
   return FileError(path,
-                   "unknown extension for a mesh: expected .vtu, .pvtu, .vtk, .msh, .mesh or "
-                   ".meshb");
+                   "unknown extension for a mesh: expected .vtu, .pvtu, .vtk, .msh, .mesh, "
+                   ".meshb or .ele (TetGen, with its .node)");
 }
 
 }  // namespace
@@ -55,6 +60,17 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   if (!view.ok()) return view.status();
   const absl::string_view text = view->bytes();
   absl::StatusOr<MeshFile> file;
+  absl::StatusOr<FileView> nodes = absl::UnknownError("");
+  if (format == MeshFormat::kTetgen) {
+    const std::string node_path = TetgenNodePath(path);
+    nodes = FileView::Open(node_path);
+    if (!nodes.ok()) {
+      return absl::Status(nodes.status().code(),
+                          absl::StrCat(path, ": TetGen keeps the points in ", node_path, ": ",
+                                       nodes.status().message()));
+    }
+    file = ParseTetgen(nodes->bytes(), text, node_path, path);
+  }
   switch (format) {
     case MeshFormat::kVtu:
       file = ParseVtu(text, path);
@@ -71,6 +87,7 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
     case MeshFormat::kMeshb:
       file = ParseMeshb(text, path);
       break;
+    case MeshFormat::kTetgen:  // read above, with its .node
     case MeshFormat::kPvtu:
     case MeshFormat::kUnknown:
       break;
@@ -108,8 +125,16 @@ std::vector<int32_t> NegativeGmshLabels(const std::string& path, const MeshFile&
   return negative;
 }
 
-absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
-                                       const MeshWriteOptions& options) {
+namespace {
+
+// The files WriteMesh writes for `path`, each with its bytes: one, or a TetGen .node and .ele.
+struct EncodedFile {
+  std::string path;
+  std::string bytes;
+};
+
+absl::StatusOr<std::vector<EncodedFile>> Encode(const std::string& path, const MeshFile& file,
+                                                const MeshWriteOptions& options) {
   const MeshFormat format = FormatOf(path);
   if (format == MeshFormat::kUnknown) return UnknownExtension(path);
   if (format == MeshFormat::kPvtu) {
@@ -128,7 +153,7 @@ absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& 
       for (int a = 0; a < 3; ++a) p[a] *= FrameSign(MeshFrame::kLps, a);
     }
     stored.frame = MeshFrame::kUntagged;
-    return FormatMesh(path, stored, options);
+    return Encode(path, stored, options);
   }
   std::string bytes;
   switch (format) {
@@ -147,18 +172,43 @@ absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& 
     case MeshFormat::kMeshb:
       bytes = FormatMeshb(file, {.version = options.meshb_version});
       break;
+    case MeshFormat::kTetgen: {
+      TetgenFiles files = FormatTetgen(file);
+      std::vector<EncodedFile> out;
+      out.push_back({TetgenNodePath(path), std::move(files.node)});
+      out.push_back({path, std::move(files.ele)});
+      return out;
+    }
     case MeshFormat::kPvtu:
     case MeshFormat::kUnknown:
       break;
   }
-  return bytes;
+  std::vector<EncodedFile> out;
+  out.push_back({path, std::move(bytes)});
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
+                                       const MeshWriteOptions& options) {
+  absl::StatusOr<std::vector<EncodedFile>> files = Encode(path, file, options);
+  if (!files.ok()) return files.status();
+  if (files->size() == 1) return std::move((*files)[0].bytes);
+  std::string all;
+  for (const EncodedFile& f : *files) all += f.bytes;
+  return all;
 }
 
 absl::Status WriteMesh(const std::string& path, const MeshFile& file,
                        const MeshWriteOptions& options) {
-  absl::StatusOr<std::string> bytes = FormatMesh(path, file, options);
-  if (!bytes.ok()) return bytes.status();
-  return WriteFileAtomically(path, *bytes);
+  absl::StatusOr<std::vector<EncodedFile>> files = Encode(path, file, options);
+  if (!files.ok()) return files.status();
+  // A TetGen .node goes first: its .ele is never left naming points that are not there.
+  for (const EncodedFile& f : *files) {
+    if (absl::Status s = WriteFileAtomically(f.path, f.bytes); !s.ok()) return s;
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace tetrefine::io

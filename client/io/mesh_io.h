@@ -16,6 +16,7 @@ namespace tetrefine::io {
 //   .vtk    legacy VTK, ASCII or BINARY, versions 2 to 5.1
 //   .msh    Gmsh 2.2 or 4.1, ASCII or binary
 //   .mesh   Medit ASCII          .meshb  Medit binary (libMeshb versions 1 to 4)
+//   .ele    TetGen, with the .node file of the same name beside it (tetgen_format.h)
 // Linear tetrahedra are kept; points, lines and surface cells are skipped; any other volume cell
 // is an error naming what the file holds. Region labels, their name and the file's frame tag
 // come along (MeshFile); points are RAS. The result passed ValidateMeshFile. Errors name the
@@ -37,14 +38,16 @@ struct MeshWriteOptions {
 // What each format keeps: .vtu/.vtk keep values, iteration, quality, labels (under label_name)
 // and the frame tag; .msh keeps values, iteration, quality and labels (as physical groups,
 // zero and negative ones too, with region_names as $PhysicalNames); .mesh/.meshb keep only the
-// labels (as references). Formats without a frame tag get the coordinates of `file.frame` untagged:
-// an LPS mesh is written with its LPS numbers, so every input vertex keeps its coordinates whatever
-// the format (LpsTagLost says when).
+// labels (as references); .ele (with its .node, written first) keeps only the labels (as the
+// region attribute). Formats without a frame tag get the coordinates of
+// `file.frame` untagged: an LPS mesh is written with its LPS numbers, so every input vertex keeps
+// its coordinates whatever the format (LpsTagLost says when).
 absl::Status WriteMesh(const std::string& path, const MeshFile& file,
                        const MeshWriteOptions& options = {});
 
 // The bytes WriteMesh would write for `path` (the format from its extension), without writing
-// them: for callers that send or time the encoding on its own.
+// them: for callers that send or time the encoding on its own. For an .ele, its .node's bytes
+// followed by its own.
 absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& file,
                                        const MeshWriteOptions& options = {});
 

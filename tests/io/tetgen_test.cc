@@ -1,0 +1,165 @@
+// TetGen .node/.ele: TetGen's own files (a fixture, and tetgen run here when installed), round
+// trips, `tetgen -r` reading what tetrefine writes, and errors naming the file and line.
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "client/io/mesh_io.h"
+#include "client/io/tetgen_format.h"
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/child_process.h"
+
+namespace tetrefine::io::tetgen_test {
+namespace {
+
+using iotest::RandomMesh;
+using iotest::RandomMeshOptions;
+using iotest::ScratchDir;
+using iotest::WriteBytes;
+using ::testing::HasSubstr;
+
+constexpr char kTetgen[] = "/usr/bin/tetgen";
+
+std::string Fixture(const std::string& name) {
+  return std::string(TETREFINE_SOURCE_DIR) + "/tests/data/meshes/" + name;
+}
+
+// Volume of each region of `file`.
+std::map<int32_t, double> RegionVolumes(const MeshFile& file) {
+  std::map<int32_t, double> volume;
+  for (size_t t = 0; t < file.mesh.tets.size(); ++t) {
+    const Tet& k = file.mesh.tets[t];
+    const auto& p = file.mesh.points;
+    volume[file.mesh.labels[t]] += SignedVolume6(p[k[0]], p[k[1]], p[k[2]], p[k[3]]) / 6.0;
+  }
+  return volume;
+}
+
+TEST(IoTetgenTest, TetgensOwnFilesReadWithTheirRegions) {
+  absl::StatusOr<MeshFile> file = ReadMesh(Fixture("tetgen_two_boxes.1.ele"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.points.size(), 48u);
+  EXPECT_EQ(file->mesh.tets.size(), 89u);
+  EXPECT_EQ(file->label_name, "tetgen:ref");
+  // TetGen's corner order is positive in tetrefine's convention, and the boxes are 2 x 1 x 1.
+  const std::map<int32_t, double> volume = RegionVolumes(*file);
+  ASSERT_EQ(volume.size(), 2u);
+  EXPECT_NEAR(volume.at(1), 2.0, 1e-12);
+  EXPECT_NEAR(volume.at(2), 2.0, 1e-12);
+}
+
+TEST(IoTetgenTest, RoundTripsKeepPointsTetsAndLabels) {
+  ScratchDir dir;
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    SCOPED_TRACE(seed);
+    const MeshFile mesh = RandomMesh(seed, {.labels = seed % 2 == 0});
+    const std::string path = dir.File(absl::StrCat("m", seed, ".ele"));
+    ASSERT_TRUE(WriteMesh(path, mesh).ok());
+    EXPECT_TRUE(std::filesystem::exists(TetgenNodePath(path)));
+    absl::StatusOr<MeshFile> back = ReadMesh(path);
+    ASSERT_TRUE(back.ok()) << back.status();
+    EXPECT_EQ(back->mesh.points, mesh.mesh.points);
+    EXPECT_EQ(back->mesh.tets, mesh.mesh.tets);
+    EXPECT_EQ(back->mesh.labels, mesh.mesh.labels);
+    EXPECT_TRUE(back->mesh.values.empty());  // TetGen's attributes have no names: not written
+  }
+}
+
+TEST(IoTetgenTest, ZeroBasedFilesCommentsAndExtraAttributes) {
+  ScratchDir dir;
+  const std::string ele = dir.File("z.ele");
+  WriteBytes(TetgenNodePath(ele),
+             "# a comment line\n5 3 2 1\n0 0 0 0 7.5 1 0\n1 1 0 0 7.5 1 0\n2 0 1 0 7.5 1 0\n"
+             "3 0 0 1 7.5 1 1  # trailing comment\n4 1 1 1 7.5 1 1\n");
+  WriteBytes(ele, "2 4 2\n0 0 1 2 3 5 0.25\n1 1 2 3 4 -3 0.5\n");
+  absl::StatusOr<MeshFile> file = ReadMesh(ele);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.tets, (std::vector<Tet>{{0, 1, 2, 3}, {1, 2, 3, 4}}));
+  EXPECT_EQ(file->mesh.labels, (std::vector<int32_t>{5, -3}));
+  EXPECT_EQ(file->dropped_arrays.size(), 4u);  // two point attributes, markers, one region
+}
+
+TEST(IoTetgenTest, ErrorsNameTheFileAndLine) {
+  ScratchDir dir;
+  const std::string ele = dir.File("bad.ele");
+  const std::string node_path = TetgenNodePath(ele);
+  const std::string nodes = "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n";
+  const struct {
+    std::string node;
+    std::string ele;
+    std::string file;
+    std::string says;
+  } cases[] = {
+      {nodes, "1 10 0\n1 1 2 3 4 1 2 3 4 1 2\n", ele, ":1: 10 nodes per tet: quadratic"},
+      {nodes, "1 4 0\n1 1 2 3 5\n", ele, ":2: a tet corner"},
+      {nodes, "2 4 0\n1 1 2 3 4\n3 1 2 3 4\n", ele, ":3: tet index 3 out of order: expected 2"},
+      {nodes, "1 4 1\n1 1 2 3 4 1.5\n", ele, "region attribute 1.5 of tet 1 is not a whole"},
+      {nodes, "2 4 0\n1 1 2 3 4\n", ele, "tets"},
+      {nodes, "1 4 0\n1 1 2 3 4\n2 1 2 3 4\n", ele, "more tets than the header's count"},
+      {"4 2 0 0\n", "1 4 0\n1 1 2 3 4\n", node_path, ":1: dimension 2"},
+      {"4 3 0 0\n2 0 0 0\n3 1 0 0\n4 0 1 0\n5 0 0 1\n", "1 4 0\n1 1 2 3 4\n", node_path,
+       "TetGen numbers from 0 or 1"},
+      {"4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 inf\n", "1 4 0\n1 1 2 3 4\n", node_path, ":5:"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.says);
+    WriteBytes(node_path, c.node);
+    WriteBytes(ele, c.ele);
+    absl::StatusOr<MeshFile> file = ReadMesh(ele);
+    ASSERT_FALSE(file.ok());
+    EXPECT_THAT(std::string(file.status().message()), HasSubstr(c.file));
+    EXPECT_THAT(std::string(file.status().message()), HasSubstr(c.says));
+  }
+  std::filesystem::remove(node_path);
+  absl::StatusOr<MeshFile> missing = ReadMesh(ele);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_THAT(std::string(missing.status().message()),
+              HasSubstr(absl::StrCat(ele, ": TetGen keeps the points in ", node_path)));
+
+  const std::string good_ele = "2 4 1\n1 1 2 3 4 1\n2 2 3 4 1 2\n";
+  WriteBytes(node_path, nodes);
+  for (size_t size = 0; size < good_ele.size(); ++size) {
+    WriteBytes(ele, good_ele.substr(0, size));
+    const absl::StatusOr<MeshFile> file = ReadMesh(ele);
+    if (!file.ok()) {
+      EXPECT_THAT(std::string(file.status().message()), HasSubstr(ele));
+    }
+  }
+}
+
+// TetGen itself: meshes a .poly with two regions, and reconstructs (-r) what tetrefine wrote.
+TEST(IoTetgenTest, TetgenMeshesAreReadAndOursAreReadByTetgen) {
+  if (!std::filesystem::exists(kTetgen)) GTEST_SKIP() << "tetgen is not installed";
+  ScratchDir dir;
+  std::filesystem::copy_file(Fixture("tetgen_two_boxes.poly"), dir.File("boxes.poly"));
+  const testing::ProcessResult run =
+      testing::RunProcess({kTetgen, "-pq1.2a0.05AQ", dir.File("boxes.poly")});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  absl::StatusOr<MeshFile> file = ReadMesh(dir.File("boxes.1.ele"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_GT(file->mesh.tets.size(), 200u);
+  const std::map<int32_t, double> volume = RegionVolumes(*file);
+  ASSERT_EQ(volume.size(), 2u);
+  EXPECT_NEAR(volume.at(1), 2.0, 1e-12);
+  EXPECT_NEAR(volume.at(2), 2.0, 1e-12);
+
+  // Ours, read back by TetGen: the same number of points and tets.
+  const std::string ours = dir.File("ours.ele");
+  ASSERT_TRUE(WriteMesh(ours, *file).ok());
+  const testing::ProcessResult back =
+      testing::RunProcess({kTetgen, "-rNEFV", dir.File("ours")}, dir.path());
+  ASSERT_EQ(back.exit_code, 0) << back.out << back.err;
+  EXPECT_TRUE(absl::StrContains(back.out, absl::StrCat("Mesh points: ", file->mesh.points.size())))
+      << back.out;
+  EXPECT_TRUE(
+      absl::StrContains(back.out, absl::StrCat("Mesh tetrahedra: ", file->mesh.tets.size())))
+      << back.out;
+}
+
+}  // namespace
+}  // namespace tetrefine::io::tetgen_test
