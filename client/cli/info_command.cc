@@ -18,6 +18,7 @@
 #include "client/cli/file_kind.h"
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_report.h"
+#include "client/io/mesh_io.h"
 #include "client/io/vtk_legacy_format.h"
 
 namespace tetrefine::cli {
@@ -174,6 +175,8 @@ int RunInfo(const std::vector<std::string>& args) {
     return VolumeInfo(path);
   }
   if (IsMeshPath(path)) return MeshInfo(path);
+  if (io::IsSurfacePath(path))
+    return Fail(std::string(io::UnknownExtension(path).message()), kExitUsage);
   return Fail(absl::StrCat(path,
                            ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
                            ".nhdr, .mha, .mhd, .vti, .vtk image) or a mesh (.vtu, .pvtu, .vtk, "

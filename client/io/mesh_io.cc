@@ -32,15 +32,43 @@ MeshFormat FormatOf(const std::string& path) {
   return MeshFormat::kUnknown;
 }
 
+}  // namespace
+
+bool IsMeshPath(const std::string& path) { return FormatOf(path) != MeshFormat::kUnknown; }
+
+namespace {
+constexpr const char* kSurfaceExtensions[] = {".stl", ".ply",  ".obj",  ".off",
+                                              ".vtp", ".poly", ".smesh"};
+}  // namespace
+
+bool IsSurfacePath(const std::string& path) {
+  for (const char* surface : kSurfaceExtensions) {
+    if (absl::EndsWithIgnoreCase(path, surface)) return true;
+  }
+  return false;
+}
+
 absl::Status UnknownExtension(const std::string& path) {
+  // Surface files are what people most often have before a volume mesh exists: say what to do.
+  if (IsSurfacePath(path)) {
+    const std::string extension = path.substr(path.find_last_of('.'));
+    const std::string name = path.substr(path.find_last_of('/') + 1);
+    // TetGen reads .stl, .ply, .off, .poly and .smesh itself; .obj and .vtp need a conversion.
+    const bool tetgen_reads =
+        !absl::EqualsIgnoreCase(extension, ".obj") && !absl::EqualsIgnoreCase(extension, ".vtp");
+    return FileError(
+        path,
+        absl::StrCat("a ", extension,
+                     " file is a surface, not a tetrahedral mesh: fill it with tets first, ",
+                     tetgen_reads ? absl::StrCat("e.g. `tetgen -pq ", name,
+                                                 "` (writes a .1.ele that tetrefine reads) or Gmsh")
+                                  : "e.g. save it as .stl (meshio, ParaView) and run `tetgen -pq` "
+                                    "on that (it writes a .1.ele that tetrefine reads), or Gmsh"));
+  }
   return FileError(path,
                    "unknown extension for a mesh: expected .vtu, .pvtu, .vtk, .msh, .mesh, "
                    ".meshb or .ele (TetGen, with its .node)");
 }
-
-}  // namespace
-
-bool IsMeshPath(const std::string& path) { return FormatOf(path) != MeshFormat::kUnknown; }
 
 bool IsWritableMeshPath(const std::string& path) {
   const MeshFormat format = FormatOf(path);
@@ -136,7 +164,11 @@ struct EncodedFile {
 absl::StatusOr<std::vector<EncodedFile>> Encode(const std::string& path, const MeshFile& file,
                                                 const MeshWriteOptions& options) {
   const MeshFormat format = FormatOf(path);
-  if (format == MeshFormat::kUnknown) return UnknownExtension(path);
+  if (format == MeshFormat::kUnknown) {
+    return FileError(path,
+                     "unknown extension for a mesh to write: expected .vtu, .vtk, .msh, .mesh, "
+                     ".meshb or .ele (TetGen, with its .node)");
+  }
   if (format == MeshFormat::kPvtu) {
     return FileError(path,
                      "a .pvtu is written as pieces, one per shard (refine --shards K --pvtu, or "

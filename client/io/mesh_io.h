@@ -63,6 +63,12 @@ std::vector<int32_t> NegativeGmshLabels(const std::string& path, const MeshFile&
 
 // True when `path` has one of the mesh extensions above (ReadMesh reads it).
 bool IsMeshPath(const std::string& path);
+// True when `path` names a surface format (.stl .ply .obj .off .vtp .poly .smesh), which ReadMesh
+// refuses saying how to fill it with tets.
+bool IsSurfacePath(const std::string& path);
+// The error ReadMesh gives for an extension it has no reader for: for a surface format, what to
+// do about it; otherwise the list of mesh extensions. Names `path`.
+absl::Status UnknownExtension(const std::string& path);
 // True when WriteMesh writes `path`: every extension above but .pvtu (written as pieces).
 bool IsWritableMeshPath(const std::string& path);
 

@@ -161,5 +161,44 @@ TEST(IoTetgenTest, TetgenMeshesAreReadAndOursAreReadByTetgen) {
       << back.out;
 }
 
+// A surface file is refused with what to do, and for the formats TetGen reads, doing it works.
+TEST(IoTetgenTest, SurfaceFilesSayHowToFillThemWithTets) {
+  ScratchDir dir;
+  for (const char* name : {"a.stl", "b.PLY", "c.off", "d.poly", "e.smesh"}) {
+    const absl::Status status = ReadMesh(dir.File(name)).status();
+    EXPECT_THAT(std::string(status.message()), HasSubstr("is a surface, not a tetrahedral mesh"));
+    EXPECT_THAT(std::string(status.message()), HasSubstr(absl::StrCat("`tetgen -pq ", name, "`")));
+  }
+  for (const char* name : {"f.obj", "g.vtp"}) {
+    EXPECT_THAT(std::string(ReadMesh(dir.File(name)).status().message()),
+                HasSubstr("save it as .stl"));
+  }
+  if (!std::filesystem::exists(kTetgen)) GTEST_SKIP() << "tetgen is not installed";
+  // The unit cube as an ASCII STL, twelve triangles; the hint's command, then the .1.ele.
+  const double c[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const int faces[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                            {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  std::string stl = "solid cube\n";
+  for (const auto& f : faces) {
+    absl::StrAppend(&stl, "facet normal 0 0 0\nouter loop\n");
+    for (int v : f) absl::StrAppend(&stl, "vertex ", c[v][0], " ", c[v][1], " ", c[v][2], "\n");
+    absl::StrAppend(&stl, "endloop\nendfacet\n");
+  }
+  stl += "endsolid cube\n";
+  WriteBytes(dir.File("cube.stl"), stl);
+  const testing::ProcessResult run =
+      testing::RunProcess({kTetgen, "-pqQ", dir.File("cube.stl")}, dir.path());
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  absl::StatusOr<MeshFile> file = ReadMesh(dir.File("cube.1.ele"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  double volume = 0.0;
+  for (const Tet& k : file->mesh.tets) {
+    const auto& p = file->mesh.points;
+    volume += SignedVolume6(p[k[0]], p[k[1]], p[k[2]], p[k[3]]) / 6.0;
+  }
+  EXPECT_NEAR(volume, 1.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace tetrefine::io::tetgen_test
