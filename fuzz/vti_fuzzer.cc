@@ -8,6 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  tetrefine::fuzz::CheckVolumeRead(tetrefine::io::ParseVti(absl::string_view(text.data(), text.size()), "input.vti"));
+  tetrefine::fuzz::CheckVolumeRead(
+      tetrefine::io::ParseVti(absl::string_view(text.data(), text.size()), "input.vti"));
   return 0;
 }

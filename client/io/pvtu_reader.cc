@@ -73,7 +73,7 @@ absl::StatusOr<MeshFile> MergePvtuPieces(std::vector<MeshFile> pieces,
   MeshFile out;
   out.label_name = pieces[0].label_name;
   out.frame = pieces[0].frame;
-  const std::string first_arrays = ArraysOf(pieces[0]);  // pieces[0] is emptied below
+  const std::string first_arrays = ArraysOf(pieces[0]);          // pieces[0] is emptied below
   std::unordered_map<PointKey, uint32_t, PointKeyHash> earlier;  // points of earlier pieces
   for (size_t k = 0; k < pieces.size(); ++k) {
     MeshFile& piece = pieces[k];
