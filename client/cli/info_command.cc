@@ -155,7 +155,7 @@ const CommandSpec& InfoSpec() {
       .summary = "Describe a volume or mesh file as tetrefine reads it",
       .usage = "tetrefine info FILE",
       .description =
-          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti, or a .vtk holding\n"
+          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti, or a .vtk holding\n"
           "STRUCTURED_POINTS): dims, voxel type, spacing, origin and world box in RAS mm, value\n"
           "range, the file's own index-to-world affine, reading warnings. A mesh (.vtu .pvtu\n"
           ".vtk .msh .mesh .meshb .ele): vertices, tets, bounding box, volume, boundary area,\n"
@@ -177,11 +177,12 @@ int RunInfo(const std::vector<std::string>& args) {
   if (IsMeshPath(path)) return MeshInfo(path);
   if (io::IsSurfacePath(path))
     return Fail(std::string(io::UnknownExtension(path).message()), kExitUsage);
-  return Fail(absl::StrCat(path,
-                           ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
-                           ".nhdr, .mha, .mhd, .vti, .vtk image) or a mesh (.vtu, .pvtu, .vtk, "
-                           ".msh, .mesh, .meshb, .ele)"),
-              kExitUsage);
+  return Fail(
+      absl::StrCat(path,
+                   ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
+                   ".nhdr, .mha, .mhd, .vti, .pvti, .vtk image) or a mesh (.vtu, .pvtu, .vtk, "
+                   ".msh, .mesh, .meshb, .ele)"),
+      kExitUsage);
 }
 
 }  // namespace tetrefine::cli

@@ -33,8 +33,8 @@ const CommandSpec& MeshSpec() {
             "the paper's liver set-up, a tetrahedrization of the voxels inside the organ.",
         .flags =
             {
-                {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk",
-                 true},
+                {"volume", "FILE",
+                 "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk", true},
                 {"output", "FILE", "mesh to write: .vtu .vtk .msh .mesh .meshb .ele", true},
                 {"block", "B", "voxels per cell edge (default 1)"},
                 {"mask-threshold", "T", "mesh only cells whose 8 corner samples are all >= T"},

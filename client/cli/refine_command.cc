@@ -688,8 +688,8 @@ const CommandSpec& RefineSpec() {
             "failure, 2 bad flags or input.",
         .flags =
             {
-                {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk",
-                 true},
+                {"volume", "FILE",
+                 "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk", true},
                 {"mesh", "FILE", "input tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele", true},
                 {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},
                 {"max-iterations", "N",

@@ -104,7 +104,8 @@ const CommandSpec& SliceSpec() {
           "Prints the discrepancy on the plane per mesh (max, mean over covered pixels).",
       .flags =
           {
-              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk", true},
+              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk",
+               true},
               {"mesh", "FILE",
                "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele (first row, e.g. before)", true},
               {"mesh-after", "FILE", "a second mesh for a second row (e.g. after refinement)"},

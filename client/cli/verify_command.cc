@@ -76,7 +76,8 @@ const CommandSpec& VerifySpec() {
           "Exit: 0 valid, 1 not valid, 2 bad flags or unreadable input.",
       .flags =
           {
-              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .vtk", true},
+              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk",
+               true},
               {"mesh", "FILE", "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele", true},
               {"epsilon", "E", "tolerance for the share of lattice points above it (default 0.1)"},
               {"norm-coeff", "X", "normCoeff of the error (default: the volume's max - min)"},

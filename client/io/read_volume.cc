@@ -18,6 +18,7 @@ absl::StatusOr<VolumeFile> ReadVolume(const std::string& path) {
   if (has(".nrrd") || has(".nhdr")) return ReadNrrd(path);
   if (has(".mha") || has(".mhd")) return ReadMetaImage(path);
   if (has(".vti")) return ReadVti(path);
+  if (has(".pvti")) return ReadPvti(path);
   if (has(".vtk")) return ReadVtkLegacyImage(path);  // a mesh .vtk says so
   if (has(".img") || has(".img.gz")) {
     return FileError(path, "an .img file holds only samples: read its .hdr");
@@ -27,7 +28,7 @@ absl::StatusOr<VolumeFile> ReadVolume(const std::string& path) {
   return FileError(
       path,
       "unknown extension for a volume: expected .nii, .nii.gz, .hdr, .nrrd, .nhdr, "
-      ".mha, .mhd, .vti or .vtk (DICOM is not read: convert it to NIfTI with dcm2niix)");
+      ".mha, .mhd, .vti, .pvti or .vtk (DICOM is not read: convert it to NIfTI with dcm2niix)");
 }
 
 }  // namespace tetrefine::io

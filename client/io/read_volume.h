@@ -11,7 +11,7 @@ namespace tetrefine::io {
 //   .nii .nii.gz .hdr .hdr.gz  NIfTI-1/2   (ReadNifti)
 //   .nrrd .nhdr                NRRD        (ReadNrrd)
 //   .mha .mhd                  MetaImage   (ReadMetaImage)
-//   .vti                       VTK XML image (ReadVti)
+//   .vti .pvti                 VTK XML image, parallel image (ReadVti, ReadPvti)
 //   .vtk                       legacy VTK STRUCTURED_POINTS (ReadVtkLegacyImage)
 // Any other extension is an "unknown extension" error naming the file. The result is in world
 // RAS mm (see VolumeFile).

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -211,21 +212,27 @@ absl::StatusOr<PieceSamples> ReadSamples(const VtkXmlFile& xml, VtuArrayReader& 
   return out;
 }
 
-}  // namespace
+// The grid an <ImageData> or <PImageData> element declares: its extent and index-to-world map.
+struct ImageGeometry {
+  Extent whole{};
+  Index3 dims{};
+  Affine affine{};
+};
 
-absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view path) {
-  VtkXmlFile xml;
-  if (absl::Status s = OpenVtkXml(text, path, "ImageData", xml); !s.ok()) return s;
-  const pugi::xml_node image = xml.dataset;
+// `direction`, when given, replaces the element's own (a .pvti index without one).
+absl::StatusOr<ImageGeometry> ReadGeometry(const VtkXmlFile& xml, absl::string_view path,
+                                           pugi::xml_node image,
+                                           const std::vector<double>* direction_from = nullptr) {
+  ImageGeometry g;
   absl::StatusOr<Extent> whole = ReadExtent(xml, path, image, "WholeExtent");
   if (!whole.ok()) return whole.status();
-  Index3 dims;
+  g.whole = *whole;
   for (int a = 0; a < 3; ++a) {
-    dims[a] = (*whole)[2 * a + 1] - (*whole)[2 * a] + 1;
-    if (dims[a] < 2 || dims[a] > kMaxVolumeAxis) {
+    g.dims[a] = g.whole[2 * a + 1] - g.whole[2 * a] + 1;
+    if (g.dims[a] < 2 || g.dims[a] > kMaxVolumeAxis) {
       return FileLineError(
           path, xml.LineOf(image),
-          absl::StrCat("WholeExtent gives ", dims[a], " samples along ", std::string(1, "xyz"[a]),
+          absl::StrCat("WholeExtent gives ", g.dims[a], " samples along ", std::string(1, "xyz"[a]),
                        ": a volume needs 2 to 2^20 per axis (trilinear needs a cell)"));
     }
   }
@@ -234,7 +241,9 @@ absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view pa
   absl::StatusOr<std::vector<double>> spacing = Numbers(xml, path, image, "Spacing", 3);
   if (!spacing.ok()) return spacing.status();
   std::vector<double> direction = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  if (image.attribute("Direction")) {
+  if (direction_from != nullptr) {
+    direction = *direction_from;
+  } else if (image.attribute("Direction")) {
     absl::StatusOr<std::vector<double>> d = Numbers(xml, path, image, "Direction", 9);
     if (!d.ok()) return d.status();
     direction = *std::move(d);
@@ -246,51 +255,65 @@ absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view pa
   for (int a = 0; a < 3; ++a) {
     for (int row = 0; row < 3; ++row) {
       axes[a][row] = direction[3 * row + a] * (*spacing)[a];
-      first[row] += axes[a][row] * static_cast<double>((*whole)[2 * a]);
+      first[row] += axes[a][row] * static_cast<double>(g.whole[2 * a]);
     }
   }
-  const Affine affine = AffineFromAxes(axes, first);
+  g.affine = AffineFromAxes(axes, first);
+  return g;
+}
 
+// One <Piece> of an image, decoded: its extent (absolute indices) and its samples.
+struct DecodedPiece {
+  Extent extent{};
+  PieceSamples samples;
+};
+
+// Every <Piece> of the <ImageData> of `xml`, each checked to lie inside `whole` (the extent of
+// the image being assembled, which for a .pvti piece file is its parent's) and decoded against
+// the bytes it really holds. Appends to `out`; `held` counts their samples.
+absl::Status DecodePieces(const VtkXmlFile& xml, absl::string_view path, const Extent& whole,
+                          std::vector<DecodedPiece>& out, uint64_t& held) {
   VtuArrayReader arrays(path, xml.encoding, xml.appended,
                         [&xml](pugi::xml_node node) { return xml.LineOf(node); });
-  const uint64_t total = static_cast<uint64_t>(dims[0]) * dims[1] * dims[2];
-  // Every piece is decoded first (each checked against the bytes it really has), so that the
-  // whole image is allocated only once the pieces hold at least as many samples: a WholeExtent
-  // of 2^60 samples over one small piece is an error, not a 2^60-byte allocation.
-  struct Decoded {
-    Index3 n, offset;
-    PieceSamples samples;
-  };
-  std::vector<Decoded> pieces;
-  uint64_t held = 0;
-  for (pugi::xml_node piece : image.children("Piece")) {
+  for (pugi::xml_node piece : xml.dataset.children("Piece")) {
     absl::StatusOr<Extent> extent = ReadExtent(xml, path, piece, "Extent");
     if (!extent.ok()) return extent.status();
-    Decoded d;
+    DecodedPiece d;
+    d.extent = *extent;
+    uint64_t count = 1;
     for (int a = 0; a < 3; ++a) {
-      d.n[a] = (*extent)[2 * a + 1] - (*extent)[2 * a] + 1;
-      d.offset[a] = (*extent)[2 * a] - (*whole)[2 * a];
-      if (d.n[a] < 1 || d.offset[a] < 0 || d.offset[a] + d.n[a] > dims[a]) {
+      const int64_t lo = d.extent[2 * a], hi = d.extent[2 * a + 1];
+      if (hi < lo || lo < whole[2 * a] || hi > whole[2 * a + 1]) {
         return FileLineError(path, xml.LineOf(piece),
                              "Piece Extent is empty or outside WholeExtent");
       }
+      count *= static_cast<uint64_t>(hi - lo + 1);
     }
     absl::StatusOr<pugi::xml_node> array = SampleArray(xml, path, piece);
     if (!array.ok()) return array.status();
-    const uint64_t count = static_cast<uint64_t>(d.n[0]) * d.n[1] * d.n[2];
     absl::StatusOr<PieceSamples> samples = ReadSamples(xml, arrays, *array, count);
     if (!samples.ok()) return samples.status();
-    if (!pieces.empty() && samples->type != pieces[0].samples.type) {
+    if (!out.empty() && samples->type != out[0].samples.type) {
       return arrays.Error(*array, "has another type than the first piece's samples");
     }
     d.samples = *std::move(samples);
     held += count;
-    pieces.push_back(std::move(d));
+    out.push_back(std::move(d));
   }
+  return absl::OkStatus();
+}
+
+// The whole image from its pieces. The image is allocated only when the pieces hold at least as
+// many samples as the grid: a WholeExtent of 2^60 samples over one small piece is an error, not
+// a 2^60-byte allocation.
+absl::StatusOr<VolumeFile> Assemble(absl::string_view path, const ImageGeometry& g,
+                                    std::vector<DecodedPiece> pieces, uint64_t held) {
   if (pieces.empty()) return FileError(path, "no <Piece>");
+  const Index3& dims = g.dims;
+  const uint64_t total = static_cast<uint64_t>(dims[0]) * dims[1] * dims[2];
   const VoxelType type = pieces[0].samples.type;
   if (pieces.size() == 1 && held == total) {  // one piece holds the whole image: no copy
-    return PlaceOnGrid(path, affine, dims, type, std::move(pieces[0].samples.data));
+    return PlaceOnGrid(path, g.affine, dims, type, std::move(pieces[0].samples.data));
   }
   if (held < total) {
     return FileError(path, absl::StrCat("the pieces hold ", held, " samples, fewer than the ",
@@ -300,15 +323,20 @@ absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view pa
   std::vector<std::byte> data(total * width);
   std::vector<bool> covered(total, false);
   uint64_t covered_count = 0;
-  for (Decoded& d : pieces) {
-    for (int64_t z = 0; z < d.n[2]; ++z) {
-      for (int64_t y = 0; y < d.n[1]; ++y) {
-        const uint64_t row = static_cast<uint64_t>(y + d.n[1] * z) * d.n[0];
+  for (DecodedPiece& d : pieces) {
+    Index3 n, offset;
+    for (int a = 0; a < 3; ++a) {
+      n[a] = d.extent[2 * a + 1] - d.extent[2 * a] + 1;
+      offset[a] = d.extent[2 * a] - g.whole[2 * a];
+    }
+    for (int64_t z = 0; z < n[2]; ++z) {
+      for (int64_t y = 0; y < n[1]; ++y) {
+        const uint64_t row = static_cast<uint64_t>(y + n[1] * z) * n[0];
         const uint64_t at =
-            static_cast<uint64_t>(d.offset[0]) +
-            dims[0] * static_cast<uint64_t>(d.offset[1] + y + dims[1] * (d.offset[2] + z));
-        std::memcpy(data.data() + at * width, d.samples.data.data() + row * width, d.n[0] * width);
-        for (int64_t x = 0; x < d.n[0]; ++x) {
+            static_cast<uint64_t>(offset[0]) +
+            dims[0] * static_cast<uint64_t>(offset[1] + y + dims[1] * (offset[2] + z));
+        std::memcpy(data.data() + at * width, d.samples.data.data() + row * width, n[0] * width);
+        for (int64_t x = 0; x < n[0]; ++x) {
           if (!covered[at + x]) {
             covered[at + x] = true;
             ++covered_count;
@@ -322,7 +350,72 @@ absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view pa
     return FileError(path, absl::StrCat("the pieces cover ", covered_count, " of the ", total,
                                         " samples of WholeExtent"));
   }
-  return PlaceOnGrid(path, affine, dims, type, std::move(data));
+  return PlaceOnGrid(path, g.affine, dims, type, std::move(data));
+}
+
+}  // namespace
+
+absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view path) {
+  VtkXmlFile xml;
+  if (absl::Status s = OpenVtkXml(text, path, "ImageData", xml); !s.ok()) return s;
+  absl::StatusOr<ImageGeometry> g = ReadGeometry(xml, path, xml.dataset);
+  if (!g.ok()) return g.status();
+  std::vector<DecodedPiece> pieces;
+  uint64_t held = 0;
+  if (absl::Status s = DecodePieces(xml, path, g->whole, pieces, held); !s.ok()) return s;
+  return Assemble(path, *g, std::move(pieces), held);
+}
+
+absl::StatusOr<VolumeFile> ReadPvti(const std::string& path) {
+  absl::StatusOr<FileView> index = FileView::Open(path);
+  if (!index.ok()) return index.status();
+  VtkXmlFile xml;
+  if (absl::Status s = OpenVtkXml(index->bytes(), path, "PImageData", xml); !s.ok()) return s;
+  absl::StatusOr<ImageGeometry> g = ReadGeometry(xml, path, xml.dataset);
+  if (!g.ok()) return g.status();
+  // VTK 9.1's vtkXMLPImageDataWriter writes Direction into every piece but not into the index
+  // (and its reader then drops it: an oblique image comes back axis-aligned). The pieces are
+  // right, so an index without Direction takes theirs, which must agree.
+  const bool index_has_direction = xml.dataset.attribute("Direction");
+  std::optional<std::vector<double>> piece_direction;
+  const std::filesystem::path directory = std::filesystem::path(path).parent_path();
+  std::vector<DecodedPiece> pieces;
+  uint64_t held = 0;
+  for (pugi::xml_node piece : xml.dataset.children("Piece")) {
+    const absl::string_view source = piece.attribute("Source").value();
+    if (source.empty()) return FileLineError(path, xml.LineOf(piece), "Piece has no Source file");
+    const std::filesystem::path p{std::string(source)};
+    const std::string piece_path = p.is_absolute() ? p.string() : (directory / p).string();
+    absl::StatusOr<FileView> file = FileView::Open(piece_path);
+    if (!file.ok()) {
+      return absl::Status(file.status().code(), absl::StrCat(path, ": piece ", pieces.size(), ": ",
+                                                             file.status().message()));
+    }
+    // The piece's own geometry is its extent within the parent's grid; the parent's Origin,
+    // Spacing and Direction place it.
+    VtkXmlFile piece_xml;
+    if (absl::Status s = OpenVtkXml(file->bytes(), piece_path, "ImageData", piece_xml); !s.ok()) {
+      return s;
+    }
+    if (!index_has_direction && piece_xml.dataset.attribute("Direction")) {
+      absl::StatusOr<std::vector<double>> d =
+          Numbers(piece_xml, piece_path, piece_xml.dataset, "Direction", 9);
+      if (!d.ok()) return d.status();
+      if (piece_direction && *piece_direction != *d) {
+        return FileLineError(piece_path, piece_xml.LineOf(piece_xml.dataset),
+                             "Direction differs from the earlier pieces' (the index has none)");
+      }
+      piece_direction = *std::move(d);
+    }
+    if (absl::Status s = DecodePieces(piece_xml, piece_path, g->whole, pieces, held); !s.ok()) {
+      return s;
+    }
+  }
+  if (piece_direction) {
+    g = ReadGeometry(xml, path, xml.dataset, &*piece_direction);
+    if (!g.ok()) return g.status();
+  }
+  return Assemble(path, *g, std::move(pieces), held);
 }
 
 absl::StatusOr<VolumeFile> ReadVti(const std::string& path) {

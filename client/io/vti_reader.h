@@ -30,4 +30,12 @@ namespace tetrefine::io {
 absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view path);
 absl::StatusOr<VolumeFile> ReadVti(const std::string& path);
 
+// Reads a parallel VTK image (.pvti: <PImageData>, what vtkXMLPImageDataWriter and ParaView's
+// parallel "Save Data" write): the grid from the index (WholeExtent, Origin, Spacing, Direction)
+// and the samples from the .vti files its <Piece Source="..."> elements name (relative to the
+// index's directory), each piece placed by its own Extent, as for a several-piece .vti. An index
+// without Direction takes its pieces' (VTK 9.1 writes it only there), which must agree. Errors
+// name the index or the piece file.
+absl::StatusOr<VolumeFile> ReadPvti(const std::string& path);
+
 }  // namespace tetrefine::io
