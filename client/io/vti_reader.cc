@@ -353,7 +353,42 @@ absl::StatusOr<VolumeFile> Assemble(absl::string_view path, const ImageGeometry&
   return PlaceOnGrid(path, g.affine, dims, type, std::move(data));
 }
 
+// A .pvti index: its grid and the piece files it names, resolved against its directory.
+struct PvtiIndex {
+  ImageGeometry geometry;
+  bool has_direction = false;
+  std::vector<std::string> sources;
+};
+
+absl::StatusOr<PvtiIndex> ParseIndex(absl::string_view text, absl::string_view path) {
+  VtkXmlFile xml;
+  if (absl::Status s = OpenVtkXml(text, path, "PImageData", xml); !s.ok()) return s;
+  PvtiIndex index;
+  absl::StatusOr<ImageGeometry> g = ReadGeometry(xml, path, xml.dataset);
+  if (!g.ok()) return g.status();
+  index.geometry = *g;
+  index.has_direction = xml.dataset.attribute("Direction");
+  const std::filesystem::path directory = std::filesystem::path(std::string(path)).parent_path();
+  for (pugi::xml_node piece : xml.dataset.children("Piece")) {
+    const absl::string_view source = piece.attribute("Source").value();
+    if (source.empty()) return FileLineError(path, xml.LineOf(piece), "Piece has no Source file");
+    const std::filesystem::path p{std::string(source)};
+    index.sources.push_back(p.is_absolute() ? p.string() : (directory / p).string());
+  }
+  if (index.sources.empty()) {
+    return FileError(path, "no <Piece Source=...>: the index names no pieces");
+  }
+  return index;
+}
+
 }  // namespace
+
+absl::StatusOr<std::vector<std::string>> ParsePvtiIndex(absl::string_view text,
+                                                        absl::string_view path) {
+  absl::StatusOr<PvtiIndex> index = ParseIndex(text, path);
+  if (!index.ok()) return index.status();
+  return std::move(index->sources);
+}
 
 absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view path) {
   VtkXmlFile xml;
@@ -367,37 +402,32 @@ absl::StatusOr<VolumeFile> ParseVti(absl::string_view text, absl::string_view pa
 }
 
 absl::StatusOr<VolumeFile> ReadPvti(const std::string& path) {
-  absl::StatusOr<FileView> index = FileView::Open(path);
+  absl::StatusOr<FileView> file = FileView::Open(path);
+  if (!file.ok()) return file.status();
+  absl::StatusOr<PvtiIndex> index = ParseIndex(file->bytes(), path);
   if (!index.ok()) return index.status();
-  VtkXmlFile xml;
-  if (absl::Status s = OpenVtkXml(index->bytes(), path, "PImageData", xml); !s.ok()) return s;
-  absl::StatusOr<ImageGeometry> g = ReadGeometry(xml, path, xml.dataset);
-  if (!g.ok()) return g.status();
+  ImageGeometry g = index->geometry;
   // VTK 9.1's vtkXMLPImageDataWriter writes Direction into every piece but not into the index
   // (and its reader then drops it: an oblique image comes back axis-aligned). The pieces are
   // right, so an index without Direction takes theirs, which must agree.
-  const bool index_has_direction = xml.dataset.attribute("Direction");
   std::optional<std::vector<double>> piece_direction;
-  const std::filesystem::path directory = std::filesystem::path(path).parent_path();
   std::vector<DecodedPiece> pieces;
   uint64_t held = 0;
-  for (pugi::xml_node piece : xml.dataset.children("Piece")) {
-    const absl::string_view source = piece.attribute("Source").value();
-    if (source.empty()) return FileLineError(path, xml.LineOf(piece), "Piece has no Source file");
-    const std::filesystem::path p{std::string(source)};
-    const std::string piece_path = p.is_absolute() ? p.string() : (directory / p).string();
-    absl::StatusOr<FileView> file = FileView::Open(piece_path);
-    if (!file.ok()) {
-      return absl::Status(file.status().code(), absl::StrCat(path, ": piece ", pieces.size(), ": ",
-                                                             file.status().message()));
+  for (const std::string& piece_path : index->sources) {
+    absl::StatusOr<FileView> piece_file = FileView::Open(piece_path);
+    if (!piece_file.ok()) {
+      return absl::Status(
+          piece_file.status().code(),
+          absl::StrCat(path, ": piece ", pieces.size(), ": ", piece_file.status().message()));
     }
     // The piece's own geometry is its extent within the parent's grid; the parent's Origin,
     // Spacing and Direction place it.
     VtkXmlFile piece_xml;
-    if (absl::Status s = OpenVtkXml(file->bytes(), piece_path, "ImageData", piece_xml); !s.ok()) {
+    if (absl::Status s = OpenVtkXml(piece_file->bytes(), piece_path, "ImageData", piece_xml);
+        !s.ok()) {
       return s;
     }
-    if (!index_has_direction && piece_xml.dataset.attribute("Direction")) {
+    if (!index->has_direction && piece_xml.dataset.attribute("Direction")) {
       absl::StatusOr<std::vector<double>> d =
           Numbers(piece_xml, piece_path, piece_xml.dataset, "Direction", 9);
       if (!d.ok()) return d.status();
@@ -407,15 +437,19 @@ absl::StatusOr<VolumeFile> ReadPvti(const std::string& path) {
       }
       piece_direction = *std::move(d);
     }
-    if (absl::Status s = DecodePieces(piece_xml, piece_path, g->whole, pieces, held); !s.ok()) {
+    if (absl::Status s = DecodePieces(piece_xml, piece_path, g.whole, pieces, held); !s.ok()) {
       return s;
     }
   }
   if (piece_direction) {
-    g = ReadGeometry(xml, path, xml.dataset, &*piece_direction);
-    if (!g.ok()) return g.status();
+    // The index's grid again, with the pieces' Direction.
+    VtkXmlFile xml;
+    if (absl::Status s = OpenVtkXml(file->bytes(), path, "PImageData", xml); !s.ok()) return s;
+    absl::StatusOr<ImageGeometry> oblique = ReadGeometry(xml, path, xml.dataset, &*piece_direction);
+    if (!oblique.ok()) return oblique.status();
+    g = *oblique;
   }
-  return Assemble(path, *g, std::move(pieces), held);
+  return Assemble(path, g, std::move(pieces), held);
 }
 
 absl::StatusOr<VolumeFile> ReadVti(const std::string& path) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
@@ -37,5 +38,10 @@ absl::StatusOr<VolumeFile> ReadVti(const std::string& path);
 // without Direction takes its pieces' (VTK 9.1 writes it only there), which must agree. Errors
 // name the index or the piece file.
 absl::StatusOr<VolumeFile> ReadPvti(const std::string& path);
+
+// The piece files a .pvti index names, in order, resolved against the directory of `path`, after
+// checking the index's grid as ReadPvti does (for the fuzz target; ReadPvti reads the pieces).
+absl::StatusOr<std::vector<std::string>> ParsePvtiIndex(absl::string_view text,
+                                                        absl::string_view path);
 
 }  // namespace tetrefine::io
