@@ -3,7 +3,7 @@
 # Target <name>: source fuzz/<name>_fuzzer.cc, corpus fuzz/corpus/<name>/.
 set(TETREFINE_FUZZ_DIR ${CMAKE_CURRENT_LIST_DIR})
 set(TETREFINE_FUZZ_TARGETS request response refine vtu vtk_legacy vtk_legacy_binary gmsh gmsh_binary
-  medit meshb nifti nrrd metaimage vti vtk_legacy_image pvtu_index pvti_index tetgen)
+  medit meshb nifti nrrd metaimage vti vtk_legacy_image pvtu_index pvti_index tetgen abaqus)
 
 set(_tetrefine_fuzz_sources_request request_fuzzer.cc)
 set(_tetrefine_fuzz_libs_request tetrefine_wire)
@@ -15,6 +15,8 @@ set(_tetrefine_fuzz_sources_pvtu_index pvtu_index_fuzzer.cc)
 set(_tetrefine_fuzz_libs_pvtu_index tetrefine_io)
 set(_tetrefine_fuzz_sources_pvti_index pvti_index_fuzzer.cc)
 set(_tetrefine_fuzz_libs_pvti_index tetrefine_io)
+set(_tetrefine_fuzz_sources_abaqus abaqus_fuzzer.cc)
+set(_tetrefine_fuzz_libs_abaqus tetrefine_io)
 foreach(_format vtu vtk_legacy vtk_legacy_binary gmsh gmsh_binary medit meshb tetgen)
   set(_tetrefine_fuzz_sources_${_format} ${_format}_fuzzer.cc)
   set(_tetrefine_fuzz_libs_${_format} tetrefine_fuzz_mesh_check tetrefine_io)

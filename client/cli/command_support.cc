@@ -40,7 +40,7 @@ absl::StatusOr<io::MeshFile> LoadMesh(const std::string& path, const std::string
   if (IsVolumePath(path)) {
     return absl::InvalidArgumentError(
         absl::StrCat(path, ": is a volume, but ", flag,
-                     " takes a mesh (.vtu, .pvtu, .vtk, .msh, .mesh, .meshb, .ele)"));
+                     " takes a mesh (.vtu, .pvtu, .vtk, .msh, .mesh, .meshb, .ele, .inp)"));
   }
   return io::ReadMesh(path);
 }

@@ -8,7 +8,7 @@ namespace tetrefine::cli {
 
 // By extension, case-insensitive, exactly as client/io dispatches: a volume (.nii, .nii.gz, .hdr,
 // .hdr.gz, .nrrd, .nhdr, .mha, .mhd, .vti, .pvti) or a mesh (.vtu, .pvtu, .vtk, .msh, .mesh,
-// .meshb, .ele).
+// .meshb, .ele, .inp).
 bool IsVolumePath(const std::string& path);
 bool IsMeshPath(const std::string& path);
 

@@ -158,8 +158,8 @@ const CommandSpec& InfoSpec() {
           "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti, or a .vtk holding\n"
           "STRUCTURED_POINTS): dims, voxel type, spacing, origin and world box in RAS mm, value\n"
           "range, the file's own index-to-world affine, reading warnings. A mesh (.vtu .pvtu\n"
-          ".vtk .msh .mesh .meshb .ele): vertices, tets, bounding box, volume, boundary area,\n"
-          "mean-ratio quality, inverted tets, which arrays it carries.",
+          ".vtk .msh .mesh .meshb .ele .inp): vertices, tets, bounding box, volume, boundary\n"
+          "area, mean-ratio quality, inverted tets, which arrays it carries.",
       .flags = {},
       .positional = "FILE"};
   return spec;
@@ -181,7 +181,7 @@ int RunInfo(const std::vector<std::string>& args) {
       absl::StrCat(path,
                    ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
                    ".nhdr, .mha, .mhd, .vti, .pvti, .vtk image) or a mesh (.vtu, .pvtu, .vtk, "
-                   ".msh, .mesh, .meshb, .ele)"),
+                   ".msh, .mesh, .meshb, .ele, .inp)"),
       kExitUsage);
 }
 

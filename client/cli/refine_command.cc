@@ -690,7 +690,8 @@ const CommandSpec& RefineSpec() {
             {
                 {"volume", "FILE",
                  "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk", true},
-                {"mesh", "FILE", "input tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele", true},
+                {"mesh", "FILE", "input tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele .inp",
+                 true},
                 {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},
                 {"max-iterations", "N",
                  absl::StrCat("stop after N iterations (default ", RefineOptions{}.max_iterations,

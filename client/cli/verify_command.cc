@@ -78,7 +78,7 @@ const CommandSpec& VerifySpec() {
           {
               {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk",
                true},
-              {"mesh", "FILE", "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele", true},
+              {"mesh", "FILE", "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele .inp", true},
               {"epsilon", "E", "tolerance for the share of lattice points above it (default 0.1)"},
               {"norm-coeff", "X", "normCoeff of the error (default: the volume's max - min)"},
               {"clamp", "", "accept vertices outside the volume, sampled at the nearest point"},

@@ -6,6 +6,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "client/io/abaqus_format.h"
 #include "client/io/file_bytes.h"
 #include "client/io/gmsh_format.h"
 #include "client/io/io_error.h"
@@ -19,7 +20,17 @@
 namespace tetrefine::io {
 namespace {
 
-enum class MeshFormat { kVtu, kPvtu, kVtkLegacy, kGmsh, kMedit, kMeshb, kTetgen, kUnknown };
+enum class MeshFormat {
+  kVtu,
+  kPvtu,
+  kVtkLegacy,
+  kGmsh,
+  kMedit,
+  kMeshb,
+  kTetgen,
+  kAbaqus,
+  kUnknown
+};
 
 MeshFormat FormatOf(const std::string& path) {
   if (absl::EndsWithIgnoreCase(path, ".vtu")) return MeshFormat::kVtu;
@@ -29,6 +40,7 @@ MeshFormat FormatOf(const std::string& path) {
   if (absl::EndsWithIgnoreCase(path, ".mesh")) return MeshFormat::kMedit;
   if (absl::EndsWithIgnoreCase(path, ".meshb")) return MeshFormat::kMeshb;
   if (absl::EndsWithIgnoreCase(path, ".ele")) return MeshFormat::kTetgen;
+  if (absl::EndsWithIgnoreCase(path, ".inp")) return MeshFormat::kAbaqus;
   return MeshFormat::kUnknown;
 }
 
@@ -67,12 +79,13 @@ absl::Status UnknownExtension(const std::string& path) {
   }
   return FileError(path,
                    "unknown extension for a mesh: expected .vtu, .pvtu, .vtk, .msh, .mesh, "
-                   ".meshb or .ele (TetGen, with its .node)");
+                   ".meshb, .ele (TetGen, with its .node) or .inp (Abaqus)");
 }
 
 bool IsWritableMeshPath(const std::string& path) {
   const MeshFormat format = FormatOf(path);
-  return format != MeshFormat::kUnknown && format != MeshFormat::kPvtu;
+  return format != MeshFormat::kUnknown && format != MeshFormat::kPvtu &&
+         format != MeshFormat::kAbaqus;
 }
 
 absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
@@ -114,6 +127,9 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
       break;
     case MeshFormat::kMeshb:
       file = ParseMeshb(text, path);
+      break;
+    case MeshFormat::kAbaqus:
+      file = ParseAbaqus(text, path);
       break;
     case MeshFormat::kTetgen:  // read above, with its .node
     case MeshFormat::kPvtu:
@@ -169,6 +185,11 @@ absl::StatusOr<std::vector<EncodedFile>> Encode(const std::string& path, const M
                      "unknown extension for a mesh to write: expected .vtu, .vtk, .msh, .mesh, "
                      ".meshb or .ele (TetGen, with its .node)");
   }
+  if (format == MeshFormat::kAbaqus) {
+    return FileError(path,
+                     "Abaqus .inp is read, not written: write .vtu, .msh (which keeps the region "
+                     "names) or another mesh format");
+  }
   if (format == MeshFormat::kPvtu) {
     return FileError(path,
                      "a .pvtu is written as pieces, one per shard (refine --shards K --pvtu, or "
@@ -211,6 +232,7 @@ absl::StatusOr<std::vector<EncodedFile>> Encode(const std::string& path, const M
       out.push_back({path, std::move(files.ele)});
       return out;
     }
+    case MeshFormat::kAbaqus:
     case MeshFormat::kPvtu:
     case MeshFormat::kUnknown:
       break;

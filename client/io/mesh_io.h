@@ -17,6 +17,7 @@ namespace tetrefine::io {
 //   .msh    Gmsh 2.2 or 4.1, ASCII or binary
 //   .mesh   Medit ASCII          .meshb  Medit binary (libMeshb versions 1 to 4)
 //   .ele    TetGen, with the .node file of the same name beside it (tetgen_format.h)
+//   .inp    Abaqus input as Gmsh, meshio and CalculiX write it (abaqus_format.h); read only
 // Linear tetrahedra are kept; points, lines and surface cells are skipped; any other volume cell
 // is an error naming what the file holds. Region labels, their name and the file's frame tag
 // come along (MeshFile); points are RAS. The result passed ValidateMeshFile. Errors name the
@@ -69,7 +70,8 @@ bool IsSurfacePath(const std::string& path);
 // The error ReadMesh gives for an extension it has no reader for: for a surface format, what to
 // do about it; otherwise the list of mesh extensions. Names `path`.
 absl::Status UnknownExtension(const std::string& path);
-// True when WriteMesh writes `path`: every extension above but .pvtu (written as pieces).
+// True when WriteMesh writes `path`: every extension above but .pvtu (written as pieces) and
+// .inp (read only).
 bool IsWritableMeshPath(const std::string& path);
 
 }  // namespace tetrefine::io

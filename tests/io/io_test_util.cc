@@ -101,4 +101,18 @@ std::string SharedData(const std::string& name) {
   return std::string(TETREFINE_SHARED_DATA_DIR) + "/" + name;
 }
 
+std::string MeshFixture(const std::string& name) {
+  return std::string(TETREFINE_SOURCE_DIR) + "/tests/data/meshes/" + name;
+}
+
+std::map<int32_t, double> RegionVolumes(const MeshFile& file) {
+  std::map<int32_t, double> volume;
+  for (size_t t = 0; t < file.mesh.tets.size(); ++t) {
+    const Tet& k = file.mesh.tets[t];
+    const auto& p = file.mesh.points;
+    volume[file.mesh.labels[t]] += SignedVolume6(p[k[0]], p[k[1]], p[k[2]], p[k[3]]) / 6.0;
+  }
+  return volume;
+}
+
 }  // namespace tetrefine::io::iotest

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 
 #include "client/io/mesh_file.h"
@@ -47,5 +48,11 @@ MeshFile RandomMesh(uint64_t seed, const RandomMeshOptions& options = {});
 
 // Path of a file in the shared real-data directory.
 std::string SharedData(const std::string& name);
+
+// Path of a fixture in tests/data/meshes.
+std::string MeshFixture(const std::string& name);
+
+// The volume of each region of `file` (its labels, which it must have), from signed tet volumes.
+std::map<int32_t, double> RegionVolumes(const MeshFile& file);
 
 }  // namespace tetrefine::io::iotest

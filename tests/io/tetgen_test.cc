@@ -25,29 +25,14 @@ using ::testing::HasSubstr;
 
 constexpr char kTetgen[] = "/usr/bin/tetgen";
 
-std::string Fixture(const std::string& name) {
-  return std::string(TETREFINE_SOURCE_DIR) + "/tests/data/meshes/" + name;
-}
-
-// Volume of each region of `file`.
-std::map<int32_t, double> RegionVolumes(const MeshFile& file) {
-  std::map<int32_t, double> volume;
-  for (size_t t = 0; t < file.mesh.tets.size(); ++t) {
-    const Tet& k = file.mesh.tets[t];
-    const auto& p = file.mesh.points;
-    volume[file.mesh.labels[t]] += SignedVolume6(p[k[0]], p[k[1]], p[k[2]], p[k[3]]) / 6.0;
-  }
-  return volume;
-}
-
 TEST(IoTetgenTest, TetgensOwnFilesReadWithTheirRegions) {
-  absl::StatusOr<MeshFile> file = ReadMesh(Fixture("tetgen_two_boxes.1.ele"));
+  absl::StatusOr<MeshFile> file = ReadMesh(iotest::MeshFixture("tetgen_two_boxes.1.ele"));
   ASSERT_TRUE(file.ok()) << file.status();
   EXPECT_EQ(file->mesh.points.size(), 48u);
   EXPECT_EQ(file->mesh.tets.size(), 89u);
   EXPECT_EQ(file->label_name, "tetgen:ref");
   // TetGen's corner order is positive in tetrefine's convention, and the boxes are 2 x 1 x 1.
-  const std::map<int32_t, double> volume = RegionVolumes(*file);
+  const std::map<int32_t, double> volume = iotest::RegionVolumes(*file);
   ASSERT_EQ(volume.size(), 2u);
   EXPECT_NEAR(volume.at(1), 2.0, 1e-12);
   EXPECT_NEAR(volume.at(2), 2.0, 1e-12);
@@ -136,14 +121,14 @@ TEST(IoTetgenTest, ErrorsNameTheFileAndLine) {
 TEST(IoTetgenTest, TetgenMeshesAreReadAndOursAreReadByTetgen) {
   if (!std::filesystem::exists(kTetgen)) GTEST_SKIP() << "tetgen is not installed";
   ScratchDir dir;
-  std::filesystem::copy_file(Fixture("tetgen_two_boxes.poly"), dir.File("boxes.poly"));
+  std::filesystem::copy_file(iotest::MeshFixture("tetgen_two_boxes.poly"), dir.File("boxes.poly"));
   const testing::ProcessResult run =
       testing::RunProcess({kTetgen, "-pq1.2a0.05AQ", dir.File("boxes.poly")});
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   absl::StatusOr<MeshFile> file = ReadMesh(dir.File("boxes.1.ele"));
   ASSERT_TRUE(file.ok()) << file.status();
   EXPECT_GT(file->mesh.tets.size(), 200u);
-  const std::map<int32_t, double> volume = RegionVolumes(*file);
+  const std::map<int32_t, double> volume = iotest::RegionVolumes(*file);
   ASSERT_EQ(volume.size(), 2u);
   EXPECT_NEAR(volume.at(1), 2.0, 1e-12);
   EXPECT_NEAR(volume.at(2), 2.0, 1e-12);

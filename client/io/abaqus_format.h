@@ -1,0 +1,27 @@
+#pragma once
+
+#include "absl/status/statusor.h"
+#include "absl/strings/string_view.h"
+#include "client/io/mesh_file.h"
+
+namespace tetrefine::io {
+
+// Abaqus input (.inp) as Gmsh, meshio and CalculiX write it: a flat file of *NODE and *ELEMENT
+// blocks. Keywords and parameters are case-insensitive; "**" lines are comments; a data line
+// ending with a comma continues on the next.
+//   *NODE: "id, x, y, z"; ids are any distinct integers.
+//   *ELEMENT, TYPE=...: C3D4 and its variants (C3D4H, C3D4T, DC3D4, ...) are the tets; other
+//     volume elements (C3D10 quadratic tets, C3D8 bricks, C3D6 wedges, ...) refuse the file,
+//     naming them; shells, beams, surfaces and the like are skipped.
+//   Regions: element sets (*ELSET blocks, else the ELSET= of *ELEMENT blocks), taken in file
+//     order, each only if it shares no tet with one taken before (Gmsh writes an elementary and a
+//     physical set for the same tets: the first one written wins). A set named with a trailing
+//     number ("PhysicalVolume5", "Volume1") gives that number as its label when the taken sets'
+//     numbers are distinct; otherwise the sets are numbered 1, 2, ... in file order. Tets in no
+//     taken set get 0. The names go to region_names (Gmsh's $PhysicalNames when written as .msh).
+// *PART, *INSTANCE and *ASSEMBLY (Abaqus/CAE's structured files, with per-instance transforms)
+// and *INCLUDE are refused with a message saying so; any other keyword (materials, steps,
+// boundary conditions) is skipped with its data lines. Errors name the file and line.
+absl::StatusOr<MeshFile> ParseAbaqus(absl::string_view text, absl::string_view path);
+
+}  // namespace tetrefine::io
