@@ -98,10 +98,16 @@ class AbaqusParser {
   std::unordered_map<int64_t, uint32_t> tet_index_;   // element id -> tet
   std::unordered_map<int64_t, bool> other_elements_;  // ids of skipped elements
   CellCensus census_;
+  // GENERATE ranges stay ranges until the labels are assigned: one line "1, 4000000000" must
+  // not become 4e9 ids before it is known that the file defines so many elements.
+  struct IdRange {
+    int64_t first = 0, last = 0, step = 1;
+  };
   struct ElementSet {
     std::string name;
     int64_t line = 0;
     std::vector<int64_t> ids;
+    std::vector<IdRange> ranges;
   };
   std::vector<ElementSet> sets_;          // *ELSET blocks, in file order
   std::vector<ElementSet> element_sets_;  // ELSET= of *ELEMENT blocks
@@ -221,7 +227,7 @@ absl::Status AbaqusParser::ReadSet(const Keyword& k, int64_t keyword_line) {
   if (name == k.params.end() || name->second.empty()) {
     return Error(keyword_line, "*ELSET without ELSET=");
   }
-  ElementSet set{name->second, keyword_line, {}};
+  ElementSet set{name->second, keyword_line, {}, {}};
   const bool generate = k.params.count("GENERATE") > 0;
   std::vector<absl::string_view> f;
   int64_t line = 0;
@@ -246,8 +252,7 @@ absl::Status AbaqusParser::ReadSet(const Keyword& k, int64_t keyword_line) {
                                       ", GENERATE: expected \"first, last[, step]\" with "
                                       "first <= last and step > 0"));
     }
-    const int64_t step = numbers.size() == 3 ? numbers[2] : 1;
-    for (int64_t id = numbers[0]; id <= numbers[1]; id += step) set.ids.push_back(id);
+    set.ranges.push_back({numbers[0], numbers[1], numbers.size() == 3 ? numbers[2] : 1});
   }
   sets_.push_back(std::move(set));
   return absl::OkStatus();
@@ -260,17 +265,28 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file) {
   for (const ElementSet& set : sets) {
     std::vector<uint32_t> tets;
     bool overlaps = false;
-    for (int64_t id : set.ids) {
+    const auto take = [&](int64_t id) -> absl::Status {
       const auto it = tet_index_.find(id);
       if (it == tet_index_.end()) {
         if (other_elements_.count(id) == 0) {
           return Error(set.line, absl::StrCat("element set ", set.name, " names element ", id,
                                               ", which the file does not define"));
         }
-        continue;
+        return absl::OkStatus();
       }
       tets.push_back(it->second);
       if (region[it->second] >= 0) overlaps = true;
+      return absl::OkStatus();
+    };
+    for (int64_t id : set.ids) {
+      if (absl::Status s = take(id); !s.ok()) return s;
+    }
+    // A range longer than the file's element count names an element it does not define; the
+    // walk below stops at the first such id, after at most that many steps.
+    for (const IdRange& r : set.ranges) {
+      for (int64_t id = r.first; id <= r.last; id += r.step) {
+        if (absl::Status s = take(id); !s.ok()) return s;
+      }
     }
     if (tets.empty() || overlaps) continue;
     for (uint32_t t : tets) region[t] = static_cast<int32_t>(taken.size());

@@ -135,6 +135,9 @@ TEST(IoAbaqusTest, ErrorsNameTheFileAndLine) {
        ":8: element set s names element 99"},
       {nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n*ELSET, ELSET=s\n1, other\n",
        "sets of sets are not read"},
+      // Four billion generated ids are an error at the second, not four billion allocations.
+      {nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n*ELSET, ELSET=s, GENERATE\n1, 4000000000\n",
+       ":8: element set s names element 2, which the file does not define"},
       {nodes + "*ELEMENT\n1,1,2,3,4\n", ":6: *ELEMENT without TYPE="},
       {"1, 2, 3\n", ":1: data line outside any keyword block"},
   };
