@@ -85,9 +85,16 @@ absl::StatusOr<Index3> SpatialDims(const NiftiHeader& header, absl::string_view 
     if (a <= 3) {
       dims[a - 1] = size;
     } else if (size != 1) {
+      // A 4D series (fMRI, DCE or DSC perfusion) is common input: say how to take one frame.
       return FileUnsupported(
           path, absl::StrCat("dim[", a, "] = ", size, ": only 3D volumes are read (this is a ",
-                             rank, "D series)"));
+                             rank, "D series",
+                             a == 4 ? absl::StrCat(" of ", size,
+                                                   " frames; take one first, e.g. frame k with "
+                                                   "`fslroi IN OUT k 1` or nibabel's "
+                                                   "`image.slicer[..., k]`")
+                                    : "",
+                             ")"));
     }
   }
   return dims;

@@ -423,6 +423,10 @@ TEST(IoNiftiErrorTest, UnsupportedDatatypeAnd4DAreClearErrors) {
   WriteBytes(path, NiftiHeaderBytes(spec) + std::string(96, '\0'));
   status = ReadNifti(path).status();
   EXPECT_THAT(std::string(status.message()), HasSubstr("dim[4] = 3"));
+  // A series says how to take one of its frames.
+  EXPECT_THAT(std::string(status.message()),
+              HasSubstr("4D series of 3 frames; take one first, e.g. frame k with `fslroi IN OUT "
+                        "k 1`"));
 }
 
 TEST(IoNiftiErrorTest, EveryTruncationAndGarbageFailsCleanly) {
