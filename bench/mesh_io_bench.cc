@@ -76,6 +76,7 @@ int Run(const std::string& input, int repeats, std::string_view only) {
       {"msh 4.1 ascii", ".msh", {}},
       {"vtk binary", ".vtk", {.binary = true}},
       {"meshb", ".meshb", {}},
+      {"tetgen .node + .ele", ".ele", {}},
   };
   const std::string dir = std::filesystem::temp_directory_path() / "tetrefine_mesh_io_bench";
   std::filesystem::create_directories(dir);

@@ -26,10 +26,10 @@ absl::StatusOr<MeshFile> ParseTetgen(absl::string_view node_text, absl::string_v
 // The .node file beside an .ele file: "dir/ball.1.ele" -> "dir/ball.1.node".
 std::string TetgenNodePath(const std::string& ele_path);
 
-// The two files for `file`, numbered from 1, coordinates to the bit (%.17g): the .node, and the
-// .ele with the labels as the region attribute (when it has labels). TetGen's files have no
-// names for attributes, so the vertex values, iteration and quality are not written (as in Medit
-// files); `tetgen -r` reads the pair back.
+// The two files for `file`, numbered from 1, coordinates to the bit (shortest round trip): the
+// .node, and the .ele with the labels as the region attribute (when it has labels). TetGen's files
+// have no names for attributes, so the vertex values, iteration and quality are not written (as in
+// Medit files); `tetgen -r` reads the pair back.
 struct TetgenFiles {
   std::string node;
   std::string ele;

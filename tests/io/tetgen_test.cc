@@ -146,6 +146,29 @@ TEST(IoTetgenTest, TetgenMeshesAreReadAndOursAreReadByTetgen) {
       << back.out;
 }
 
+// meshio writes TetGen files too, with its arrays as attributes and float boundary markers
+// ("0.0"), which meshio 5 itself cannot read back.
+TEST(IoTetgenTest, MeshiosTetgenFilesRead) {
+  if (testing::RunProcess({iotest::kPython, "-c", "import meshio"}).exit_code != 0) {
+    GTEST_SKIP() << "meshio is not installed";
+  }
+  ScratchDir dir;
+  const MeshFile mesh = RandomMesh(5, {.labels = true});
+  ASSERT_TRUE(WriteMesh(dir.File("in.vtu"), mesh).ok());
+  const testing::ProcessResult run =
+      testing::RunProcess({iotest::kPython, "-c",
+                           absl::StrCat("import meshio; meshio.write('", dir.File("m.ele"),
+                                        "', meshio.read('", dir.File("in.vtu"), "'))")});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  absl::StatusOr<MeshFile> file = ReadMesh(dir.File("m.ele"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.points, mesh.mesh.points);
+  EXPECT_EQ(file->mesh.tets, mesh.mesh.tets);
+  // meshio's first cell attribute is the first cell array it holds: here "iteration".
+  ASSERT_EQ(file->mesh.labels.size(), mesh.mesh.tets.size());
+  EXPECT_EQ(file->mesh.labels, mesh.tet_iteration);
+}
+
 // A surface file is refused with what to do, and for the formats TetGen reads, doing it works.
 TEST(IoTetgenTest, SurfaceFilesSayHowToFillThemWithTets) {
   ScratchDir dir;
