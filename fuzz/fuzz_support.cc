@@ -64,4 +64,15 @@ std::string WritePrivateFile(std::string_view name, std::string_view bytes) {
   return path;
 }
 
+void CheckPieceSources(const absl::StatusOr<std::vector<std::string>>& sources) {
+  if (!sources.ok()) {
+    TETREFINE_FUZZ_CHECK(!sources.status().message().empty(), "an error without a message");
+    return;
+  }
+  TETREFINE_FUZZ_CHECK(!sources->empty(), "an index accepted with no pieces");
+  for (const std::string& source : *sources) {
+    TETREFINE_FUZZ_CHECK(!source.empty(), "an empty piece path");
+  }
+}
+
 }  // namespace tetrefine::fuzz

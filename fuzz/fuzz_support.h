@@ -8,6 +8,9 @@
 #include <initializer_list>
 #include <string>
 #include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
 
 namespace tetrefine::fuzz {
 
@@ -50,5 +53,9 @@ bool AnyKeyLineContains(std::string_view text, std::initializer_list<std::string
 // `name` inside a directory private to this process (created on first use, under $TMPDIR or
 // /tmp), with `bytes` written to it. Readers that only take paths read it from there.
 std::string WritePrivateFile(std::string_view name, std::string_view bytes);
+
+// What a parallel index parser (.pvtu, .pvti) promises for any input: an error with a message,
+// or at least one piece, each a non-empty path.
+void CheckPieceSources(const absl::StatusOr<std::vector<std::string>>& sources);
 
 }  // namespace tetrefine::fuzz

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -95,8 +96,8 @@ class AbaqusParser {
   size_t at_ = 0;  // the next line to look at
   MeshFile file_;
   std::unordered_map<int64_t, uint32_t> node_index_;
-  std::unordered_map<int64_t, uint32_t> tet_index_;   // element id -> tet
-  std::unordered_map<int64_t, bool> other_elements_;  // ids of skipped elements
+  std::unordered_map<int64_t, uint32_t> tet_index_;  // element id -> tet
+  std::unordered_set<int64_t> other_elements_;       // ids of skipped elements
   CellCensus census_;
   // GENERATE ranges stay ranges until the labels are assigned: one line "1, 4000000000" must
   // not become 4e9 ids before it is known that the file defines so many elements.
@@ -191,7 +192,7 @@ absl::Status AbaqusParser::ReadElements(const Keyword& k, int64_t keyword_line) 
     ++count;
     if (!set.name.empty()) set.ids.push_back(id);
     if (kind != ElementClass::kTet) {
-      other_elements_[id] = true;
+      other_elements_.insert(id);
       continue;
     }
     if (f.size() != 5) {

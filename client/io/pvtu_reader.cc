@@ -3,7 +3,6 @@
 
 #include <array>
 #include <cstring>
-#include <filesystem>
 #include <unordered_map>
 #include <utility>
 
@@ -53,18 +52,7 @@ absl::StatusOr<std::vector<std::string>> ParsePvtuIndex(absl::string_view text,
                                                         absl::string_view path) {
   VtkXmlFile xml;
   if (absl::Status s = OpenVtkXml(text, path, "PUnstructuredGrid", xml); !s.ok()) return s;
-  const std::filesystem::path directory = std::filesystem::path(std::string(path)).parent_path();
-  std::vector<std::string> sources;
-  for (pugi::xml_node piece : xml.dataset.children("Piece")) {
-    const absl::string_view source = piece.attribute("Source").value();
-    if (source.empty()) {
-      return FileLineError(path, xml.LineOf(piece), "Piece has no Source file");
-    }
-    const std::filesystem::path p{std::string(source)};
-    sources.push_back(p.is_absolute() ? p.string() : (directory / p).string());
-  }
-  if (sources.empty()) return FileError(path, "no <Piece Source=...>: the index names no pieces");
-  return sources;
+  return PieceSources(xml, path);
 }
 
 absl::StatusOr<MeshFile> MergePvtuPieces(std::vector<MeshFile> pieces,

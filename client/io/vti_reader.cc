@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -216,13 +215,28 @@ absl::StatusOr<PieceSamples> ReadSamples(const VtkXmlFile& xml, VtuArrayReader& 
 struct ImageGeometry {
   Extent whole{};
   Index3 dims{};
-  Affine affine{};
+  std::vector<double> origin;     // 3
+  std::vector<double> spacing;    // 3
+  std::vector<double> direction;  // 9, row-major; the identity when the file has none
+  bool has_direction = false;
+
+  // Column a is Direction's column a times Spacing[a]; the extent's first sample lies at
+  // Origin + Direction (Spacing * first index).
+  Affine affine() const {
+    std::array<Vec3, 3> axes;
+    Vec3 first = {origin[0], origin[1], origin[2]};
+    for (int a = 0; a < 3; ++a) {
+      for (int row = 0; row < 3; ++row) {
+        axes[a][row] = direction[3 * row + a] * spacing[a];
+        first[row] += axes[a][row] * static_cast<double>(whole[2 * a]);
+      }
+    }
+    return AffineFromAxes(axes, first);
+  }
 };
 
-// `direction`, when given, replaces the element's own (a .pvti index without one).
 absl::StatusOr<ImageGeometry> ReadGeometry(const VtkXmlFile& xml, absl::string_view path,
-                                           pugi::xml_node image,
-                                           const std::vector<double>* direction_from = nullptr) {
+                                           pugi::xml_node image) {
   ImageGeometry g;
   absl::StatusOr<Extent> whole = ReadExtent(xml, path, image, "WholeExtent");
   if (!whole.ok()) return whole.status();
@@ -238,27 +252,17 @@ absl::StatusOr<ImageGeometry> ReadGeometry(const VtkXmlFile& xml, absl::string_v
   }
   absl::StatusOr<std::vector<double>> origin = Numbers(xml, path, image, "Origin", 3);
   if (!origin.ok()) return origin.status();
+  g.origin = *std::move(origin);
   absl::StatusOr<std::vector<double>> spacing = Numbers(xml, path, image, "Spacing", 3);
   if (!spacing.ok()) return spacing.status();
-  std::vector<double> direction = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  if (direction_from != nullptr) {
-    direction = *direction_from;
-  } else if (image.attribute("Direction")) {
+  g.spacing = *std::move(spacing);
+  g.direction = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  g.has_direction = image.attribute("Direction");
+  if (g.has_direction) {
     absl::StatusOr<std::vector<double>> d = Numbers(xml, path, image, "Direction", 9);
     if (!d.ok()) return d.status();
-    direction = *std::move(d);
+    g.direction = *std::move(d);
   }
-  // Column a of the affine is Direction's column a times Spacing[a]; the extent's first sample
-  // lies at Origin + Direction (Spacing * first index).
-  std::array<Vec3, 3> axes;
-  Vec3 first = {(*origin)[0], (*origin)[1], (*origin)[2]};
-  for (int a = 0; a < 3; ++a) {
-    for (int row = 0; row < 3; ++row) {
-      axes[a][row] = direction[3 * row + a] * (*spacing)[a];
-      first[row] += axes[a][row] * static_cast<double>(g.whole[2 * a]);
-    }
-  }
-  g.affine = AffineFromAxes(axes, first);
   return g;
 }
 
@@ -313,7 +317,7 @@ absl::StatusOr<VolumeFile> Assemble(absl::string_view path, const ImageGeometry&
   const uint64_t total = static_cast<uint64_t>(dims[0]) * dims[1] * dims[2];
   const VoxelType type = pieces[0].samples.type;
   if (pieces.size() == 1 && held == total) {  // one piece holds the whole image: no copy
-    return PlaceOnGrid(path, g.affine, dims, type, std::move(pieces[0].samples.data));
+    return PlaceOnGrid(path, g.affine(), dims, type, std::move(pieces[0].samples.data));
   }
   if (held < total) {
     return FileError(path, absl::StrCat("the pieces hold ", held, " samples, fewer than the ",
@@ -350,35 +354,23 @@ absl::StatusOr<VolumeFile> Assemble(absl::string_view path, const ImageGeometry&
     return FileError(path, absl::StrCat("the pieces cover ", covered_count, " of the ", total,
                                         " samples of WholeExtent"));
   }
-  return PlaceOnGrid(path, g.affine, dims, type, std::move(data));
+  return PlaceOnGrid(path, g.affine(), dims, type, std::move(data));
 }
 
 // A .pvti index: its grid and the piece files it names, resolved against its directory.
 struct PvtiIndex {
   ImageGeometry geometry;
-  bool has_direction = false;
   std::vector<std::string> sources;
 };
 
 absl::StatusOr<PvtiIndex> ParseIndex(absl::string_view text, absl::string_view path) {
   VtkXmlFile xml;
   if (absl::Status s = OpenVtkXml(text, path, "PImageData", xml); !s.ok()) return s;
-  PvtiIndex index;
   absl::StatusOr<ImageGeometry> g = ReadGeometry(xml, path, xml.dataset);
   if (!g.ok()) return g.status();
-  index.geometry = *g;
-  index.has_direction = xml.dataset.attribute("Direction");
-  const std::filesystem::path directory = std::filesystem::path(std::string(path)).parent_path();
-  for (pugi::xml_node piece : xml.dataset.children("Piece")) {
-    const absl::string_view source = piece.attribute("Source").value();
-    if (source.empty()) return FileLineError(path, xml.LineOf(piece), "Piece has no Source file");
-    const std::filesystem::path p{std::string(source)};
-    index.sources.push_back(p.is_absolute() ? p.string() : (directory / p).string());
-  }
-  if (index.sources.empty()) {
-    return FileError(path, "no <Piece Source=...>: the index names no pieces");
-  }
-  return index;
+  absl::StatusOr<std::vector<std::string>> sources = PieceSources(xml, path);
+  if (!sources.ok()) return sources.status();
+  return PvtiIndex{*std::move(g), *std::move(sources)};
 }
 
 }  // namespace
@@ -406,7 +398,7 @@ absl::StatusOr<VolumeFile> ReadPvti(const std::string& path) {
   if (!file.ok()) return file.status();
   absl::StatusOr<PvtiIndex> index = ParseIndex(file->bytes(), path);
   if (!index.ok()) return index.status();
-  ImageGeometry g = index->geometry;
+  ImageGeometry& g = index->geometry;
   // VTK 9.1's vtkXMLPImageDataWriter writes Direction into every piece but not into the index
   // (and its reader then drops it: an oblique image comes back axis-aligned). The pieces are
   // right, so an index without Direction takes theirs, which must agree.
@@ -427,7 +419,7 @@ absl::StatusOr<VolumeFile> ReadPvti(const std::string& path) {
         !s.ok()) {
       return s;
     }
-    if (!index->has_direction && piece_xml.dataset.attribute("Direction")) {
+    if (!g.has_direction && piece_xml.dataset.attribute("Direction")) {
       absl::StatusOr<std::vector<double>> d =
           Numbers(piece_xml, piece_path, piece_xml.dataset, "Direction", 9);
       if (!d.ok()) return d.status();
@@ -441,14 +433,7 @@ absl::StatusOr<VolumeFile> ReadPvti(const std::string& path) {
       return s;
     }
   }
-  if (piece_direction) {
-    // The index's grid again, with the pieces' Direction.
-    VtkXmlFile xml;
-    if (absl::Status s = OpenVtkXml(file->bytes(), path, "PImageData", xml); !s.ok()) return s;
-    absl::StatusOr<ImageGeometry> oblique = ReadGeometry(xml, path, xml.dataset, &*piece_direction);
-    if (!oblique.ok()) return oblique.status();
-    g = *oblique;
-  }
+  if (piece_direction) g.direction = *std::move(piece_direction);
   return Assemble(path, g, std::move(pieces), held);
 }
 

@@ -1,6 +1,7 @@
 #include "client/io/vtk_xml_file.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <optional>
 
 #include "absl/strings/match.h"
@@ -120,6 +121,20 @@ absl::Status OpenVtkXml(absl::string_view text, absl::string_view path, absl::st
   out.dataset = root.child(element.c_str());
   if (!out.dataset) return FileError(path, absl::StrCat("no <", type, ">"));
   return absl::OkStatus();
+}
+
+absl::StatusOr<std::vector<std::string>> PieceSources(const VtkXmlFile& xml,
+                                                      absl::string_view path) {
+  const std::filesystem::path directory = std::filesystem::path(std::string(path)).parent_path();
+  std::vector<std::string> sources;
+  for (pugi::xml_node piece : xml.dataset.children("Piece")) {
+    const absl::string_view source = piece.attribute("Source").value();
+    if (source.empty()) return FileLineError(path, xml.LineOf(piece), "Piece has no Source file");
+    const std::filesystem::path p{std::string(source)};
+    sources.push_back(p.is_absolute() ? p.string() : (directory / p).string());
+  }
+  if (sources.empty()) return FileError(path, "no <Piece Source=...>: the index names no pieces");
+  return sources;
 }
 
 }  // namespace tetrefine::io

@@ -2,8 +2,10 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "client/io/vtu_data_array.h"
 #include "pugixml.hpp"
@@ -40,5 +42,11 @@ struct VtkXmlFile {
 // an appended section without its '_' marker or cut short before </VTKFile>, no <type> element.
 absl::Status OpenVtkXml(absl::string_view text, absl::string_view path, absl::string_view type,
                         VtkXmlFile& out);
+
+// The files a parallel index (.pvtu, .pvti) names in its <Piece Source="..."/> elements, in
+// order, each resolved against the directory of `path` unless absolute. Errors name `path` (and
+// the line): a piece without a Source, no pieces at all.
+absl::StatusOr<std::vector<std::string>> PieceSources(const VtkXmlFile& xml,
+                                                      absl::string_view path);
 
 }  // namespace tetrefine::io
