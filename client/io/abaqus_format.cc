@@ -1,7 +1,9 @@
 // Abaqus .inp. See abaqus_format.h.
 #include "client/io/abaqus_format.h"
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -71,47 +73,102 @@ std::optional<int32_t> TrailingNumber(absl::string_view name) {
   return static_cast<int32_t>(value);
 }
 
+// GENERATE ranges stay ranges until the labels are assigned: one line "1, 4000000000" must not
+// become 4e9 ids before it is known that the file defines so many elements.
+struct IdRange {
+  int64_t first = 0, last = 0, step = 1;
+};
+
+struct ElementSet {
+  std::string name;
+  int64_t line = 0;
+  std::vector<int64_t> ids;
+  std::vector<IdRange> ranges;
+  std::string instance;  // an assembly's set: the INSTANCE= it names (upper case)
+};
+
+// The nodes, elements and sets of one *PART block, or of a flat file (name empty): each part has
+// its own node and element numbering.
+struct Part {
+  std::string name;  // as written
+  int64_t line = 0;
+  std::vector<Vec3> points;
+  std::vector<Tet> tets;
+  std::unordered_map<int64_t, uint32_t> node_index;
+  std::unordered_map<int64_t, uint32_t> tet_index;  // element id -> tet
+  std::unordered_set<int64_t> other_elements;       // ids of skipped elements
+  std::vector<ElementSet> sets;                     // *ELSET blocks, in file order
+  std::vector<ElementSet> element_sets;             // ELSET= of *ELEMENT blocks
+};
+
+// An *INSTANCE of a part in the *ASSEMBLY: its nodes moved by the translation, then rotated by
+// `degrees` about the axis from axis_a to axis_b (right-handed), as Abaqus places them.
+struct Instance {
+  std::string name;  // as written
+  int64_t line = 0;
+  size_t part = 0;
+  Vec3 translation{0, 0, 0};
+  bool rotated = false;
+  Vec3 axis_a{0, 0, 0}, axis_b{0, 0, 0};
+  double degrees = 0.0;
+};
+
+// Rotation of p by `degrees` about the axis through a and b (Rodrigues' formula).
+Vec3 Rotate(const Vec3& p, const Vec3& a, const Vec3& b, double degrees) {
+  Vec3 k{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double length = std::sqrt(k[0] * k[0] + k[1] * k[1] + k[2] * k[2]);
+  for (double& x : k) x /= length;
+  const double angle = degrees * (3.14159265358979323846 / 180.0);
+  const double c = std::cos(angle), s = std::sin(angle);
+  const Vec3 v{p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+  const Vec3 cross{k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]};
+  const double dot = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+  Vec3 out;
+  for (int i = 0; i < 3; ++i) out[i] = a[i] + v[i] * c + cross[i] * s + k[i] * dot * (1.0 - c);
+  return out;
+}
+
 class AbaqusParser {
  public:
   AbaqusParser(absl::string_view text, absl::string_view path) : path_(path) {
     lines_ = absl::StrSplit(text, '\n');
+    parts_.emplace_back();  // the flat file's nodes and elements
   }
 
   absl::StatusOr<MeshFile> Parse();
 
  private:
+  // Where the keyword lines are: at the top, inside *PART, *ASSEMBLY or *INSTANCE.
+  enum class Scope { kTop, kPart, kAssembly, kInstance };
+
   absl::Status Error(int64_t line, absl::string_view problem) const {
     return FileLineError(path_, line + 1, problem);
   }
   // The next data line's comma-separated fields, with continuation lines (a line ending with a
   // comma) joined; false at a keyword line or the end. Comment and blank lines are skipped.
   bool NextRecord(std::vector<absl::string_view>& fields, int64_t& line);
-  absl::Status ReadNodes();
-  absl::Status ReadElements(const Keyword& k, int64_t keyword_line);
-  absl::Status ReadSet(const Keyword& k, int64_t keyword_line);
-  absl::Status AssignLabels(MeshFile& file);
+  void SkipData();
+  absl::Status ReadNodes(Part& part);
+  absl::Status ReadElements(Part& part, const Keyword& k, int64_t keyword_line);
+  absl::Status ReadSet(const Keyword& k, int64_t keyword_line, ElementSet& set);
+  absl::Status OpenPart(const Keyword& k, int64_t line);
+  absl::Status OpenInstance(const Keyword& k, int64_t line);
+  absl::Status Structure(const Keyword& k, int64_t line, bool& handled);
+  absl::StatusOr<MeshFile> Assemble();
+  absl::Status AssignLabels(MeshFile& file, const std::vector<size_t>& placed,
+                            const std::vector<uint32_t>& tet_offset);
 
   absl::string_view path_;
   std::vector<absl::string_view> lines_;
   size_t at_ = 0;  // the next line to look at
-  MeshFile file_;
-  std::unordered_map<int64_t, uint32_t> node_index_;
-  std::unordered_map<int64_t, uint32_t> tet_index_;  // element id -> tet
-  std::unordered_set<int64_t> other_elements_;       // ids of skipped elements
+  Scope scope_ = Scope::kTop;
+  std::vector<Part> parts_;                             // [0]: the flat file's
+  size_t current_ = 0;                                  // the part being read
+  std::unordered_map<std::string, size_t> part_named_;  // upper-case name -> part
+  std::vector<Instance> instances_;
+  bool assembly_ = false;
+  std::vector<ElementSet> assembly_sets_;  // *ELSET, INSTANCE=... in the assembly
   CellCensus census_;
-  // GENERATE ranges stay ranges until the labels are assigned: one line "1, 4000000000" must
-  // not become 4e9 ids before it is known that the file defines so many elements.
-  struct IdRange {
-    int64_t first = 0, last = 0, step = 1;
-  };
-  struct ElementSet {
-    std::string name;
-    int64_t line = 0;
-    std::vector<int64_t> ids;
-    std::vector<IdRange> ranges;
-  };
-  std::vector<ElementSet> sets_;          // *ELSET blocks, in file order
-  std::vector<ElementSet> element_sets_;  // ELSET= of *ELEMENT blocks
 };
 
 bool IsComment(absl::string_view line) { return absl::StartsWith(line, "**"); }
@@ -139,7 +196,15 @@ bool AbaqusParser::NextRecord(std::vector<absl::string_view>& fields, int64_t& l
   return continued;
 }
 
-absl::Status AbaqusParser::ReadNodes() {
+void AbaqusParser::SkipData() {
+  while (at_ < lines_.size()) {
+    const absl::string_view next = absl::StripAsciiWhitespace(lines_[at_]);
+    if (!next.empty() && next[0] == '*' && !IsComment(next)) break;
+    ++at_;
+  }
+}
+
+absl::Status AbaqusParser::ReadNodes(Part& part) {
   std::vector<absl::string_view> f;
   int64_t line = 0;
   while (NextRecord(f, line)) {
@@ -155,18 +220,18 @@ absl::Status AbaqusParser::ReadNodes() {
                                         "\" is not a finite number"));
       }
     }
-    if (file_.mesh.points.size() >= (size_t{1} << 32) - 1) {
+    if (part.points.size() >= (size_t{1} << 32) - 1) {
       return Error(line, "more than 2^32 - 1 nodes");
     }
-    if (!node_index_.emplace(id, static_cast<uint32_t>(file_.mesh.points.size())).second) {
+    if (!part.node_index.emplace(id, static_cast<uint32_t>(part.points.size())).second) {
       return Error(line, absl::StrCat("node ", id, " is defined twice"));
     }
-    file_.mesh.points.push_back(p);
+    part.points.push_back(p);
   }
   return absl::OkStatus();
 }
 
-absl::Status AbaqusParser::ReadElements(const Keyword& k, int64_t keyword_line) {
+absl::Status AbaqusParser::ReadElements(Part& part, const Keyword& k, int64_t keyword_line) {
   const auto type = k.params.find("TYPE");
   if (type == k.params.end() || type->second.empty()) {
     return Error(keyword_line, "*ELEMENT without TYPE=");
@@ -186,13 +251,13 @@ absl::Status AbaqusParser::ReadElements(const Keyword& k, int64_t keyword_line) 
     if (f.empty() || !ParseInt64(f[0], id)) {
       return Error(line, "element line does not start with an element id");
     }
-    if (tet_index_.count(id) > 0 || other_elements_.count(id) > 0) {
+    if (part.tet_index.count(id) > 0 || part.other_elements.count(id) > 0) {
       return Error(line, absl::StrCat("element ", id, " is defined twice"));
     }
     ++count;
     if (!set.name.empty()) set.ids.push_back(id);
     if (kind != ElementClass::kTet) {
-      other_elements_.insert(id);
+      part.other_elements.insert(id);
       continue;
     }
     if (f.size() != 5) {
@@ -202,15 +267,17 @@ absl::Status AbaqusParser::ReadElements(const Keyword& k, int64_t keyword_line) 
     Tet tet;
     for (int c = 0; c < 4; ++c) {
       int64_t node = 0;
-      const auto it = ParseInt64(f[1 + c], node) ? node_index_.find(node) : node_index_.end();
-      if (it == node_index_.end()) {
+      const auto it =
+          ParseInt64(f[1 + c], node) ? part.node_index.find(node) : part.node_index.end();
+      if (it == part.node_index.end()) {
         return Error(line, absl::StrCat("element ", id, ": node \"", f[1 + c].substr(0, 30),
-                                        "\" is not defined by an earlier *NODE"));
+                                        "\" is not defined by an earlier *NODE",
+                                        part.name.empty() ? "" : " of part ", part.name));
       }
       tet[c] = it->second;
     }
-    tet_index_[id] = static_cast<uint32_t>(file_.mesh.tets.size());
-    file_.mesh.tets.push_back(tet);
+    part.tet_index[id] = static_cast<uint32_t>(part.tets.size());
+    part.tets.push_back(tet);
   }
   if (kind == ElementClass::kTet) {
     census_.AddTets(count);
@@ -219,16 +286,17 @@ absl::Status AbaqusParser::ReadElements(const Keyword& k, int64_t keyword_line) 
                  kind == ElementClass::kOtherVolume ? CellFate::kUnsupported : CellFate::kSkip},
                 count);
   }
-  if (!set.name.empty()) element_sets_.push_back(std::move(set));
+  if (!set.name.empty()) part.element_sets.push_back(std::move(set));
   return absl::OkStatus();
 }
 
-absl::Status AbaqusParser::ReadSet(const Keyword& k, int64_t keyword_line) {
+absl::Status AbaqusParser::ReadSet(const Keyword& k, int64_t keyword_line, ElementSet& set) {
   const auto name = k.params.find("ELSET");
   if (name == k.params.end() || name->second.empty()) {
     return Error(keyword_line, "*ELSET without ELSET=");
   }
-  ElementSet set{name->second, keyword_line, {}, {}};
+  set.name = name->second;
+  set.line = keyword_line;
   const bool generate = k.params.count("GENERATE") > 0;
   std::vector<absl::string_view> f;
   int64_t line = 0;
@@ -255,34 +323,249 @@ absl::Status AbaqusParser::ReadSet(const Keyword& k, int64_t keyword_line) {
     }
     set.ranges.push_back({numbers[0], numbers[1], numbers.size() == 3 ? numbers[2] : 1});
   }
-  sets_.push_back(std::move(set));
   return absl::OkStatus();
 }
 
-absl::Status AbaqusParser::AssignLabels(MeshFile& file) {
-  const std::vector<ElementSet>& sets = sets_.empty() ? element_sets_ : sets_;
+absl::Status AbaqusParser::OpenPart(const Keyword& k, int64_t line) {
+  const auto name = k.params.find("NAME");
+  if (name == k.params.end() || name->second.empty()) return Error(line, "*PART without NAME=");
+  if (!part_named_.emplace(absl::AsciiStrToUpper(name->second), parts_.size()).second) {
+    return Error(line, absl::StrCat("part ", name->second, " is defined twice"));
+  }
+  current_ = parts_.size();
+  parts_.emplace_back();
+  parts_.back().name = name->second;
+  parts_.back().line = line;
+  scope_ = Scope::kPart;
+  return absl::OkStatus();
+}
+
+absl::Status AbaqusParser::OpenInstance(const Keyword& k, int64_t line) {
+  const auto name = k.params.find("NAME");
+  const auto part = k.params.find("PART");
+  if (name == k.params.end() || name->second.empty()) {
+    return Error(line, "*INSTANCE without NAME=");
+  }
+  if (part == k.params.end() || part->second.empty()) {
+    return Error(line, absl::StrCat("*INSTANCE ", name->second,
+                                    " without PART= (instances that define their own "
+                                    "nodes and elements are not read)"));
+  }
+  const auto found = part_named_.find(absl::AsciiStrToUpper(part->second));
+  if (found == part_named_.end()) {
+    return Error(line, absl::StrCat("*INSTANCE ", name->second, ": part ", part->second,
+                                    " is not defined by an earlier *PART"));
+  }
+  for (const Instance& other : instances_) {
+    if (absl::AsciiStrToUpper(other.name) == absl::AsciiStrToUpper(name->second)) {
+      return Error(line, absl::StrCat("instance ", name->second, " is defined twice"));
+    }
+  }
+  Instance instance;
+  instance.name = name->second;
+  instance.line = line;
+  instance.part = found->second;
+  // Up to two data lines: the translation "x, y, z", then the rotation "ax, ay, az, bx, by, bz,
+  // degrees".
+  std::vector<absl::string_view> f;
+  int64_t data_line = 0;
+  for (int record = 0; NextRecord(f, data_line); ++record) {
+    const size_t want = record == 0 ? 3 : 7;
+    std::vector<double> numbers(f.size());
+    bool finite = f.size() == want && record < 2;
+    for (size_t i = 0; finite && i < f.size(); ++i) {
+      finite = ParseDouble(f[i], numbers[i]) && std::isfinite(numbers[i]);
+    }
+    if (!finite) {
+      return Error(data_line,
+                   record >= 2
+                       ? absl::StrCat("*INSTANCE ", instance.name, " has more than two data lines")
+                       : absl::StrCat("*INSTANCE ", instance.name, ": expected ",
+                                      record == 0 ? "a translation \"x, y, z\""
+                                                  : "a rotation \"ax, ay, az, bx, by, "
+                                                    "bz, degrees\"",
+                                      " of finite numbers"));
+    }
+    if (record == 0) {
+      instance.translation = {numbers[0], numbers[1], numbers[2]};
+    } else {
+      instance.rotated = true;
+      instance.axis_a = {numbers[0], numbers[1], numbers[2]};
+      instance.axis_b = {numbers[3], numbers[4], numbers[5]};
+      instance.degrees = numbers[6];
+      if (instance.axis_a == instance.axis_b) {
+        return Error(data_line, absl::StrCat("*INSTANCE ", instance.name,
+                                             ": the rotation axis's two points are the same"));
+      }
+    }
+  }
+  instances_.push_back(std::move(instance));
+  scope_ = Scope::kInstance;
+  return absl::OkStatus();
+}
+
+// The keywords that open and close parts, the assembly and instances; `handled` says whether k
+// was one of them.
+absl::Status AbaqusParser::Structure(const Keyword& k, int64_t line, bool& handled) {
+  handled = true;
+  const auto misplaced = [&](absl::string_view where) {
+    return Error(line, absl::StrCat("*", k.name, " ", where));
+  };
+  if (k.name == "PART") {
+    if (scope_ != Scope::kTop) return misplaced("inside another block (a missing *END?)");
+    return OpenPart(k, line);
+  }
+  if (k.name == "END PART") {
+    if (scope_ != Scope::kPart) return misplaced("without *PART");
+    scope_ = Scope::kTop;
+    current_ = 0;
+    return absl::OkStatus();
+  }
+  if (k.name == "ASSEMBLY") {
+    if (scope_ != Scope::kTop) return misplaced("inside another block (a missing *END?)");
+    if (assembly_) return misplaced("a second time");
+    assembly_ = true;
+    scope_ = Scope::kAssembly;
+    return absl::OkStatus();
+  }
+  if (k.name == "END ASSEMBLY") {
+    if (scope_ != Scope::kAssembly) return misplaced("without *ASSEMBLY");
+    scope_ = Scope::kTop;
+    return absl::OkStatus();
+  }
+  if (k.name == "INSTANCE") {
+    if (scope_ != Scope::kAssembly) return misplaced("outside *ASSEMBLY");
+    return OpenInstance(k, line);
+  }
+  if (k.name == "END INSTANCE") {
+    if (scope_ != Scope::kInstance) return misplaced("without *INSTANCE");
+    scope_ = Scope::kAssembly;
+    return absl::OkStatus();
+  }
+  handled = false;
+  return absl::OkStatus();
+}
+
+absl::StatusOr<MeshFile> AbaqusParser::Assemble() {
+  MeshFile file;
+  // The parts placed, in order: a flat file's own, or each instance's part.
+  std::vector<size_t> placed;
+  std::vector<uint32_t> tet_offset;
+  const auto place = [&](const Part& part, const Instance* instance) -> absl::Status {
+    if (file.mesh.points.size() + part.points.size() >= (size_t{1} << 32) - 1) {
+      return Error(instance != nullptr ? instance->line : 0, "more than 2^32 - 1 nodes");
+    }
+    const uint32_t point_offset = static_cast<uint32_t>(file.mesh.points.size());
+    tet_offset.push_back(static_cast<uint32_t>(file.mesh.tets.size()));
+    for (Vec3 p : part.points) {
+      if (instance != nullptr) {
+        for (int a = 0; a < 3; ++a) p[a] += instance->translation[a];
+        if (instance->rotated) {
+          p = Rotate(p, instance->axis_a, instance->axis_b, instance->degrees);
+        }
+      }
+      file.mesh.points.push_back(p);
+    }
+    for (Tet t : part.tets) {
+      for (uint32_t& v : t) v += point_offset;
+      file.mesh.tets.push_back(t);
+    }
+    return absl::OkStatus();
+  };
+  if (instances_.empty()) {
+    for (size_t p = 1; p < parts_.size(); ++p) {
+      if (!parts_[p].tets.empty()) {
+        return Error(parts_[p].line, absl::StrCat("part ", parts_[p].name,
+                                                  " has tetrahedra but no *INSTANCE in an "
+                                                  "*ASSEMBLY places it"));
+      }
+    }
+    placed.push_back(0);
+    if (absl::Status s = place(parts_[0], nullptr); !s.ok()) return s;
+  } else {
+    if (!parts_[0].tets.empty()) {
+      return Error(0, "elements outside *PART in a file whose assembly places parts");
+    }
+    // Instances of parts without tets (rigid surfaces, shells) add nothing.
+    for (const Instance& instance : instances_) {
+      if (parts_[instance.part].tets.empty()) continue;
+      placed.push_back(instance.part);
+      if (absl::Status s = place(parts_[instance.part], &instance); !s.ok()) return s;
+    }
+  }
+  if (absl::Status s = AssignLabels(file, placed, tet_offset); !s.ok()) return s;
+  return file;
+}
+
+absl::Status AbaqusParser::AssignLabels(MeshFile& file, const std::vector<size_t>& placed,
+                                        const std::vector<uint32_t>& tet_offset) {
+  // The sets in the order they are taken: each placed part's (its *ELSET blocks, else the ELSET=
+  // of its *ELEMENT blocks), then the assembly's. With several instances placed, a part's set
+  // name is qualified by its instance's, as Abaqus/CAE shows it ("Part-1-1.Set-1").
+  struct Candidate {
+    const ElementSet* set;
+    const Part* part;
+    uint32_t offset;
+    std::string name;
+  };
+  std::vector<Candidate> candidates;
+  std::vector<const Instance*> placed_instances;
+  for (const Instance& instance : instances_) {
+    if (!parts_[instance.part].tets.empty()) placed_instances.push_back(&instance);
+  }
+  for (size_t i = 0; i < placed.size(); ++i) {
+    const Part& part = parts_[placed[i]];
+    for (const ElementSet& set : part.sets.empty() ? part.element_sets : part.sets) {
+      candidates.push_back({&set, &part, tet_offset[i],
+                            placed_instances.size() > 1
+                                ? absl::StrCat(placed_instances[i]->name, ".", set.name)
+                                : set.name});
+    }
+  }
+  for (const ElementSet& set : assembly_sets_) {
+    const Instance* instance = nullptr;
+    for (const Instance& i : instances_) {
+      if (absl::AsciiStrToUpper(i.name) == set.instance) instance = &i;
+    }
+    if (instance == nullptr) {
+      return Error(set.line, absl::StrCat("element set ", set.name, " names instance ",
+                                          set.instance, ", which the assembly does not define"));
+    }
+    const auto at = std::find(placed_instances.begin(), placed_instances.end(), instance);
+    const uint32_t offset =
+        at == placed_instances.end() ? 0 : tet_offset[at - placed_instances.begin()];
+    candidates.push_back(
+        {&set, &parts_[instance->part], offset,
+         placed_instances.size() > 1 ? absl::StrCat(instance->name, ".", set.name) : set.name});
+  }
   std::vector<int32_t> region(file.mesh.tets.size(), -1);  // index into `taken`, -1: none
-  std::vector<const ElementSet*> taken;
-  for (const ElementSet& set : sets) {
+  std::vector<const Candidate*> taken;
+  for (const Candidate& candidate : candidates) {
+    const ElementSet& set = *candidate.set;
+    const Part& part = *candidate.part;
     std::vector<uint32_t> tets;
     bool overlaps = false;
     const auto take = [&](int64_t id) -> absl::Status {
-      const auto it = tet_index_.find(id);
-      if (it == tet_index_.end()) {
-        if (other_elements_.count(id) == 0) {
-          return Error(set.line, absl::StrCat("element set ", set.name, " names element ", id,
-                                              ", which the file does not define"));
+      const auto it = part.tet_index.find(id);
+      if (it == part.tet_index.end()) {
+        if (part.other_elements.count(id) == 0) {
+          return Error(set.line,
+                       absl::StrCat("element set ", set.name, " names element ", id, ", which ",
+                                    part.name.empty() ? std::string("the file")
+                                                      : absl::StrCat("part ", part.name),
+                                    " does not define"));
         }
         return absl::OkStatus();
       }
-      tets.push_back(it->second);
-      if (region[it->second] >= 0) overlaps = true;
+      const uint32_t t = candidate.offset + it->second;
+      tets.push_back(t);
+      if (region[t] >= 0) overlaps = true;
       return absl::OkStatus();
     };
     for (int64_t id : set.ids) {
       if (absl::Status s = take(id); !s.ok()) return s;
     }
-    // A range longer than the file's element count names an element it does not define; the
+    // A range longer than the part's element count names an element it does not define; the
     // walk below stops at the first such id, after at most that many steps.
     for (const IdRange& r : set.ranges) {
       for (int64_t id = r.first; id <= r.last; id += r.step) {
@@ -291,7 +574,7 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file) {
     }
     if (tets.empty() || overlaps) continue;
     for (uint32_t t : tets) region[t] = static_cast<int32_t>(taken.size());
-    taken.push_back(&set);
+    taken.push_back(&candidate);
   }
   if (taken.empty()) return absl::OkStatus();
   // Labels: the sets' trailing numbers when they are distinct and not 0, else 1, 2, ...
@@ -327,40 +610,57 @@ absl::StatusOr<MeshFile> AbaqusParser::Parse() {
     if (raw[0] != '*') {
       return Error(line, "data line outside any keyword block");
     }
-    const Keyword k = ParseKeyword(raw);
-    if (k.name == "PART" || k.name == "INSTANCE" || k.name == "ASSEMBLY") {
-      return FileUnsupported(
-          path_, absl::StrCat("line ", line + 1, ": *", k.name,
-                              ": Abaqus/CAE parts and instances (each with its own numbering "
-                              "and transform) are not read; write a flat input (Gmsh or "
-                              "meshio write one)"));
+    Keyword k = ParseKeyword(raw);
+    // "*End Part" and "*EndPart" alike.
+    if (absl::StartsWith(k.name, "END") && k.name.size() > 3 && k.name[3] != ' ') {
+      k.name.insert(3, " ");
     }
     if (k.name == "INCLUDE") {
       return FileUnsupported(path_, absl::StrCat("line ", line + 1,
                                                  ": *INCLUDE is not followed; put the included "
                                                  "file's lines in its place"));
     }
+    bool handled = false;
+    if (absl::Status s = Structure(k, line, handled); !s.ok() || handled) {
+      if (!s.ok()) return s;
+      continue;
+    }
     absl::Status s;
-    if (k.name == "NODE") {
-      s = ReadNodes();
-    } else if (k.name == "ELEMENT") {
-      s = ReadElements(k, line);
-    } else if (k.name == "ELSET") {
-      s = ReadSet(k, line);
+    const bool in_part = scope_ == Scope::kTop || scope_ == Scope::kPart;
+    if (k.name == "NODE" && in_part) {
+      s = ReadNodes(parts_[current_]);
+    } else if (k.name == "ELEMENT" && in_part) {
+      s = ReadElements(parts_[current_], k, line);
+    } else if (k.name == "ELSET" && in_part) {
+      ElementSet set;
+      s = ReadSet(k, line, set);
+      parts_[current_].sets.push_back(std::move(set));
+    } else if (k.name == "ELSET" && k.params.count("INSTANCE") > 0) {
+      // An assembly's set of one instance's elements, numbered as its part numbers them.
+      ElementSet set;
+      s = ReadSet(k, line, set);
+      set.instance = absl::AsciiStrToUpper(k.params.at("INSTANCE"));
+      assembly_sets_.push_back(std::move(set));
+    } else if ((k.name == "NODE" || k.name == "ELEMENT") && scope_ == Scope::kInstance) {
+      return Error(line, absl::StrCat("*", k.name,
+                                      " inside *INSTANCE: instances that define "
+                                      "their own nodes and elements are not read"));
     } else {
-      // Anything else (HEADING's title, NSET, MATERIAL, STEP, ...): its data lines are skipped.
-      while (at_ < lines_.size()) {
-        const absl::string_view next = absl::StripAsciiWhitespace(lines_[at_]);
-        if (!next.empty() && next[0] == '*' && !IsComment(next)) break;
-        ++at_;
-      }
+      // Anything else (HEADING's title, NSET, MATERIAL, STEP, an assembly's reference nodes and
+      // connector elements, ...): its data lines are skipped.
+      SkipData();
     }
     if (!s.ok()) return s;
   }
+  if (scope_ != Scope::kTop) {
+    return Error(static_cast<int64_t>(lines_.size()) - 1,
+                 scope_ == Scope::kPart ? "the file ends inside *PART (no *END PART)"
+                 : scope_ == Scope::kAssembly
+                     ? "the file ends inside *ASSEMBLY (no *END ASSEMBLY)"
+                     : "the file ends inside *INSTANCE (no *END INSTANCE)");
+  }
   if (absl::Status s = census_.Check(path_); !s.ok()) return s;
-  MeshFile file = std::move(file_);
-  if (absl::Status s = AssignLabels(file); !s.ok()) return s;
-  return file;
+  return Assemble();
 }
 
 }  // namespace

@@ -6,9 +6,10 @@
 
 namespace tetrefine::io {
 
-// Abaqus input (.inp) as Gmsh, meshio and CalculiX write it: a flat file of *NODE and *ELEMENT
-// blocks. Keywords and parameters are case-insensitive; "**" lines are comments; a data line
-// ending with a comma continues on the next.
+// Abaqus input (.inp) as Gmsh, meshio and CalculiX write it (a flat file of *NODE and *ELEMENT
+// blocks), or as Abaqus/CAE writes it (parts placed by instances, below). Keywords and parameters
+// are case-insensitive; "**" lines are comments; a data line ending with a comma continues on the
+// next.
 //   *NODE: "id, x, y, z"; ids are any distinct integers.
 //   *ELEMENT, TYPE=...: C3D4 and its variants (C3D4H, C3D4T, DC3D4, ...) are the tets; other
 //     volume elements (C3D10 quadratic tets, C3D8 bricks, C3D6 wedges, ...) refuse the file,
@@ -19,8 +20,19 @@ namespace tetrefine::io {
 //     number ("PhysicalVolume5", "Volume1") gives that number as its label when the taken sets'
 //     numbers are distinct; otherwise the sets are numbered 1, 2, ... in file order. Tets in no
 //     taken set get 0. The names go to region_names (Gmsh's $PhysicalNames when written as .msh).
-// *PART, *INSTANCE and *ASSEMBLY (Abaqus/CAE's structured files, with per-instance transforms)
-// and *INCLUDE are refused with a message saying so; any other keyword (materials, steps,
+// Abaqus/CAE's structured files: each *PART ... *END PART holds its own *NODE, *ELEMENT and
+//   *ELSET blocks, numbered within the part; the *ASSEMBLY places parts by *INSTANCE, NAME=...,
+//   PART=... (case-insensitive names), with up to two data lines: a translation "x, y, z", then a
+//   rotation "ax, ay, az, bx, by, bz, degrees" about the axis from a to b (right-handed), applied
+//   after the translation as the Abaqus Keywords Reference describes *INSTANCE. The mesh is every
+//   instance's tets in *INSTANCE order, each with its own copy of its part's nodes (instances that
+//   share faces are refused later, as any mesh with overlapping boundaries is); instances of parts
+//   without tets add nothing. Regions: each instance's part sets, by the rule above, then the
+//   assembly's *ELSET, INSTANCE=... sets; with more than one instance placed a part's set is
+//   named after its instance ("Block-1.Core3"). The assembly's own nodes and elements (reference
+//   points, connectors) are skipped. A part with tets that no instance places, an instance that
+//   defines its own nodes, and a block left open are errors.
+// *INCLUDE is refused with a message saying so; any other keyword (materials, sections, steps,
 // boundary conditions) is skipped with its data lines. Errors name the file and line.
 absl::StatusOr<MeshFile> ParseAbaqus(absl::string_view text, absl::string_view path);
 

@@ -124,7 +124,6 @@ TEST(IoAbaqusTest, ErrorsNameTheFileAndLine) {
        "1 C3D10 element and no tetrahedra"},
       {nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n*ELEMENT, TYPE=C3D8R\n2,1,2,3,4,1,2,3,4\n",
        "1 C3D8R element beside 1 tetrahedron"},
-      {"*PART, NAME=Part-1\n" + nodes, "line 1: *PART: Abaqus/CAE parts and instances"},
       {"*INCLUDE, INPUT=mesh.inp\n", "*INCLUDE is not followed"},
       {nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,9\n", ":7: element 1: node \"9\" is not defined"},
       {nodes + "2,5,5,5\n", ":6: node 2 is defined twice"},
@@ -156,6 +155,173 @@ TEST(IoAbaqusTest, ErrorsNameTheFileAndLine) {
     } else {
       EXPECT_TRUE(ValidateMeshFile(*file, "cut.inp").ok());
     }
+  }
+}
+
+// Abaqus/CAE's structured input: a part with its own numbering and sets, an assembly that
+// places an instance of it (translated, then rotated), and an assembly set of that instance.
+constexpr char kCaeHead[] = R"(*Heading
+** Job name: block Model name: Model-1
+*Preprint, echo=NO, model=NO, history=NO, contact=NO
+**
+** PARTS
+**
+*Part, name=Block
+*Node
+      1,           0.,           0.,           0.
+      2,           1.,           0.,           0.
+      3,           0.,           1.,           0.
+      4,           0.,           0.,           1.
+      5,           1.,           1.,           1.
+*Element, type=C3D4
+1, 1, 2, 3, 4
+2, 2, 3, 4, 5
+*Elset, elset=Core3
+ 1,
+*Elset, elset=Rim8, generate
+ 2,  2,  1
+*Solid Section, elset=Core3, material=Steel
+,
+*End Part
+**
+** ASSEMBLY
+**
+*Assembly, name=Assembly
+**
+)";
+
+constexpr char kCaeTail[] = R"(*Nset, nset=Fixed, instance=Block-1
+ 1,
+*Elset, elset=All, instance=Block-1, generate
+ 1,  2,  1
+*End Assembly
+**
+** MATERIALS
+**
+*Material, name=Steel
+*Elastic
+210000., 0.3
+)";
+
+// Signed volume of tet t of `mesh`, six times over.
+double Volume6(const Mesh& mesh, size_t t) {
+  const auto& [a, b, c, d] = mesh.tets[t];
+  const Vec3 &p = mesh.points[a], &q = mesh.points[b], &r = mesh.points[c], &s = mesh.points[d];
+  const Vec3 u{q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+  const Vec3 v{r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+  const Vec3 w{s[0] - p[0], s[1] - p[1], s[2] - p[2]};
+  return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+         u[2] * (v[0] * w[1] - v[1] * w[0]);
+}
+
+TEST(IoAbaqusTest, CaePartPlacedByItsInstanceKeepsItsSets) {
+  const std::string text = std::string(kCaeHead) +
+                           "*Instance, name=Block-1, part=Block\n"
+                           "10., 0., 0.\n"
+                           "0., 0., 0., 0., 0., 1., 90.\n"
+                           "*End Instance\n" +
+                           kCaeTail;
+  absl::StatusOr<MeshFile> file = ParseAbaqus(text, "cae.inp");
+  ASSERT_TRUE(file.ok()) << file.status();
+  ASSERT_EQ(file->mesh.points.size(), 5u);
+  ASSERT_EQ(file->mesh.tets, (std::vector<Tet>{{0, 1, 2, 3}, {1, 2, 3, 4}}));
+  // Translated by (10, 0, 0), then turned a quarter about z: (x, y, z) -> (-y, x + 10, z).
+  const std::vector<Vec3> want = {{0, 10, 0}, {0, 11, 0}, {-1, 10, 0}, {0, 10, 1}, {-1, 11, 1}};
+  for (size_t i = 0; i < want.size(); ++i) {
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(file->mesh.points[i][a], want[i][a], 1e-12) << i;
+  }
+  // A rotation keeps each tet's orientation and volume.
+  EXPECT_NEAR(Volume6(file->mesh, 0), 1.0, 1e-12);
+  EXPECT_NEAR(Volume6(file->mesh, 1), 2.0, 1e-12);
+  // The part's sets, then the assembly's "All" (which overlaps them and is not taken).
+  EXPECT_EQ(file->mesh.labels, (std::vector<int32_t>{3, 8}));
+  EXPECT_EQ(file->region_names.at(3), "Core3");
+  EXPECT_EQ(file->region_names.at(8), "Rim8");
+}
+
+TEST(IoAbaqusTest, EveryInstanceIsPlacedAndItsSetsNamedAfterIt) {
+  // Two instances of the block, the second moved clear of the first (keywords in other cases,
+  // "*EndInstance" spelled without a space); a shell-only part's instance adds nothing.
+  const std::string text = std::string(kCaeHead) +
+                           "*INSTANCE, NAME=Block-1, PART=block\n*END INSTANCE\n"
+                           "*instance, name=Block-2, part=Block\n5, 0, 0\n*EndInstance\n" +
+                           kCaeTail;
+  const std::string with_skin =
+      "*Part, name=Skin\n*Node\n1,0,0,0\n2,1,0,0\n3,0,1,0\n*Element, type=S3\n1,1,2,3\n"
+      "*End Part\n" +
+      text;
+  for (const std::string& t : {text, with_skin}) {
+    std::string placed = t;
+    if (&t == &with_skin) {
+      placed.insert(placed.find("*End Assembly"),
+                    "*Instance, name=Skin-1, part=Skin\n*End Instance\n");
+    }
+    absl::StatusOr<MeshFile> file = ParseAbaqus(placed, "two.inp");
+    ASSERT_TRUE(file.ok()) << file.status();
+    ASSERT_EQ(file->mesh.points.size(), 10u);
+    EXPECT_EQ(file->mesh.tets,
+              (std::vector<Tet>{{0, 1, 2, 3}, {1, 2, 3, 4}, {5, 6, 7, 8}, {6, 7, 8, 9}}));
+    EXPECT_EQ(file->mesh.points[6], (Vec3{6, 0, 0}));
+    // "Block-1.Core3" and "Block-2.Core3" share their trailing number: numbered in order.
+    EXPECT_EQ(file->mesh.labels, (std::vector<int32_t>{1, 2, 3, 4}));
+    EXPECT_EQ(file->region_names.at(1), "Block-1.Core3");
+    EXPECT_EQ(file->region_names.at(4), "Block-2.Rim8");
+  }
+}
+
+TEST(IoAbaqusTest, AssemblySetsLabelAPartWithoutSets) {
+  std::string head = kCaeHead;
+  head.erase(head.find("*Elset, elset=Core3"),
+             head.find("*End Part") - head.find("*Elset, elset=Core3"));
+  const std::string text = head +
+                           "*Instance, name=Block-1, part=Block\n*End Instance\n"
+                           "*Elset, elset=Front5, instance=Block-1\n2\n" +
+                           kCaeTail;
+  absl::StatusOr<MeshFile> file = ParseAbaqus(text, "asm.inp");
+  ASSERT_TRUE(file.ok()) << file.status();
+  // "Front5" takes tet 2, "All" then overlaps it and is not taken.
+  EXPECT_EQ(file->mesh.labels, (std::vector<int32_t>{0, 5}));
+  EXPECT_EQ(file->region_names.at(5), "Front5");
+}
+
+TEST(IoAbaqusTest, CaeStructureErrorsNameTheFileAndLine) {
+  const std::string head = kCaeHead;
+  const std::string instance = "*Instance, name=Block-1, part=Block\n*End Instance\n";
+  const struct {
+    std::string text;
+    std::string says;
+  } cases[] = {
+      {head + "*Instance, name=Block-1\n*End Instance\n*End Assembly\n",
+       "*INSTANCE Block-1 without PART="},
+      {head + "*Instance, name=B, part=Cube\n*End Instance\n*End Assembly\n",
+       "part Cube is not defined by an earlier *PART"},
+      {head + "*End Assembly\n", "part Block has tetrahedra but no *INSTANCE"},
+      {"*Part, name=Block\n*Node\n1,0,0,0\n", "the file ends inside *PART"},
+      {head + "*Instance, name=B, part=Block\n1, 2\n*End Instance\n*End Assembly\n",
+       "*INSTANCE B: expected a translation \"x, y, z\""},
+      {head + "*Instance, name=B, part=Block\n0,0,0\n1,1,1,1,1,1,90\n*End Instance\n",
+       "the rotation axis's two points are the same"},
+      {head + "*Instance, name=B, part=Block\n0,0,0\n0,0,0,0,0,1,90\n1,2,3\n",
+       "*INSTANCE B has more than two data lines"},
+      {head + instance + instance, "instance Block-1 is defined twice"},
+      {head + instance + "*Elset, elset=S, instance=Other\n1\n*End Assembly\n",
+       "element set S names instance OTHER, which the assembly does not define"},
+      {head + instance + "*Elset, elset=S, instance=Block-1\n7\n*End Assembly\n",
+       "element set S names element 7, which part Block does not define"},
+      {head + "*Instance, name=B, part=Block\n*Node\n1,0,0,0\n", "*NODE inside *INSTANCE"},
+      {"*End Part\n", ":1: *END PART without *PART"},
+      {head + "*Part, name=Two\n", "*PART inside another block"},
+      {std::string("*Part, name=P\n*End Part\n*Part, name=p\n"), "part p is defined twice"},
+      {"*Node\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*Element, type=C3D4\n1,1,2,3,4\n" + head +
+           instance + "*End Assembly\n",
+       "elements outside *PART"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.says);
+    absl::StatusOr<MeshFile> file = ParseAbaqus(c.text, "cae.inp");
+    ASSERT_FALSE(file.ok());
+    EXPECT_THAT(std::string(file.status().message()), HasSubstr("cae.inp"));
+    EXPECT_THAT(std::string(file.status().message()), HasSubstr(c.says));
   }
 }
 
