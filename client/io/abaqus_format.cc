@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <optional>
 #include <string>
@@ -130,8 +131,9 @@ Vec3 Rotate(const Vec3& p, const Vec3& a, const Vec3& b, double degrees) {
 
 class AbaqusParser {
  public:
-  AbaqusParser(absl::string_view text, absl::string_view path) : path_(path) {
-    lines_ = absl::StrSplit(text, '\n');
+  AbaqusParser(absl::string_view text, absl::string_view path, const AbaqusIncludeReader& include)
+      : text_(text), include_(include) {
+    sources_.emplace_back(path);
     parts_.emplace_back();  // the flat file's nodes and elements
   }
 
@@ -141,9 +143,14 @@ class AbaqusParser {
   // Where the keyword lines are: at the top, inside *PART, *ASSEMBLY or *INSTANCE.
   enum class Scope { kTop, kPart, kAssembly, kInstance };
 
+  // `line` indexes lines_; the message names the file it came from and its line there.
   absl::Status Error(int64_t line, absl::string_view problem) const {
-    return FileLineError(path_, line + 1, problem);
+    const auto [source, number] = where_[static_cast<size_t>(line)];
+    return FileLineError(sources_[source], number + 1, problem);
   }
+  // Appends the lines of `text` (from sources_[source]) to lines_, each *INCLUDE replaced by the
+  // lines of the file it names when include_ is set (else kept, and refused by Parse).
+  absl::Status AddLines(absl::string_view text, uint32_t source, int depth);
   // The next data line's comma-separated fields, with continuation lines (a line ending with a
   // comma) joined; false at a keyword line or the end. Comment and blank lines are skipped.
   bool NextRecord(std::vector<absl::string_view>& fields, int64_t& line);
@@ -158,9 +165,14 @@ class AbaqusParser {
   absl::Status AssignLabels(MeshFile& file, const std::vector<size_t>& placed,
                             const std::vector<uint32_t>& tet_offset);
 
-  absl::string_view path_;
-  std::vector<absl::string_view> lines_;
-  size_t at_ = 0;  // the next line to look at
+  absl::string_view text_;
+  const AbaqusIncludeReader& include_;
+  std::vector<std::string> sources_;  // [0]: the file's own path, then the included files'
+  std::deque<std::string> included_;  // the included files' text, which lines_ views
+  int64_t included_bytes_ = 0;
+  std::vector<absl::string_view> lines_;  // every line, included files' in place of *INCLUDE
+  std::vector<std::pair<uint32_t, int64_t>> where_;  // per line: source and line number there
+  size_t at_ = 0;                                    // the next line to look at
   Scope scope_ = Scope::kTop;
   std::vector<Part> parts_;                             // [0]: the flat file's
   size_t current_ = 0;                                  // the part being read
@@ -172,6 +184,59 @@ class AbaqusParser {
 };
 
 bool IsComment(absl::string_view line) { return absl::StartsWith(line, "**"); }
+
+// How deep *INCLUDE may nest (a file that includes itself stops here), and how many bytes all
+// inclusions may splice in together (a file naming a large one many times, or files that include
+// each other several times each, would otherwise grow without bound before the depth limit).
+constexpr int kMaxIncludeDepth = 8;
+constexpr int64_t kMaxIncludedBytes = int64_t{1} << 32;
+
+absl::Status AbaqusParser::AddLines(absl::string_view text, uint32_t source, int depth) {
+  int64_t number = 0;
+  for (absl::string_view line : absl::StrSplit(text, '\n')) {
+    const absl::string_view raw = absl::StripAsciiWhitespace(line);
+    const bool include = include_ && !raw.empty() && raw[0] == '*' && !IsComment(raw) &&
+                         ParseKeyword(raw).name == "INCLUDE";
+    if (!include) {
+      lines_.push_back(line);
+      where_.emplace_back(source, number++);
+      continue;
+    }
+    const auto fail = [&](absl::string_view problem) {
+      return FileLineError(sources_[source], number + 1, problem);
+    };
+    const Keyword k = ParseKeyword(raw);
+    const auto input = k.params.find("INPUT");
+    absl::string_view name;
+    if (input != k.params.end()) name = input->second;
+    if (name.size() >= 2 && name.front() == '"' && name.back() == '"') {
+      name = name.substr(1, name.size() - 2);
+    }
+    if (name.empty()) return fail("*INCLUDE without INPUT=");
+    if (depth >= kMaxIncludeDepth) {
+      return fail(absl::StrCat("*INCLUDE nested more than ", kMaxIncludeDepth,
+                               " deep (does a file include itself?)"));
+    }
+    absl::StatusOr<std::string> content = include_(name);
+    if (!content.ok()) {
+      return fail(absl::StrCat("*INCLUDE, INPUT=", name, ": ", content.status().message()));
+    }
+    included_bytes_ += static_cast<int64_t>(content->size());
+    if (included_bytes_ > kMaxIncludedBytes) {
+      return fail(absl::StrCat("*INCLUDE: the included files hold more than ", kMaxIncludedBytes,
+                               " bytes together"));
+    }
+    included_.push_back(*std::move(content));
+    sources_.emplace_back(name);
+    if (absl::Status s =
+            AddLines(included_.back(), static_cast<uint32_t>(sources_.size() - 1), depth + 1);
+        !s.ok()) {
+      return s;
+    }
+    ++number;
+  }
+  return absl::OkStatus();
+}
 
 bool AbaqusParser::NextRecord(std::vector<absl::string_view>& fields, int64_t& line) {
   fields.clear();
@@ -602,6 +667,7 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file, const std::vector<size_t
 }
 
 absl::StatusOr<MeshFile> AbaqusParser::Parse() {
+  if (absl::Status s = AddLines(text_, 0, 0); !s.ok()) return s;
   while (at_ < lines_.size()) {
     const absl::string_view raw = absl::StripAsciiWhitespace(lines_[at_]);
     const int64_t line = static_cast<int64_t>(at_);
@@ -616,9 +682,11 @@ absl::StatusOr<MeshFile> AbaqusParser::Parse() {
       k.name.insert(3, " ");
     }
     if (k.name == "INCLUDE") {
-      return FileUnsupported(path_, absl::StrCat("line ", line + 1,
-                                                 ": *INCLUDE is not followed; put the included "
-                                                 "file's lines in its place"));
+      const auto [source, number] = where_[static_cast<size_t>(line)];
+      return FileUnsupported(sources_[source],
+                             absl::StrCat("line ", number + 1,
+                                          ": *INCLUDE is not followed here; put the included "
+                                          "file's lines in its place"));
     }
     bool handled = false;
     if (absl::Status s = Structure(k, line, handled); !s.ok() || handled) {
@@ -659,14 +727,15 @@ absl::StatusOr<MeshFile> AbaqusParser::Parse() {
                      ? "the file ends inside *ASSEMBLY (no *END ASSEMBLY)"
                      : "the file ends inside *INSTANCE (no *END INSTANCE)");
   }
-  if (absl::Status s = census_.Check(path_); !s.ok()) return s;
+  if (absl::Status s = census_.Check(sources_[0]); !s.ok()) return s;
   return Assemble();
 }
 
 }  // namespace
 
-absl::StatusOr<MeshFile> ParseAbaqus(absl::string_view text, absl::string_view path) {
-  return AbaqusParser(text, path).Parse();
+absl::StatusOr<MeshFile> ParseAbaqus(absl::string_view text, absl::string_view path,
+                                     const AbaqusIncludeReader& include) {
+  return AbaqusParser(text, path, include).Parse();
 }
 
 }  // namespace tetrefine::io

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <functional>
+#include <string>
+
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 #include "client/io/mesh_file.h"
@@ -32,8 +35,14 @@ namespace tetrefine::io {
 //   named after its instance ("Block-1.Core3"). The assembly's own nodes and elements (reference
 //   points, connectors) are skipped. A part with tets that no instance places, an instance that
 //   defines its own nodes, and a block left open are errors.
-// *INCLUDE is refused with a message saying so; any other keyword (materials, sections, steps,
-// boundary conditions) is skipped with its data lines. Errors name the file and line.
-absl::StatusOr<MeshFile> ParseAbaqus(absl::string_view text, absl::string_view path);
+// *INCLUDE, INPUT=name (CalculiX decks keep their mesh in one): the named file's lines stand in
+// its place, read by `include` (ReadMesh's reads the name relative to the directory of the file it
+// reads, as Abaqus and CalculiX read it relative to the job's directory); errors in them name the
+// included file and its line. Nested up to 8 deep. Without `include` (the fuzzer, the server) an
+// *INCLUDE is refused, saying so. Any other keyword (materials, sections, steps, boundary
+// conditions) is skipped with its data lines. Errors name the file and line.
+using AbaqusIncludeReader = std::function<absl::StatusOr<std::string>(absl::string_view name)>;
+absl::StatusOr<MeshFile> ParseAbaqus(absl::string_view text, absl::string_view path,
+                                     const AbaqusIncludeReader& include = {});
 
 }  // namespace tetrefine::io

@@ -1,6 +1,7 @@
 #include "client/io/mesh_io.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -129,7 +130,10 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
       file = ParseMeshb(text, path);
       break;
     case MeshFormat::kAbaqus:
-      file = ParseAbaqus(text, path);
+      file = ParseAbaqus(text, path, [&path](absl::string_view name) {
+        return ReadFileBytes(
+            (std::filesystem::path(path).parent_path() / std::string(name)).string());
+      });
       break;
     case MeshFormat::kTetgen:  // read above, with its .node
     case MeshFormat::kPvtu:

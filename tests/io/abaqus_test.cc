@@ -325,6 +325,50 @@ TEST(IoAbaqusTest, CaeStructureErrorsNameTheFileAndLine) {
   }
 }
 
+TEST(IoAbaqusTest, IncludedFilesStandInPlaceOfTheirKeyword) {
+  // A CalculiX deck: the mesh in files of its own, one of them in a subdirectory and including
+  // another (names relative to the deck's directory, at every depth).
+  ScratchDir dir;
+  std::filesystem::create_directory(dir.File("mesh"));
+  WriteBytes(dir.File("deck.inp"),
+             "*HEADING\nincluded\n*INCLUDE, INPUT=mesh/nodes.inp\n"
+             "*include,input=\"mesh/elements.inp\"\n*MATERIAL, NAME=Steel\n");
+  WriteBytes(dir.File("mesh/nodes.inp"),
+             "*NODE, NSET=Nall\n10, 0, 0, 0\n20, 1, 0, 0\n30, 0, 1, 0\n40, 0, 0, 1\n50, 1, 1, 1\n");
+  WriteBytes(dir.File("mesh/elements.inp"),
+             "*ELEMENT, TYPE=C3D4, ELSET=Eall\n7, 10, 20, 30, 40\n9, 20, 30, 40, 50\n"
+             "*INCLUDE, INPUT=mesh/sets.inp\n");
+  WriteBytes(dir.File("mesh/sets.inp"), "*ELSET, ELSET=Core3\n7\n*ELSET, ELSET=Rim8\n9\n");
+  absl::StatusOr<MeshFile> file = ReadMesh(dir.File("deck.inp"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.points.size(), 5u);
+  EXPECT_EQ(file->mesh.tets, (std::vector<Tet>{{0, 1, 2, 3}, {1, 2, 3, 4}}));
+  EXPECT_EQ(file->mesh.labels, (std::vector<int32_t>{3, 8}));
+
+  // An error in an included file names that file and its own line.
+  WriteBytes(dir.File("mesh/sets.inp"), "*ELSET, ELSET=Core3\n7\n*ELSET, ELSET=Rim8\n99\n");
+  file = ReadMesh(dir.File("deck.inp"));
+  ASSERT_FALSE(file.ok());
+  EXPECT_THAT(std::string(file.status().message()),
+              HasSubstr("mesh/sets.inp:3: element set Rim8 names element 99"));
+  // A missing file is named, with the line that includes it.
+  WriteBytes(dir.File("mesh/elements.inp"), "*INCLUDE, INPUT=mesh/gone.inp\n");
+  file = ReadMesh(dir.File("deck.inp"));
+  ASSERT_FALSE(file.ok());
+  EXPECT_THAT(std::string(file.status().message()),
+              HasSubstr("mesh/elements.inp:1: *INCLUDE, INPUT=mesh/gone.inp: "));
+  // A file that includes itself stops at the depth limit.
+  WriteBytes(dir.File("mesh/elements.inp"), "** loop\n*INCLUDE, INPUT=mesh/elements.inp\n");
+  file = ReadMesh(dir.File("deck.inp"));
+  ASSERT_FALSE(file.ok());
+  EXPECT_THAT(std::string(file.status().message()), HasSubstr("nested more than 8 deep"));
+  WriteBytes(dir.File("mesh/elements.inp"), "*INCLUDE\n");
+  file = ReadMesh(dir.File("deck.inp"));
+  ASSERT_FALSE(file.ok());
+  EXPECT_THAT(std::string(file.status().message()),
+              HasSubstr("mesh/elements.inp:1: *INCLUDE without INPUT="));
+}
+
 TEST(IoAbaqusTest, InpIsReadNotWritten) {
   EXPECT_TRUE(IsMeshPath("x.inp"));
   EXPECT_FALSE(IsWritableMeshPath("x.inp"));
