@@ -86,6 +86,10 @@ struct ElementSet {
   std::vector<int64_t> ids;
   std::vector<IdRange> ranges;
   std::string instance;  // an assembly's set: the INSTANCE= it names (upper case)
+  // Earlier sets this one names ("*ELSET, ELSET=All" over "Core3, Rim8"), walked when the labels
+  // are assigned rather than copied here: sets that each name the one before twice would double
+  // with every line.
+  std::vector<const ElementSet*> members;
 };
 
 // The nodes, elements and sets of one *PART block, or of a flat file (name empty): each part has
@@ -98,8 +102,9 @@ struct Part {
   std::unordered_map<int64_t, uint32_t> node_index;
   std::unordered_map<int64_t, uint32_t> tet_index;  // element id -> tet
   std::unordered_set<int64_t> other_elements;       // ids of skipped elements
-  std::vector<ElementSet> sets;                     // *ELSET blocks, in file order
-  std::vector<ElementSet> element_sets;             // ELSET= of *ELEMENT blocks
+  // Deques: sets point to the earlier sets they name.
+  std::deque<ElementSet> sets;          // *ELSET blocks, in file order
+  std::deque<ElementSet> element_sets;  // ELSET= of *ELEMENT blocks
 };
 
 // An *INSTANCE of a part in the *ASSEMBLY: its nodes moved by the translation, then rotated by
@@ -127,6 +132,15 @@ Vec3 Rotate(const Vec3& p, const Vec3& a, const Vec3& b, double degrees) {
   Vec3 out;
   for (int i = 0; i < 3; ++i) out[i] = a[i] + v[i] * c + cross[i] * s + k[i] * dot * (1.0 - c);
   return out;
+}
+
+// The last of `sets` named `name` (upper case) of `instance`, or null.
+const ElementSet* LatestNamed(const std::deque<ElementSet>& sets, const std::string& name,
+                              const std::string& instance) {
+  for (auto it = sets.rbegin(); it != sets.rend(); ++it) {
+    if (it->instance == instance && absl::AsciiStrToUpper(it->name) == name) return &*it;
+  }
+  return nullptr;
 }
 
 class AbaqusParser {
@@ -157,7 +171,10 @@ class AbaqusParser {
   void SkipData();
   absl::Status ReadNodes(Part& part);
   absl::Status ReadElements(Part& part, const Keyword& k, int64_t keyword_line);
-  absl::Status ReadSet(const Keyword& k, int64_t keyword_line, ElementSet& set);
+  // `named` finds an earlier set by its upper-case name, or gives null.
+  absl::Status ReadSet(const Keyword& k, int64_t keyword_line,
+                       const std::function<const ElementSet*(const std::string&)>& named,
+                       ElementSet& set);
   absl::Status OpenPart(const Keyword& k, int64_t line);
   absl::Status OpenInstance(const Keyword& k, int64_t line);
   absl::Status Structure(const Keyword& k, int64_t line, bool& handled);
@@ -179,7 +196,7 @@ class AbaqusParser {
   std::unordered_map<std::string, size_t> part_named_;  // upper-case name -> part
   std::vector<Instance> instances_;
   bool assembly_ = false;
-  std::vector<ElementSet> assembly_sets_;  // *ELSET, INSTANCE=... in the assembly
+  std::deque<ElementSet> assembly_sets_;  // *ELSET, INSTANCE=... in the assembly
   CellCensus census_;
 };
 
@@ -355,7 +372,9 @@ absl::Status AbaqusParser::ReadElements(Part& part, const Keyword& k, int64_t ke
   return absl::OkStatus();
 }
 
-absl::Status AbaqusParser::ReadSet(const Keyword& k, int64_t keyword_line, ElementSet& set) {
+absl::Status AbaqusParser::ReadSet(
+    const Keyword& k, int64_t keyword_line,
+    const std::function<const ElementSet*(const std::string&)>& named, ElementSet& set) {
   const auto name = k.params.find("ELSET");
   if (name == k.params.end() || name->second.empty()) {
     return Error(keyword_line, "*ELSET without ELSET=");
@@ -370,11 +389,18 @@ absl::Status AbaqusParser::ReadSet(const Keyword& k, int64_t keyword_line, Eleme
     for (absl::string_view field : f) {
       if (field.empty()) continue;
       int64_t n = 0;
-      if (!ParseInt64(field, n)) {
-        return Error(line, absl::StrCat("*ELSET ", set.name, ": \"", field.substr(0, 30),
-                                        "\" is not an element id (sets of sets are not read)"));
+      if (ParseInt64(field, n)) {
+        numbers.push_back(n);
+        continue;
       }
-      numbers.push_back(n);
+      const ElementSet* member = generate ? nullptr : named(absl::AsciiStrToUpper(field));
+      if (member == nullptr) {
+        return Error(line, absl::StrCat("*ELSET ", set.name, ": \"", field.substr(0, 30),
+                                        "\" is neither an element id nor ",
+                                        generate ? "allowed with GENERATE"
+                                                 : "the name of an earlier element set"));
+      }
+      set.members.push_back(member);
     }
     if (!generate) {
       set.ids.insert(set.ids.end(), numbers.begin(), numbers.end());
@@ -610,15 +636,18 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file, const std::vector<size_t
     const Part& part = *candidate.part;
     std::vector<uint32_t> tets;
     bool overlaps = false;
+    // The set being walked: `set` or one it names.
+    const ElementSet* walking = &set;
     const auto take = [&](int64_t id) -> absl::Status {
       const auto it = part.tet_index.find(id);
       if (it == part.tet_index.end()) {
         if (part.other_elements.count(id) == 0) {
-          return Error(set.line,
-                       absl::StrCat("element set ", set.name, " names element ", id, ", which ",
-                                    part.name.empty() ? std::string("the file")
-                                                      : absl::StrCat("part ", part.name),
-                                    " does not define"));
+          return Error(
+              walking->line,
+              absl::StrCat(
+                  "element set ", walking->name, " names element ", id, ", which ",
+                  part.name.empty() ? std::string("the file") : absl::StrCat("part ", part.name),
+                  " does not define"));
         }
         return absl::OkStatus();
       }
@@ -627,14 +656,24 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file, const std::vector<size_t
       if (region[t] >= 0) overlaps = true;
       return absl::OkStatus();
     };
-    for (int64_t id : set.ids) {
-      if (absl::Status s = take(id); !s.ok()) return s;
-    }
-    // A range longer than the part's element count names an element it does not define; the
-    // walk below stops at the first such id, after at most that many steps.
-    for (const IdRange& r : set.ranges) {
-      for (int64_t id = r.first; id <= r.last; id += r.step) {
+    // Each set once, the named ones too, however often they are named.
+    std::vector<const ElementSet*> to_walk = {&set};
+    std::unordered_set<const ElementSet*> seen_sets = {&set};
+    while (!to_walk.empty()) {
+      walking = to_walk.back();
+      to_walk.pop_back();
+      for (int64_t id : walking->ids) {
         if (absl::Status s = take(id); !s.ok()) return s;
+      }
+      // A range longer than the part's element count names an element it does not define; the
+      // walk below stops at the first such id, after at most that many steps.
+      for (const IdRange& r : walking->ranges) {
+        for (int64_t id = r.first; id <= r.last; id += r.step) {
+          if (absl::Status s = take(id); !s.ok()) return s;
+        }
+      }
+      for (const ElementSet* member : walking->members) {
+        if (seen_sets.insert(member).second) to_walk.push_back(member);
       }
     }
     if (tets.empty() || overlaps) continue;
@@ -700,14 +739,25 @@ absl::StatusOr<MeshFile> AbaqusParser::Parse() {
     } else if (k.name == "ELEMENT" && in_part) {
       s = ReadElements(parts_[current_], k, line);
     } else if (k.name == "ELSET" && in_part) {
+      Part& part = parts_[current_];
       ElementSet set;
-      s = ReadSet(k, line, set);
-      parts_[current_].sets.push_back(std::move(set));
+      s = ReadSet(
+          k, line,
+          [&part](const std::string& name) {
+            const ElementSet* found = LatestNamed(part.sets, name, "");
+            return found != nullptr ? found : LatestNamed(part.element_sets, name, "");
+          },
+          set);
+      part.sets.push_back(std::move(set));
     } else if (k.name == "ELSET" && k.params.count("INSTANCE") > 0) {
       // An assembly's set of one instance's elements, numbered as its part numbers them.
       ElementSet set;
-      s = ReadSet(k, line, set);
-      set.instance = absl::AsciiStrToUpper(k.params.at("INSTANCE"));
+      const std::string instance = absl::AsciiStrToUpper(k.params.at("INSTANCE"));
+      s = ReadSet(
+          k, line,
+          [&](const std::string& name) { return LatestNamed(assembly_sets_, name, instance); },
+          set);
+      set.instance = instance;
       assembly_sets_.push_back(std::move(set));
     } else if ((k.name == "NODE" || k.name == "ELEMENT") && scope_ == Scope::kInstance) {
       return Error(line, absl::StrCat("*", k.name,

@@ -23,6 +23,8 @@ namespace tetrefine::io {
 //     number ("PhysicalVolume5", "Volume1") gives that number as its label when the taken sets'
 //     numbers are distinct; otherwise the sets are numbered 1, 2, ... in file order. Tets in no
 //     taken set get 0. The names go to region_names (Gmsh's $PhysicalNames when written as .msh).
+//     An *ELSET's data may name earlier sets (case-insensitive; *ELSET blocks or *ELEMENT's
+//     ELSET=), whose elements it then holds.
 // Abaqus/CAE's structured files: each *PART ... *END PART holds its own *NODE, *ELEMENT and
 //   *ELSET blocks, numbered within the part; the *ASSEMBLY places parts by *INSTANCE, NAME=...,
 //   PART=... (case-insensitive names), with up to two data lines: a translation "x, y, z", then a

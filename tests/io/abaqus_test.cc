@@ -114,6 +114,40 @@ TEST(IoAbaqusTest, OverlappingSetsGiveTheFirstAndUnnumberedSetsCount) {
   EXPECT_TRUE(file->mesh.labels.empty());
 }
 
+TEST(IoAbaqusTest, SetsNamingEarlierSetsHoldTheirElements) {
+  const std::string head =
+      "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n5,1,1,1\n6,2,2,2\n"
+      "*ELEMENT, TYPE=C3D4, ELSET=Inner\n1,1,2,3,4\n2,2,3,4,5\n"
+      "*ELEMENT, TYPE=C3D4, ELSET=Outer\n3,3,4,5,6\n";
+  // The *ELEMENT blocks' sets are not regions once *ELSET blocks exist, but those can name them
+  // (in any case); an element named twice in one set is no overlap.
+  absl::StatusOr<MeshFile> file =
+      ParseAbaqus(head + "*ELSET, ELSET=shell4\nOUTER\n*ELSET, ELSET=core2\ninner, 1\n", "s.inp");
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.labels, (std::vector<int32_t>{2, 2, 4}));
+  EXPECT_EQ(file->region_names.at(2), "core2");
+  EXPECT_EQ(file->region_names.at(4), "shell4");
+  // Sixty sets, each naming the one before twice: each is walked once, not 2^60 times.
+  std::string chain = head + "*ELSET, ELSET=s0\ninner, inner\n";
+  for (int i = 1; i < 60; ++i) {
+    chain += absl::StrCat("*ELSET, ELSET=s", i, "\ns", i - 1, ", S", i - 1, "\n");
+  }
+  file = ParseAbaqus(chain, "s.inp");
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->mesh.labels, (std::vector<int32_t>{1, 1, 0}));  // "s0"; the others overlap it
+  // A set naming a later set is refused (a set names what is defined before it, as Abaqus reads
+  // it), and an error in a named set is reported against that set.
+  file = ParseAbaqus(head + "*ELSET, ELSET=a\nb, 3\n*ELSET, ELSET=b\n1, 2\n", "s.inp");
+  ASSERT_FALSE(file.ok());
+  EXPECT_THAT(std::string(file.status().message()),
+              HasSubstr("s.inp:14: *ELSET a: \"b\" is neither an element id nor the name of an "
+                        "earlier element set"));
+  file = ParseAbaqus(head + "*ELSET, ELSET=bad\n9\n*ELSET, ELSET=all\nbad, 1\n", "s.inp");
+  ASSERT_FALSE(file.ok());
+  EXPECT_THAT(std::string(file.status().message()),
+              HasSubstr("s.inp:13: element set bad names element 9"));
+}
+
 TEST(IoAbaqusTest, ErrorsNameTheFileAndLine) {
   const std::string nodes = "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n";
   const struct {
@@ -133,7 +167,7 @@ TEST(IoAbaqusTest, ErrorsNameTheFileAndLine) {
       {nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n*ELSET, ELSET=s\n1, 99\n",
        ":8: element set s names element 99"},
       {nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n*ELSET, ELSET=s\n1, other\n",
-       "sets of sets are not read"},
+       "\"other\" is neither an element id nor the name of an earlier element set"},
       // Four billion generated ids are an error at the second, not four billion allocations.
       {nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n*ELSET, ELSET=s, GENERATE\n1, 4000000000\n",
        ":8: element set s names element 2, which the file does not define"},
