@@ -34,7 +34,8 @@ size_t MaxExpansion(VtkCompressor compressor);
 absl::Status DecompressBlock(VtkCompressor compressor, absl::string_view compressed, char* out,
                              size_t decoded_size);
 
-// zlib's level for BlockCompressor that asks for ISA-L's igzip (level 1), the fastest coder.
+// zlib's level for BlockCompressor that asks for ISA-L's igzip (level 1), the fastest coder, whose
+// bytes vary from run to run (below).
 inline constexpr int kFastestZlibLevel = 0;
 
 // Compresses blocks one after another, reusing its coder state: one per thread.
@@ -42,8 +43,10 @@ inline constexpr int kFastestZlibLevel = 0;
 // counts, lzma 0-9; LZ4 ignores it. Every zlib coder writes the format VTK reads: libdeflate is
 // about 2.3x faster than zlib's own deflate at level 1 on refined meshes for 6% more bytes, and
 // ISA-L 1.9x faster than libdeflate's level 1 for 2% more (bench/mesh_io_bench; vtu_writer.cc).
-// ISA-L picks its SIMD code for the CPU at run time, so its bytes may differ from one CPU
-// generation to another; what they decode to never does.
+// ISA-L's bytes are not reproducible: the same block, given to a fresh coder, came out 1-3 bytes
+// longer or shorter in about 1 of 3000 blocks of a `tetrefine refine` run, even with one thread
+// (2026-11-27; its levels 1 and 2, not 0); what they decode to never changes. libdeflate's bytes
+// depend only on the block and the level, which is why vtu_writer.cc's default is libdeflate's.
 class BlockCompressor {
  public:
   BlockCompressor(VtkCompressor compressor, int level);

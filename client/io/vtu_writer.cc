@@ -24,17 +24,17 @@
 namespace tetrefine::io {
 namespace {
 
-// zlib's fastest coder when the caller does not choose: ISA-L's igzip (kFastestZlibLevel).
-// Measured 2026-11-25 on bench/file_to_file.sh's output (2.82 M tets with value, iteration,
-// quality and labels): its 108 MB of blocks, one thread, took libdeflate's level 1 0.70 s for
-// 42.6 MB, ISA-L's level 1 0.37 s for 43.4 MB (15.4 bytes per tet) and ISA-L's level 0 0.30 s for
-// 54 MB; bench/mesh_io_bench on 2 threads, both coders in one run: encode 0.27-0.31 s against
-// 0.57-0.70 s. Before that, on a refined 1.6 M-tet mesh, libdeflate's level 1 wrote 16.2 bytes
-// per tet and its level 6 16.1 at 1.8x the time; zlib's own deflate 15.2 (level 1) and 14.9
-// (level 6) at 2.3x and 7x the time of libdeflate's level 1. Speed wins: the file is well under
-// the 25 bytes per tet aimed at either way. Levels 1-12 (VtuWriteOptions::level) still choose
-// libdeflate's.
-constexpr int kDefaultZlibLevel = kFastestZlibLevel;
+// zlib's coder when the caller does not choose: libdeflate's level 1, whose bytes depend only on
+// the data. ISA-L's igzip (kFastestZlibLevel) encodes faster but wrote different bytes for the
+// same mesh from one run to another (a sweep found it on 2026-11-27: 3 different files in 10
+// identical runs; traced to igzip itself, see vtk_compressor.h), and a pipeline that checksums or
+// caches its outputs needs the same bytes for the same mesh. What it costs, bench/mesh_io_bench on
+// bench/file_to_file.sh's output (2.81 M tets, 2 threads, both coders in one run, 2026-11-27):
+// encode 0.217 s against ISA-L's 0.127 s, write 0.267 s against 0.156 s, 15.16 bytes per tet
+// against 15.44. Measured before (2026-11-25): zlib's own deflate writes 15.2 bytes per tet at
+// level 1 at 2.3x libdeflate's time, and libdeflate's level 6 16.1 at 1.8x; the file is well under
+// the 25 bytes per tet aimed at either way.
+constexpr int kDefaultZlibLevel = 1;
 constexpr int kDefaultLzmaLevel = 1;
 
 // One array to write: where it goes, its XML attributes, its little-endian bytes (a view of the
