@@ -40,6 +40,9 @@ absl::StatusOr<std::string> ReadFileMaybeGzip(const std::string& path);
 // `path`. rename() within a directory is atomic on POSIX, so readers see either the old file or
 // the complete new one, and a failed write never leaves half a file behind. A symbolic link at
 // `path` stays a link: the file it points to (through any chain of links) is the one replaced.
+// A character device or FIFO there (/dev/null, /dev/stdout, a named pipe to another program; or a
+// link to one) is written into as it is, never replaced; a directory, block device or socket is
+// an error naming `path`.
 absl::Status WriteFileAtomically(const std::string& path, absl::string_view content);
 
 }  // namespace tetrefine::io

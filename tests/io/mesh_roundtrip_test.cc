@@ -1,9 +1,17 @@
 // Mesh formats: write-then-read round trips, hand-written inputs, the real Medit mesh, and
 // atomic writes.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <string>
+#include <thread>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_replace.h"
@@ -382,6 +390,55 @@ TEST(IoMeshTest, WritingThroughASymbolicLinkKeepsTheLink) {
     for (const auto& entry : std::filesystem::directory_iterator(dir.File(sub))) {
       EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
     }
+  }
+}
+
+// A FIFO or character device at the output path (or behind a link there) is written into, never
+// replaced: as root, `--output /dev/null` used to turn /dev/null into a regular file. Only private
+// special files are made here.
+TEST(IoMeshTest, SpecialFilesAreWrittenIntoNotReplaced) {
+  ScratchDir dir;
+  const MeshFile mesh = RandomMesh(3);
+  ASSERT_EQ(::mkfifo(dir.File("pipe").c_str(), 0600), 0);
+  std::filesystem::create_symlink("pipe", dir.File("link.vtu"));
+  // The test holds the FIFO open for writing too, so that the reader's open returns at once and
+  // its read ends when the test lets go, whether or not the writer ever opened the FIFO (a
+  // replaced FIFO would otherwise leave the reader waiting forever).
+  const int hold = ::open(dir.File("pipe").c_str(), O_RDWR);
+  ASSERT_GE(hold, 0);
+  std::string received;
+  std::thread reader([&] {
+    std::ifstream in(dir.File("pipe"), std::ios::binary);
+    received.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  });
+  const absl::Status written = WriteMesh(dir.File("link.vtu"), mesh);
+  ::close(hold);
+  reader.join();
+  ASSERT_TRUE(written.ok()) << written;
+  EXPECT_EQ(received, FormatVtu(mesh, {}));
+  struct stat st;
+  ASSERT_EQ(::stat(dir.File("pipe").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  EXPECT_TRUE(std::filesystem::is_symlink(dir.File("link.vtu")));
+
+  // A character device, where this test may make one (root, as CI runs): a private copy of
+  // /dev/null.
+  if (::mknod(dir.File("null").c_str(), S_IFCHR | 0600, makedev(1, 3)) == 0) {
+    ASSERT_TRUE(WriteMesh(dir.File("null.vtu"), mesh).ok());  // a regular file beside it
+    std::filesystem::create_symlink("null", dir.File("discard.vtu"));
+    EXPECT_TRUE(WriteMesh(dir.File("discard.vtu"), mesh).ok());
+    ASSERT_EQ(::stat(dir.File("null").c_str(), &st), 0);
+    EXPECT_TRUE(S_ISCHR(st.st_mode));
+  }
+
+  // A directory is an error naming the path.
+  std::filesystem::create_directory(dir.File("folder.vtu"));
+  const absl::Status folder = WriteMesh(dir.File("folder.vtu"), mesh);
+  EXPECT_FALSE(folder.ok());
+  EXPECT_THAT(std::string(folder.message()), HasSubstr("folder.vtu: cannot write: Is a directory"));
+  EXPECT_TRUE(std::filesystem::is_directory(dir.File("folder.vtu")));
+  for (const auto& entry : std::filesystem::directory_iterator(dir.File(""))) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
   }
 }
 
