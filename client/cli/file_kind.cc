@@ -79,4 +79,38 @@ absl::Status CheckOutputPath(const std::string& path, const std::string& flag, b
   return absl::OkStatus();
 }
 
+namespace {
+
+// What a path names once links, "." and ".." are resolved (as far as the path exists).
+std::filesystem::path FileNamedBy(const std::string& path) {
+  // Absolute first: weakly_canonical leaves a relative path relative when none of it exists yet
+  // ("same.vtu" against "./same.vtu").
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, ec);
+  if (ec) return path;
+  std::filesystem::path resolved = std::filesystem::weakly_canonical(absolute, ec);
+  return ec ? absolute.lexically_normal() : resolved;
+}
+
+bool IsSpecialFile(const std::filesystem::path& path) {
+  std::error_code ec;
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  return !ec && (std::filesystem::is_character_file(status) || std::filesystem::is_fifo(status));
+}
+
+}  // namespace
+
+absl::Status CheckNotTheSameFile(const NamedPath& output, const std::vector<NamedPath>& others) {
+  const std::filesystem::path file = FileNamedBy(output.path);
+  if (IsSpecialFile(file)) return absl::OkStatus();
+  for (const NamedPath& other : others) {
+    if (other.path.empty() || FileNamedBy(other.path) != file) continue;
+    return absl::InvalidArgumentError(
+        absl::StrCat(output.path, ": ", output.flag, " names the same file as ", other.flag,
+                     other.path == output.path ? "" : absl::StrCat(" (", other.path, ")"),
+                     "; writing it would overwrite that"));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace tetrefine::cli

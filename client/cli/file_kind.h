@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "absl/status/status.h"
 
@@ -24,5 +25,16 @@ std::string FileStem(const std::string& path);
 // `mesh` is set, a directory that exists, and no directory of that name. The message names the
 // path and the flag.
 absl::Status CheckOutputPath(const std::string& path, const std::string& flag, bool mesh);
+
+// A file a command names by a flag: {"--stats-json", "run.json"}.
+struct NamedPath {
+  std::string flag;
+  std::string path;
+};
+// Checks that `output` names a file that none of `others` names (through links, "./" and the
+// like: the same file, not the same string), so that one output cannot overwrite another or an
+// input. Character devices and FIFOs (/dev/null for two outputs) may be shared. The message names
+// both flags and the path.
+absl::Status CheckNotTheSameFile(const NamedPath& output, const std::vector<NamedPath>& others);
 
 }  // namespace tetrefine::cli

@@ -213,6 +213,10 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   if (args.Has("stats-json")) {
     absl::Status stats = CheckOutputPath(s->stats_json_path, "--stats-json", /*mesh=*/false);
     if (!stats.ok()) return stats;
+    stats = CheckNotTheSameFile(
+        {"--stats-json", s->stats_json_path},
+        {{"--output", s->output_path}, {"--volume", s->volume_path}, {"--mesh", s->mesh_path}});
+    if (!stats.ok()) return stats;
   }
   return absl::OkStatus();
 }

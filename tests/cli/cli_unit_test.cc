@@ -1,9 +1,12 @@
 // Unit tests of the pieces of the tetrefine command line: argument parsing, JSON, the grid
 // mesher, mesh fitting and the mesh report. Suites are named Cli* (`ctest -R '^Cli'`).
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <random>
 #include <string>
@@ -176,6 +179,36 @@ TEST(CliFileKind, ExtensionsAndStems) {
   EXPECT_EQ(PathStem("dir.d/noext"), "dir.d/noext");
   EXPECT_EQ(FileStem("dir/cube.mesh"), "cube");
   EXPECT_EQ(FileStem(".hidden"), ".hidden");
+}
+
+// One output must not name the file another output or an input names, however it is spelled; a
+// device two outputs share is fine. (A sweep wrote --stats-json over --output and over the input
+// volume, exit 0.)
+TEST(CliFileKind, AnOutputNamingAnotherFlagsFileIsRefused) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("tetrefine_same_file_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir / "sub");
+  std::FILE* f = std::fopen((dir / "vol.nii").c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fclose(f);
+  std::filesystem::create_symlink(dir / "vol.nii", dir / "link.json");
+  const std::string d = dir.string();
+  const std::vector<NamedPath> others = {{"--output", d + "/sub/../out.vtu"},
+                                         {"--volume", d + "/vol.nii"}};
+  for (const std::string& same : {d + "/out.vtu", d + "/./out.vtu", d + "/sub/../out.vtu",
+                                  d + "/vol.nii", d + "/link.json"}) {
+    const absl::Status s = CheckNotTheSameFile({"--stats-json", same}, others);
+    EXPECT_FALSE(s.ok()) << same;
+    EXPECT_TRUE(absl::StrContains(s.message(), "--stats-json names the same file as")) << s;
+  }
+  EXPECT_TRUE(CheckNotTheSameFile({"--stats-json", d + "/run.json"}, others).ok());
+  EXPECT_TRUE(CheckNotTheSameFile({"--stats-json", "/dev/null"}, {{"--output", "/dev/null"}}).ok());
+  // Relative spellings of a file that does not exist yet.
+  std::filesystem::path cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir);
+  EXPECT_FALSE(CheckNotTheSameFile({"--stats-json", "./new.vtu"}, {{"--output", "new.vtu"}}).ok());
+  std::filesystem::current_path(cwd);
+  std::filesystem::remove_all(dir);
 }
 
 // The lattice line says whether it covers every tet or a sample of them (a sample's maximum can
