@@ -1,6 +1,7 @@
 #include "core/refine_options.h"
 
 #include <cmath>
+#include <limits>
 
 #include "absl/strings/str_cat.h"
 
@@ -72,6 +73,22 @@ absl::Status ValidateRefineOptions(const RefineOptions& o) {
   }
   if (o.lattice_max_tets < 0) {
     return Invalid("lattice_max_tets", o.lattice_max_tets, "must be >= 0");
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckNormCoeffForRange(double norm_coeff, const std::array<double, 2>& range) {
+  if (!std::isnormal(norm_coeff) || norm_coeff < 0.0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("options.norm_coeff: must be a positive normal number (>= ",
+                     std::numeric_limits<double>::min(), "), got ", norm_coeff));
+  }
+  const double ratio = (range[1] - range[0]) / norm_coeff;
+  if (!(ratio <= kMaxRangeOverNorm)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "options.norm_coeff: ", norm_coeff, " is too small for the volume's value range [",
+        range[0], ", ", range[1], "]: errors up to ", ratio,
+        " would overflow the statistics; it must be at least range / ", kMaxRangeOverNorm));
   }
   return absl::OkStatus();
 }

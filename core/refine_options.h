@@ -1,5 +1,7 @@
 #pragma once
 
+#include <array>
+
 // The options of one refinement: the one plain options struct, and its one set of limits. Every
 // layer that carries options (the wire's request options, the client's call, the CLI's flags)
 // embeds or fills this struct, takes its defaults from it and validates it with
@@ -113,6 +115,17 @@ struct RefineOptions {
   // it must be thread-safe.
   std::function<bool()> should_cancel;
 };
+
+// The largest error the statistics may meet, value range / norm_coeff: they sum errors over up
+// to 2^63 edges (about 1e19), which must stay below the largest double (1.8e308).
+inline constexpr double kMaxRangeOverNorm = 1e280;
+
+// OK when `norm_coeff` suits a volume whose values span `range` ([min, max]): a normal number
+// (a subnormal one turns every error into inf) with range / norm_coeff at most
+// kMaxRangeOverNorm. Else INVALID_ARGUMENT naming options.norm_coeff, its value and the bound.
+// Refine's callers check it once the volume is known (the service when the volume has arrived,
+// `tetrefine verify` before it samples).
+absl::Status CheckNormCoeffForRange(double norm_coeff, const std::array<double, 2>& range);
 
 // OK, or INVALID_ARGUMENT naming the first offending field and its value, e.g.
 // "options.epsilon: must be finite and > 0, got 0". Refine checks its options with this; so does

@@ -18,10 +18,6 @@ namespace {
 // on indices far from overflow.
 constexpr int64_t kMaxDim = int64_t{1} << 20;
 
-// The largest error the statistics may meet, value range / norm_coeff: they sum errors over up
-// to 2^63 edges (about 1e19), which must stay below the largest double (1.8e308).
-constexpr double kMaxRangeOverNorm = 1e280;
-
 std::string KindName(const v1::RefineRequest& request) {
   const google::protobuf::FieldDescriptor* field =
       v1::RefineRequest::descriptor()->FindFieldByNumber(request.kind_case());
@@ -280,15 +276,8 @@ absl::Status RequestReader::AddVolumeChunk(const v1::VolumeChunk& chunk) {
   if (!volume.ok()) return volume.status();
   volume_ = *std::move(volume);
   if (options_.refine.norm_coeff.has_value()) {
-    const std::array<double, 2> range = volume_->ValueRange();
-    const double ratio = (range[1] - range[0]) / *options_.refine.norm_coeff;
-    if (!(ratio <= kMaxRangeOverNorm)) {
-      return Invalid(absl::StrCat("options.norm_coeff: ", *options_.refine.norm_coeff,
-                                  " is too small for the volume's value range [", range[0], ", ",
-                                  range[1], "]: errors up to ", ratio,
-                                  " would overflow the statistics; it must be at least range / ",
-                                  kMaxRangeOverNorm));
-    }
+    absl::Status norm = CheckNormCoeffForRange(*options_.refine.norm_coeff, volume_->ValueRange());
+    if (!norm.ok()) return norm;
   }
   stage_ = Stage::kMeshHeader;
   return absl::OkStatus();

@@ -17,6 +17,7 @@
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_report.h"
 #include "core/lattice.h"
+#include "core/refine_options.h"
 
 namespace tetrefine::cli {
 namespace {
@@ -135,6 +136,10 @@ int RunVerify(const std::vector<std::string>& args) {
   if (!norm_coeff.has_value()) {
     const std::array<double, 2> range = volume.ValueRange();
     norm_coeff = range[1] > range[0] ? range[1] - range[0] : 1.0;
+  } else if (absl::Status norm = CheckNormCoeffForRange(*norm_coeff, volume.ValueRange());
+             !norm.ok()) {
+    // The bound refine's service applies: a smaller one printed "max inf" and "valid".
+    return Fail(absl::StrCat("--norm-coeff: ", norm.message()), kExitUsage);
   }
   const LatticeStats lattice = SampleLattice(volume, mesh, kLatticeN, kLatticeMaxTets,
                                              /*seed=*/1, *norm_coeff, epsilon, /*clamp=*/true);

@@ -290,5 +290,22 @@ TEST_F(CliMeshVerify, InfoOnAMesh) {
   }
 }
 
+// verify bounds --norm-coeff as refine's service does: a value so small that the errors overflow
+// printed "max inf" and "valid", exit 0 (a sweep, 2026-11-27).
+TEST_F(CliMeshVerify, NormCoeffTooSmallForTheVolumeIsRefusedAsRefineRefusesIt) {
+  MakeMesh("grid.vtu", {"--block", "3"});
+  for (const char* norm : {"1e-300", "1e-310"}) {
+    const ProcessResult verify = Verify(dir_.File("grid.vtu"), {"--norm-coeff", norm});
+    EXPECT_EQ(verify.exit_code, 2) << norm << verify.out;
+    EXPECT_TRUE(absl::StrContains(verify.err, "--norm-coeff: options.norm_coeff: ")) << verify.err;
+    const ProcessResult refine =
+        RunTetrefine({"refine", "--volume", volume_, "--mesh", dir_.File("grid.vtu"), "--epsilon",
+                      "0.1", "--norm-coeff", norm, "--output", dir_.File("out.vtu")});
+    EXPECT_EQ(refine.exit_code, 2) << norm << refine.err;
+    EXPECT_TRUE(absl::StrContains(refine.err, "options.norm_coeff: ")) << refine.err;
+  }
+  EXPECT_EQ(Verify(dir_.File("grid.vtu"), {"--norm-coeff", "1e-3"}).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace tetrefine::clitest
