@@ -184,6 +184,16 @@ absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice
   // The service admits 4 vertices per admitted tet.
   limits.max_input_tets = std::max({limits.max_input_tets, choice.tets, (choice.vertices + 3) / 4});
   limits.max_output_tets = std::max(limits.max_output_tets, choice.max_tets.value_or(0));
+  // The work caps too: the CLI's own flag ranges bound them, and a shared server's defaults
+  // refused what the flags allowed (--lattice-n 17, --max-iterations 101) with a message naming
+  // server flags the user cannot set.
+  limits.max_iterations = std::max(limits.max_iterations, choice.max_iterations);
+  limits.max_lattice_n = std::max(limits.max_lattice_n, choice.lattice_n);
+  const int64_t sampled = choice.lattice_max_tets == 0
+                              ? limits.max_output_tets
+                              : std::min(choice.lattice_max_tets, limits.max_output_tets);
+  limits.max_lattice_points =
+      std::max(limits.max_lattice_points, wire::LatticePointsPerTet(choice.lattice_n) * sampled);
   return StartEmbeddedBackend(config);
 }
 

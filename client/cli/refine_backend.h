@@ -66,6 +66,9 @@ struct BackendChoice {
   int64_t vertices = 0;
   int64_t tets = 0;
   std::optional<int64_t> max_tets;
+  int max_iterations = 0;
+  int lattice_n = 0;
+  int64_t lattice_max_tets = 0;  // 0: every tet
 };
 
 // The one place the refine command's backend is decided: with shards, the mesh cut into that

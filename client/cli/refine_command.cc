@@ -476,7 +476,10 @@ int RunRefinement(const RefineSettings& s) {
        .vertices = static_cast<int64_t>(mesh.points.size()),
        .tets = static_cast<int64_t>(mesh.tets.size()),
        .max_tets = s.options.send_max_tets ? std::optional<int64_t>(s.options.refine.max_tets)
-                                           : std::nullopt});
+                                           : std::nullopt,
+       .max_iterations = s.options.refine.max_iterations,
+       .lattice_n = s.options.refine.lattice_n,
+       .lattice_max_tets = s.options.refine.lattice_max_tets});
   if (!backend.ok()) {
     // A TLS file that cannot be used is the user's input; an embedded service that does not start
     // is not.
@@ -724,8 +727,8 @@ const CommandSpec& RefineSpec() {
                  absl::StrCat(
                      "the lattice check samples N tets of a larger mesh (default ",
                      RefineOptions{}.lattice_max_tets,
-                     "); N above the output's tets checks every tet, within the "
-                     "service's cap on sampled points (tetrefine_server "
+                     "); N above the output's tets checks every tet; with --server, within "
+                     "that server's cap on sampled points (tetrefine_server "
                      "--max_lattice_points, 2e8 by default: 1.2 M tets at --lattice-n 8)")},
                 {"output", "FILE",
                  "refined mesh, .vtu .vtk .msh .mesh .meshb .ele, or .pvtu with --shards (default "

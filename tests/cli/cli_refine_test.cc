@@ -187,6 +187,20 @@ TEST_F(CliRefine, LatticeMaxTetsSetsTheSample) {
   EXPECT_TRUE(absl::StrContains(zero.err, "--lattice-max-tets: ")) << zero.err;
 }
 
+// The embedded service admits every value the flags allow: a shared server's caps (100
+// iterations, lattice order 16, 2e8 lattice points) refused --max-iterations 101, --lattice-n 17
+// and a large --lattice-max-tets with exit 1 and a message naming tetrefine_server flags.
+TEST_F(CliRefine, EmbeddedServiceAdmitsWhatTheFlagsAllow) {
+  for (const std::vector<std::string>& flags : std::vector<std::vector<std::string>>{
+           {"--max-iterations", "101"}, {"--lattice-n", "17"}, {"--lattice-max-tets", "1212122"}}) {
+    std::vector<std::string> args = {"refine",    "--volume", volume_,    "--mesh",          mesh_,
+                                     "--epsilon", "0.05",     "--output", dir_.File("e.vtu")};
+    args.insert(args.end(), flags.begin(), flags.end());
+    const ProcessResult run = RunTetrefine(args);
+    EXPECT_EQ(run.exit_code, 0) << flags[0] << ": " << run.err;
+  }
+}
+
 TEST_F(CliRefine, EveryIterationWritesOneFilePerIteration) {
   const std::string out = dir_.File("series.vtk");
   const ProcessResult run =
