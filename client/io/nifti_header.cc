@@ -31,10 +31,14 @@ NiftiHeader ParseNifti1(const FieldReader& f) {
   for (int i = 0; i < 8; ++i) h.dim[i] = f.At<int16_t>(40 + 2 * i);
   h.datatype = f.At<int16_t>(70);
   for (int i = 0; i < 8; ++i) h.pixdim[i] = f.At<float>(76 + 4 * i);
-  // vox_offset is a float in NIfTI-1; integral in every real file. Beyond int64 (or NaN) the
-  // conversion would be undefined: -1 makes the reader refuse it.
+  // vox_offset is a float in NIfTI-1; integral in every real file. A fraction would be dropped
+  // without a word, and beyond int64 (or NaN) the conversion would be undefined: -1 makes the
+  // reader refuse it, naming the value written.
   const float vox_offset = f.At<float>(108);
-  h.vox_offset = vox_offset >= 0.0f && vox_offset < 0x1p62f ? static_cast<int64_t>(vox_offset) : -1;
+  h.vox_offset_written = vox_offset;
+  h.vox_offset = vox_offset >= 0.0f && vox_offset < 0x1p62f && vox_offset == std::floor(vox_offset)
+                     ? static_cast<int64_t>(vox_offset)
+                     : -1;
   h.scl_slope = f.At<float>(112);
   h.scl_inter = f.At<float>(116);
   h.xyzt_units = f.At<uint8_t>(123);
@@ -55,6 +59,7 @@ NiftiHeader ParseNifti2(const FieldReader& f) {
   for (int i = 0; i < 8; ++i) h.dim[i] = f.At<int64_t>(16 + 8 * i);
   for (int i = 0; i < 8; ++i) h.pixdim[i] = f.At<double>(104 + 8 * i);
   h.vox_offset = f.At<int64_t>(168);
+  h.vox_offset_written = static_cast<double>(h.vox_offset);
   h.scl_slope = f.At<double>(176);
   h.scl_inter = f.At<double>(184);
   h.qform_code = f.At<int32_t>(344);

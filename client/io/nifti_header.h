@@ -16,11 +16,13 @@ namespace tetrefine::io {
 struct NiftiHeader {
   int version = 1;  // 1 or 2
   ByteOrder order = ByteOrder::kLittle;
-  bool single_file = true;         // magic n+1/n+2 (.nii) rather than ni1/ni2 (.hdr + .img)
-  std::array<int64_t, 8> dim{};    // dim[0] = rank, dim[1..7] = sizes
-  int datatype = 0;                // NIFTI_TYPE_* code
-  std::array<double, 8> pixdim{};  // pixdim[0] = qfac, pixdim[1..3] = voxel size in xyz units
-  int64_t vox_offset = 0;          // byte offset of the samples in the data file
+  bool single_file = true;          // magic n+1/n+2 (.nii) rather than ni1/ni2 (.hdr + .img)
+  std::array<int64_t, 8> dim{};     // dim[0] = rank, dim[1..7] = sizes
+  int datatype = 0;                 // NIFTI_TYPE_* code
+  std::array<double, 8> pixdim{};   // pixdim[0] = qfac, pixdim[1..3] = voxel size in xyz units
+  int64_t vox_offset = 0;           // byte offset of the samples in the data file; -1 when the
+                                    // header's is not a whole number in [0, 2^62)
+  double vox_offset_written = 0.0;  // the header's vox_offset as written, for messages
   double scl_slope = 0.0;
   double scl_inter = 0.0;
   int xyzt_units = 0;

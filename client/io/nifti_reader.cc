@@ -141,8 +141,14 @@ absl::StatusOr<VolumeFile> ReadNifti(const std::string& path) {
   const size_t min_offset =
       header->single_file ? (header->version == 1 ? kNifti1HeaderSize : kNifti2HeaderSize) : 0;
   if (header->vox_offset < 0 || static_cast<uint64_t>(header->vox_offset) < min_offset) {
+    const double written = header->vox_offset_written;
     return FileError(
-        path, absl::StrCat("vox_offset = ", header->vox_offset, ": must be at least ", min_offset));
+        path, absl::StrCat("vox_offset = ", written, ": ",
+                           written >= 0x1p62
+                               ? absl::StrCat("beyond the data file's ", image.size(), " bytes")
+                               : absl::StrCat("must be a whole number of bytes, at "
+                                              "least ",
+                                              min_offset)));
   }
   const uint64_t offset = static_cast<uint64_t>(header->vox_offset);
   // Each axis is at most 2^20, so the product fits in 2^60 and times 8 bytes in uint64.

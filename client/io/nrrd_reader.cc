@@ -214,6 +214,7 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
   }
 
   std::array<Vec3, 3> axes{};
+  std::vector<std::string> spacing_warnings;
   Vec3 origin{0, 0, 0};
   Vec3 signs{1, 1, 1};
   if (const absl::string_view space = Field(*fields, "space"); !space.empty()) {
@@ -246,7 +247,15 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
           std::isfinite(step) && step != 0.0) {
         step = std::abs(step);
       } else {
-        step = 1.0;  // "nan" or absent: unknown spacing
+        // "nan" (NRRD's unknown), 0 or absent: 1, said (as the NIfTI reader says a zero pixdim),
+        // since every distance in the result then depends on it.
+        spacing_warnings.push_back(absl::StrCat(
+            path, ": ",
+            a < static_cast<int>(spacings.size())
+                ? absl::StrCat("spacing \"", spacings[a], "\" of axis ", a, " is not a size")
+                : absl::StrCat("no spacing for axis ", a),
+            " and the file has no space directions: voxel size 1 used along axis ", a));
+        step = 1.0;
       }
       axes[a][a] = step;
     }
@@ -330,7 +339,13 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
   absl::StatusOr<DecodedVoxels> voxels =
       DecodeVoxels(payload.substr(byte_skip, need), *type, order, 0.0, 0.0);
   if (!voxels.ok()) return WithPath(path, voxels.status());
-  return PlaceOnGrid(path, affine, dims, voxels->type, std::move(voxels->data));
+  absl::StatusOr<VolumeFile> placed =
+      PlaceOnGrid(path, affine, dims, voxels->type, std::move(voxels->data));
+  if (placed.ok()) {
+    placed->warnings.insert(placed->warnings.end(), spacing_warnings.begin(),
+                            spacing_warnings.end());
+  }
+  return placed;
 }
 
 }  // namespace tetrefine::io

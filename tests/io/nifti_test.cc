@@ -429,6 +429,30 @@ TEST(IoNiftiErrorTest, UnsupportedDatatypeAnd4DAreClearErrors) {
                         "k 1`"));
 }
 
+// vox_offset errors give the value the header holds (they said "-1" for every bad one), and a
+// fraction is refused rather than dropped.
+TEST(IoNiftiErrorTest, VoxOffsetErrorsNameTheValueWritten) {
+  ScratchDir dir;
+  const std::string good = NiftiHeaderBytes(NiftiSpec{}) + std::string(32, '\0');
+  const struct {
+    float value;
+    std::string says;
+  } cases[] = {{-100.0f, "vox_offset = -100: must be a whole number of bytes, at least 348"},
+               {347.0f, "vox_offset = 347: must be a whole number of bytes, at least 348"},
+               {352.5f, "vox_offset = 352.5: must be a whole number of bytes"},
+               {std::nanf(""), "vox_offset = nan: must be a whole number"},
+               {1e30f, "vox_offset = 1e+30: beyond the data file's 384 bytes"}};
+  for (const auto& c : cases) {
+    std::string bytes = good;
+    std::memcpy(bytes.data() + 108, &c.value, 4);
+    const std::string path = dir.File("offset.nii");
+    WriteBytes(path, bytes);
+    const absl::Status status = ReadNifti(path).status();
+    EXPECT_THAT(std::string(status.message()), HasSubstr(c.says)) << c.value;
+    EXPECT_THAT(std::string(status.message()), HasSubstr(path));
+  }
+}
+
 TEST(IoNiftiErrorTest, EveryTruncationAndGarbageFailsCleanly) {
   ScratchDir dir;
   NiftiSpec spec;

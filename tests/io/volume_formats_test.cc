@@ -190,6 +190,32 @@ TEST(IoNrrdTest, ObliqueSpaceDirectionsBecomeTheDirection) {
 // Voxel sizes outside [1e-9, 1e9] mm are refused naming the file and the axis, straight or
 // oblique (fuzz_nifti found a 1e-305 mm spacing whose oblique columns lost bits in a round
 // trip); the bounds themselves are accepted.
+// Spacings that are not sizes (NRRD's "nan" for unknown, 0) or missing become 1 mm, and say so,
+// as the NIfTI reader says a zero pixdim: every distance in the result depends on them.
+TEST(IoNrrdTest, UnknownSpacingsAreOneAndWarned) {
+  ScratchDir dir;
+  const std::string path = dir.File("spacing.nrrd");
+  const auto read = [&](const std::string& spacings) {
+    WriteBytes(path, absl::StrCat("NRRD0004\ntype: short\ndimension: 3\nsizes: ", kNx, " ", kNy,
+                                  " ", kNz, "\n", spacings, "endian: little\nencoding: raw\n\n",
+                                  Int16Samples(Ramp(), false)));
+    absl::StatusOr<VolumeFile> file = ReadVolume(path);
+    EXPECT_TRUE(file.ok()) << file.status();
+    return file.ok() ? *file : VolumeFile{};
+  };
+  VolumeFile file = read("spacings: 0 2 nan\n");
+  EXPECT_EQ(file.volume.grid().spacing, (Vec3{1, 2, 1}));
+  ASSERT_EQ(file.warnings.size(), 2u);
+  EXPECT_THAT(file.warnings[0], HasSubstr("spacing.nrrd: spacing \"0\" of axis 0 is not a size"));
+  EXPECT_THAT(file.warnings[1], HasSubstr("spacing \"nan\" of axis 2 is not a size"));
+  EXPECT_THAT(file.warnings[1], HasSubstr("voxel size 1 used along axis 2"));
+  file = read("");
+  EXPECT_EQ(file.warnings.size(), 3u);
+  file = read("spacings: 1.5 2 3\n");
+  EXPECT_EQ(file.volume.grid().spacing, (Vec3{1.5, 2, 3}));
+  EXPECT_TRUE(file.warnings.empty());
+}
+
 TEST(IoNrrdTest, AbsurdVoxelSizesAreRefusedNamingTheAxis) {
   ScratchDir dir;
   const std::string path = dir.File("scale.nrrd");
