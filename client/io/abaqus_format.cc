@@ -96,7 +96,7 @@ struct ElementSet {
 // its own node and element numbering.
 struct Part {
   std::string name;  // as written
-  int64_t line = 0;
+  int64_t line = 0;  // of *PART; for the flat file's, of its first *ELEMENT
   std::vector<Vec3> points;
   std::vector<Tet> tets;
   std::unordered_map<int64_t, uint32_t> node_index;
@@ -105,6 +105,8 @@ struct Part {
   // Deques: sets point to the earlier sets they name.
   std::deque<ElementSet> sets;          // *ELSET blocks, in file order
   std::deque<ElementSet> element_sets;  // ELSET= of *ELEMENT blocks
+  // The latest set of each upper-case name, for sets that name sets.
+  std::unordered_map<std::string, const ElementSet*> sets_named, element_sets_named;
 };
 
 // An *INSTANCE of a part in the *ASSEMBLY: its nodes moved by the translation, then rotated by
@@ -119,6 +121,11 @@ struct Instance {
   double degrees = 0.0;
 };
 
+// The most nodes, and the most tets, an assembly's instances may place together (2^28: more
+// than a refinement service admits by default, 10 M tets).
+constexpr uint64_t kMaxPlaced = uint64_t{1} << 28;
+constexpr int64_t kMaxWalkedIds = int64_t{1} << 28;
+
 // Rotation of p by `degrees` about the axis through a and b (Rodrigues' formula).
 Vec3 Rotate(const Vec3& p, const Vec3& a, const Vec3& b, double degrees) {
   Vec3 k{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
@@ -132,15 +139,6 @@ Vec3 Rotate(const Vec3& p, const Vec3& a, const Vec3& b, double degrees) {
   Vec3 out;
   for (int i = 0; i < 3; ++i) out[i] = a[i] + v[i] * c + cross[i] * s + k[i] * dot * (1.0 - c);
   return out;
-}
-
-// The last of `sets` named `name` (upper case) of `instance`, or null.
-const ElementSet* LatestNamed(const std::deque<ElementSet>& sets, const std::string& name,
-                              const std::string& instance) {
-  for (auto it = sets.rbegin(); it != sets.rend(); ++it) {
-    if (it->instance == instance && absl::AsciiStrToUpper(it->name) == name) return &*it;
-  }
-  return nullptr;
 }
 
 class AbaqusParser {
@@ -195,8 +193,11 @@ class AbaqusParser {
   size_t current_ = 0;                                  // the part being read
   std::unordered_map<std::string, size_t> part_named_;  // upper-case name -> part
   std::vector<Instance> instances_;
+  std::unordered_map<std::string, size_t> instance_named_;  // upper-case name -> instance
   bool assembly_ = false;
   std::deque<ElementSet> assembly_sets_;  // *ELSET, INSTANCE=... in the assembly
+  // The latest of them by "INSTANCE\nNAME" (upper case), for sets that name sets.
+  std::unordered_map<std::string, const ElementSet*> assembly_sets_named_;
   CellCensus census_;
 };
 
@@ -320,6 +321,9 @@ absl::Status AbaqusParser::ReadElements(Part& part, const Keyword& k, int64_t ke
   }
   const std::string type_name = absl::AsciiStrToUpper(type->second);
   const ElementClass kind = Classify(type_name);
+  if (part.name.empty() && part.tets.empty() && part.other_elements.empty()) {
+    part.line = keyword_line;
+  }
   ElementSet set;
   if (const auto elset = k.params.find("ELSET"); elset != k.params.end()) {
     set.name = elset->second;
@@ -368,7 +372,11 @@ absl::Status AbaqusParser::ReadElements(Part& part, const Keyword& k, int64_t ke
                  kind == ElementClass::kOtherVolume ? CellFate::kUnsupported : CellFate::kSkip},
                 count);
   }
-  if (!set.name.empty()) part.element_sets.push_back(std::move(set));
+  if (!set.name.empty()) {
+    part.element_sets.push_back(std::move(set));
+    part.element_sets_named[absl::AsciiStrToUpper(part.element_sets.back().name)] =
+        &part.element_sets.back();
+  }
   return absl::OkStatus();
 }
 
@@ -447,10 +455,8 @@ absl::Status AbaqusParser::OpenInstance(const Keyword& k, int64_t line) {
     return Error(line, absl::StrCat("*INSTANCE ", name->second, ": part ", part->second,
                                     " is not defined by an earlier *PART"));
   }
-  for (const Instance& other : instances_) {
-    if (absl::AsciiStrToUpper(other.name) == absl::AsciiStrToUpper(name->second)) {
-      return Error(line, absl::StrCat("instance ", name->second, " is defined twice"));
-    }
+  if (!instance_named_.emplace(absl::AsciiStrToUpper(name->second), instances_.size()).second) {
+    return Error(line, absl::StrCat("instance ", name->second, " is defined twice"));
   }
   Instance instance;
   instance.name = name->second;
@@ -575,7 +581,20 @@ absl::StatusOr<MeshFile> AbaqusParser::Assemble() {
     if (absl::Status s = place(parts_[0], nullptr); !s.ok()) return s;
   } else {
     if (!parts_[0].tets.empty()) {
-      return Error(0, "elements outside *PART in a file whose assembly places parts");
+      return Error(parts_[0].line, "elements outside *PART in a file whose assembly places parts");
+    }
+    // Instances copy their part without the file holding the copies: a few lines could ask for
+    // billions of tets. Counted before anything is copied.
+    uint64_t points = 0, tets = 0;
+    for (const Instance& instance : instances_) {
+      if (parts_[instance.part].tets.empty()) continue;
+      points += parts_[instance.part].points.size();
+      tets += parts_[instance.part].tets.size();
+      if (points > kMaxPlaced || tets > kMaxPlaced) {
+        return Error(instance.line,
+                     absl::StrCat("the instances up to ", instance.name, " place more than ",
+                                  kMaxPlaced, " ", points > kMaxPlaced ? "nodes" : "tetrahedra"));
+      }
     }
     // Instances of parts without tets (rigid surfaces, shells) add nothing.
     for (const Instance& instance : instances_) {
@@ -601,8 +620,11 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file, const std::vector<size_t
   };
   std::vector<Candidate> candidates;
   std::vector<const Instance*> placed_instances;
-  for (const Instance& instance : instances_) {
-    if (!parts_[instance.part].tets.empty()) placed_instances.push_back(&instance);
+  std::vector<int64_t> placed_position(instances_.size(), -1);  // per instance, in `placed`
+  for (size_t i = 0; i < instances_.size(); ++i) {
+    if (parts_[instances_[i].part].tets.empty()) continue;
+    placed_position[i] = static_cast<int64_t>(placed_instances.size());
+    placed_instances.push_back(&instances_[i]);
   }
   for (size_t i = 0; i < placed.size(); ++i) {
     const Part& part = parts_[placed[i]];
@@ -614,23 +636,25 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file, const std::vector<size_t
     }
   }
   for (const ElementSet& set : assembly_sets_) {
-    const Instance* instance = nullptr;
-    for (const Instance& i : instances_) {
-      if (absl::AsciiStrToUpper(i.name) == set.instance) instance = &i;
-    }
+    const auto named = instance_named_.find(set.instance);
+    const Instance* instance =
+        named == instance_named_.end() ? nullptr : &instances_[named->second];
     if (instance == nullptr) {
       return Error(set.line, absl::StrCat("element set ", set.name, " names instance ",
                                           set.instance, ", which the assembly does not define"));
     }
-    const auto at = std::find(placed_instances.begin(), placed_instances.end(), instance);
-    const uint32_t offset =
-        at == placed_instances.end() ? 0 : tet_offset[at - placed_instances.begin()];
+    const int64_t at = placed_position[named->second];
+    const uint32_t offset = at < 0 ? 0 : tet_offset[static_cast<size_t>(at)];
     candidates.push_back(
         {&set, &parts_[instance->part], offset,
          placed_instances.size() > 1 ? absl::StrCat(instance->name, ".", set.name) : set.name});
   }
   std::vector<int32_t> region(file.mesh.tets.size(), -1);  // index into `taken`, -1: none
   std::vector<const Candidate*> taken;
+  // Every set is walked once per candidate that names it, directly or not: a file of many sets
+  // that each name the one before would take quadratic time. The walk stops past this many ids
+  // (real files walk a few times their element count; 2^28 is about ten seconds).
+  int64_t walked = 0;
   for (const Candidate& candidate : candidates) {
     const ElementSet& set = *candidate.set;
     const Part& part = *candidate.part;
@@ -639,6 +663,12 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file, const std::vector<size_t
     // The set being walked: `set` or one it names.
     const ElementSet* walking = &set;
     const auto take = [&](int64_t id) -> absl::Status {
+      if (++walked > kMaxWalkedIds) {
+        return Error(candidate.set->line,
+                     absl::StrCat("the element sets name more than ", kMaxWalkedIds,
+                                  " element ids in all, counting each set once for every set "
+                                  "that names it; name fewer sets within sets"));
+      }
       const auto it = part.tet_index.find(id);
       if (it == part.tet_index.end()) {
         if (part.other_elements.count(id) == 0) {
@@ -743,22 +773,31 @@ absl::StatusOr<MeshFile> AbaqusParser::Parse() {
       ElementSet set;
       s = ReadSet(
           k, line,
-          [&part](const std::string& name) {
-            const ElementSet* found = LatestNamed(part.sets, name, "");
-            return found != nullptr ? found : LatestNamed(part.element_sets, name, "");
+          [&part](const std::string& name) -> const ElementSet* {
+            for (const auto* named : {&part.sets_named, &part.element_sets_named}) {
+              if (const auto it = named->find(name); it != named->end()) return it->second;
+            }
+            return nullptr;
           },
           set);
       part.sets.push_back(std::move(set));
+      part.sets_named[absl::AsciiStrToUpper(part.sets.back().name)] = &part.sets.back();
     } else if (k.name == "ELSET" && k.params.count("INSTANCE") > 0) {
       // An assembly's set of one instance's elements, numbered as its part numbers them.
       ElementSet set;
       const std::string instance = absl::AsciiStrToUpper(k.params.at("INSTANCE"));
       s = ReadSet(
           k, line,
-          [&](const std::string& name) { return LatestNamed(assembly_sets_, name, instance); },
+          [&](const std::string& name) -> const ElementSet* {
+            const auto it = assembly_sets_named_.find(absl::StrCat(instance, "\n", name));
+            return it == assembly_sets_named_.end() ? nullptr : it->second;
+          },
           set);
       set.instance = instance;
       assembly_sets_.push_back(std::move(set));
+      assembly_sets_named_[absl::StrCat(instance, "\n",
+                                        absl::AsciiStrToUpper(assembly_sets_.back().name))] =
+          &assembly_sets_.back();
     } else if ((k.name == "NODE" || k.name == "ELEMENT") && scope_ == Scope::kInstance) {
       return Error(line, absl::StrCat("*", k.name,
                                       " inside *INSTANCE: instances that define "

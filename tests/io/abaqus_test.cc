@@ -148,6 +148,22 @@ TEST(IoAbaqusTest, SetsNamingEarlierSetsHoldTheirElements) {
               HasSubstr("s.inp:13: element set bad names element 9"));
 }
 
+// Sets naming sets are walked once per set that names them, so a small file can ask for
+// quadratic work (a long chain of sets each naming the one before, or many sets naming one big
+// set): 2^15 sets naming one set of 2^14 + 1 ids stop at 2^28 walked ids.
+TEST(IoAbaqusTest, SetsNamingSetsStopAt2To28WalkedIds) {
+  std::string text = "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n";
+  text += "*ELSET, ELSET=s0, GENERATE\n1, 1\n";
+  text += "*ELSET, ELSET=big\n";
+  for (int i = 0; i < 1 << 14; ++i) text += "1,\n";
+  text += "1\n";
+  for (int i = 1; i < 1 << 15; ++i) absl::StrAppend(&text, "*ELSET, ELSET=s", i, "\nbig\n");
+  const absl::StatusOr<MeshFile> file = ParseAbaqus(text, "chain.inp");
+  ASSERT_FALSE(file.ok());
+  EXPECT_THAT(std::string(file.status().message()),
+              HasSubstr("the element sets name more than 268435456 element ids in all"));
+}
+
 TEST(IoAbaqusTest, ErrorsNameTheFileAndLine) {
   const std::string nodes = "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n";
   const struct {
@@ -303,6 +319,23 @@ TEST(IoAbaqusTest, EveryInstanceIsPlacedAndItsSetsNamedAfterIt) {
   }
 }
 
+// Instances copy their part without the file holding the copies: a few kilobytes could ask for
+// billions of tets. A part of 2^16 tets placed 2^12 + 1 times is refused before any copy.
+TEST(IoAbaqusTest, InstancesMayNotPlaceMoreThan2To28Tets) {
+  std::string text =
+      "*Part, name=P\n*Node\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*Element, type=C3D4\n";
+  for (int e = 1; e <= 1 << 16; ++e) absl::StrAppend(&text, e, ",1,2,3,4\n");
+  text += "*End Part\n*Assembly, name=A\n";
+  for (int i = 0; i <= 1 << 12; ++i) {
+    absl::StrAppend(&text, "*Instance, name=I", i, ", part=P\n*End Instance\n");
+  }
+  text += "*End Assembly\n";
+  const absl::StatusOr<MeshFile> file = ParseAbaqus(text, "many.inp");
+  ASSERT_FALSE(file.ok());
+  EXPECT_THAT(std::string(file.status().message()),
+              HasSubstr("the instances up to I4096 place more than 268435456 tetrahedra"));
+}
+
 TEST(IoAbaqusTest, AssemblySetsLabelAPartWithoutSets) {
   std::string head = kCaeHead;
   head.erase(head.find("*Elset, elset=Core3"),
@@ -348,7 +381,7 @@ TEST(IoAbaqusTest, CaeStructureErrorsNameTheFileAndLine) {
       {std::string("*Part, name=P\n*End Part\n*Part, name=p\n"), "part p is defined twice"},
       {"*Node\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*Element, type=C3D4\n1,1,2,3,4\n" + head +
            instance + "*End Assembly\n",
-       "elements outside *PART"},
+       ":6: elements outside *PART"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.says);
