@@ -189,12 +189,17 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
   if (type == VoxelType::kFloat32 || type == VoxelType::kFloat64) {
     for (int64_t i = 0; i < count; ++i) {
       const double value = LoadAs(type, v.data_.data(), i);
-      if (!std::isfinite(value)) {
+      if (!(std::abs(value) <= kMaxVoxelMagnitude)) {
         // Named by its grid index, as a user's viewer shows it, not by its place in the slab.
         const int64_t nx = hi[0] - lo[0], ny = hi[1] - lo[1];
-        return absl::InvalidArgumentError(
-            absl::StrCat("volume voxel (", lo[0] + i % nx, ", ", lo[1] + (i / nx) % ny, ", ",
-                         lo[2] + i / (nx * ny), ") is not finite (", value, ")"));
+        return absl::InvalidArgumentError(absl::StrCat(
+            "volume voxel (", lo[0] + i % nx, ", ", lo[1] + (i / nx) % ny, ", ",
+            lo[2] + i / (nx * ny), ") ",
+            std::isfinite(value)
+                ? absl::StrCat("is ", value, ": beyond +-", kMaxVoxelMagnitude,
+                               " the interpolation and the value range overflow; rescale the "
+                               "volume")
+                : absl::StrCat("is not finite (", value, ")")));
       }
     }
   }

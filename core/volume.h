@@ -152,15 +152,21 @@ struct TrilinearSampler {
   }
 };
 
+// The largest voxel magnitude a volume holds. Trilinear interpolation adds two products of
+// values, and the default normalisation is max - min: values near the largest double (1.8e308)
+// overflowed both, so that every error was inf (refinement ran to its tet budget) or 0
+// ("converged" at once). Only float64 volumes can go beyond it.
+inline constexpr double kMaxVoxelMagnitude = 1e300;
+
 // A scalar voxel volume, or a slab of one: the samples with indices in [lo, hi) of a larger grid.
 // Sampling uses the whole grid's geometry, so a point gives the same bits whether the volume is
 // whole or a slab that contains the point's cell.
 class Volume {
  public:
-  // Checks geometry (dims, origin, spacing, direction: finite and invertible), range and data
-  // length; errors name the field (e.g. "volume.direction[4]"). `data` holds the slab's samples as
-  // little-endian values of `type`, x fastest then y then z, size (hi-lo).prod() * VoxelSize(type)
-  // bytes.
+  // Checks geometry (dims, origin, spacing, direction: finite and invertible), range, data length
+  // and values (finite, within +-kMaxVoxelMagnitude); errors name the field (e.g.
+  // "volume.direction[4]"). `data` holds the slab's samples as little-endian values of `type`, x
+  // fastest then y then z, size (hi-lo).prod() * VoxelSize(type) bytes.
   static absl::StatusOr<Volume> Create(const GridGeometry& grid, const Index3& lo, const Index3& hi,
                                        VoxelType type, std::vector<std::byte> data);
   // A whole volume: lo = 0, hi = grid.dims.

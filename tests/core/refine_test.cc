@@ -381,6 +381,46 @@ TEST(VolumeCreate, NonFiniteVoxelIsNamedByItsGridIndex) {
   EXPECT_EQ(volume.status().message(), "volume voxel (5, 6, 7) is not finite (nan)");
 }
 
+// Values near the largest double overflowed the interpolation and the value range: every error
+// was inf (refinement ran to its budget) or, for +-1.7e308, the range was inf and every error 0
+// ("converged" at once). Volumes beyond +-kMaxVoxelMagnitude are refused, naming the voxel; the
+// bound itself, and a refinement of values just under it scaled from a small field, work.
+TEST(VolumeCreate, ValuesBeyondTheMagnitudeBoundAreRefused) {
+  GridGeometry g;
+  g.dims = {4, 4, 4};
+  for (const double big : {1.7e308, -1.7e308, 1e301, -2e300}) {
+    std::vector<double> values(64, 1.0);
+    values[1 + 4 * (2 + 4 * 3)] = big;
+    auto volume = Volume::FromDoubles(g, values);
+    ASSERT_FALSE(volume.ok()) << big;
+    EXPECT_EQ(volume.status().message(),
+              absl::StrCat("volume voxel (1, 2, 3) is ", big,
+                           ": beyond +-1e+300 the interpolation and the value range overflow; "
+                           "rescale the volume"));
+  }
+  // At the bound the arithmetic stays finite: the same field at 1 and at 1e300 refines alike.
+  const GridGeometry heart = HeartGrid();
+  const Volume unit = testing::AnalyticVolume(heart, BlobField{{20, 40, 30}, 6.0});
+  ASSERT_EQ(unit.type(), VoxelType::kFloat64);
+  std::vector<double> scaled(static_cast<size_t>(unit.voxel_count()));
+  std::memcpy(scaled.data(), unit.data().data(), scaled.size() * sizeof(double));
+  double largest = 0.0;
+  for (double x : scaled) largest = std::max(largest, std::abs(x));
+  for (double& x : scaled) x *= kMaxVoxelMagnitude / largest;
+  auto huge = Volume::FromDoubles(heart, scaled);
+  ASSERT_TRUE(huge.ok()) << huge.status();
+  const Mesh mesh = testing::FiveTetMesh(heart.origin, GridMax(heart), {2, 2, 2});
+  RefineOptions o;
+  o.epsilon = 0.05;
+  absl::StatusOr<RefineResult> a = Refine(unit, mesh, o), b = Refine(*huge, mesh, o);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(b->stop_reason, StopReason::kConverged);
+  EXPECT_EQ(b->mesh.tets.size(), a->mesh.tets.size());
+  ASSERT_FALSE(b->iterations.empty());
+  EXPECT_TRUE(std::isfinite(b->iterations[0].max_error));
+  EXPECT_NEAR(b->iterations[0].max_error, a->iterations[0].max_error, 1e-9);
+}
+
 TEST_P(RefineEveryScheme, StopsBeforeExceedingTheTetBudget) {
   const GridGeometry g = HeartGrid();
   const Volume volume = testing::AnalyticVolume(g, BlobField{{20, 40, 30}, 6.0});
