@@ -25,6 +25,16 @@ def _image(data, diagonal, translation, slope=None, inter=None, units=None):
     return image
 
 
+def _no_transform_image(data, zooms):
+    """A NIfTI with neither sform nor qform: nibabel's image.affine is then its Analyze fallback
+    (centred, x flipped), while the file places voxel (i, j, k) at (i, j, k) * pixdim."""
+    image = nibabel.Nifti1Image(data, np.diag([*zooms, 1.0]))
+    image.set_sform(None, code=0)
+    image.set_qform(None, code=0)
+    image.header.set_zooms(zooms)
+    return image
+
+
 _RNG = np.random.default_rng(11)
 _INT16 = _RNG.integers(-300, 900, size=(12, 10, 8)).astype(np.int16)
 
@@ -36,6 +46,7 @@ CASES = {
     "float64 with an intercept": _image(_INT16.astype(np.float64), (1, 1, 1), (5, 5, 5), 1.0,
                                         100.0),
     "4-d with one volume": _image(_INT16[..., None], (2.0, 2.0, 2.0), (-10, -10, -10)),
+    "no sform or qform": _no_transform_image(_INT16, (2.0, 1.5, 1.0)),
 }
 
 
@@ -133,6 +144,26 @@ def test_a_meshio_mesh_in():
         tetrefine.mesh_from_meshio(mesh, label_name="region")
     with pytest.raises(tetrefine.TetrefineError, match="mesh: no tetra cells .*triangle"):
         tetrefine.mesh_from_meshio(meshio.Mesh(points, [("triangle", triangles)]))
+    # Other volume cells are part of the domain: refused, as the CLI's readers refuse them,
+    # rather than dropped.
+    hexahedron = np.arange(8)[None, :]
+    with pytest.raises(tetrefine.TetrefineError,
+                       match=f"1 hexahedron cells beside {len(tets)} tetra: only linear tets"):
+        tetrefine.mesh_from_meshio(meshio.Mesh(points, [("tetra", tets), ("hexahedron",
+                                                                           hexahedron)]))
+    with pytest.raises(tetrefine.TetrefineError, match="2 tetra10 cells beside"):
+        tetrefine.mesh_from_meshio(meshio.Mesh(points, [("tetra", tets),
+                                                        ("tetra10", np.zeros((2, 10), int))]))
+
+
+def test_a_nifti_without_transforms_is_placed_as_the_file_says():
+    image = _no_transform_image(_INT16, (2.0, 1.0, 1.0))
+    image.header["pixdim"][2] = 0.0  # after the zooms: nibabel cannot make an affine of it
+    with pytest.warns(UserWarning, match=r"pixdim\[2\] is 0.0 .* voxel size 1 used along axis 1"):
+        volume = tetrefine.volume_from_nibabel(image)
+    assert volume.direction is None
+    assert list(volume.origin) == [0.0, 0.0, 0.0] and list(volume.spacing) == [2.0, 1.0, 1.0]
+    np.testing.assert_array_equal(volume.data, _INT16)
 
 
 @pytest.mark.parametrize("labels, message", [

@@ -427,3 +427,12 @@ def test_tls_with_a_client_certificate(server_binary, tmp_path):
         tls_server.stop()
     with pytest.raises(tetrefine.TetrefineError, match="tls\\['ca'\\]: .*missing.pem"):
         tetrefine.Client("127.0.0.1:1", tls={"ca": tmp_path / "missing.pem"})
+
+def test_a_non_callable_on_iteration_is_refused_before_sending(server):
+    points, tets = box_mesh((1, 1, 1), (5, 5, 5), (1, 1, 1))
+    volume = np.zeros((8, 8, 8))
+    with tetrefine.Client(server.target) as client:
+        with pytest.raises(tetrefine.TetrefineError,
+                           match="on_iteration: expected a callable .* got int") as caught:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.1, on_iteration=5)
+    assert caught.value.code == grpc.StatusCode.INVALID_ARGUMENT

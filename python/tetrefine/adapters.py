@@ -4,6 +4,7 @@ nibabel and meshio are imported only when these functions are called.
 """
 
 import math
+import warnings
 
 import numpy as np
 
@@ -35,6 +36,36 @@ class VolumeGrid:
         lo = np.asarray(self.origin, dtype=np.float64)
         hi = lo + (np.asarray(self.data.shape) - 1) * np.asarray(self.spacing)
         return lo, hi
+
+
+def _nifti_pixdim_affine(image):
+    """For a NIfTI with neither sform nor qform, the affine tetrefine's reader uses, else None.
+
+    nibabel's image.affine is then its Analyze fallback, which centres the grid and flips x;
+    the NIfTI standard's method 1, which the C++ reader follows, puts voxel (i, j, k) at
+    (i, j, k) * pixdim from the origin. A zero or non-finite pixdim is read as 1, with a warning,
+    as the C++ reader does.
+    """
+    header = getattr(image, "header", None)
+    if header is None or not hasattr(header, "get_sform") or not hasattr(header, "get_qform"):
+        return None
+    try:
+        sform_code = int(header["sform_code"])
+        qform_code = int(header["qform_code"])
+        pixdim = [float(header["pixdim"][a + 1]) for a in range(3)]
+    except (KeyError, ValueError, TypeError, IndexError):
+        return None
+    if sform_code > 0 or qform_code > 0:
+        return None
+    affine = np.eye(4)
+    for a in range(3):
+        size = abs(pixdim[a])
+        if not (size > 0.0) or not math.isfinite(size):
+            warnings.warn(f"pixdim[{a + 1}] is {pixdim[a]} and the image has no qform or sform: "
+                          f"voxel size 1 used along axis {a}")
+            size = 1.0
+        affine[a, a] = size
+    return affine
 
 
 def _unit_scale(image):
@@ -84,7 +115,10 @@ def volume_from_nibabel(image):
         data = data[..., 0]
     if data.ndim != 3:
         raise invalid("image", f"expected a 3-d volume, got shape {data.shape}")
-    affine = np.asarray(image.affine, dtype=np.float64) * _unit_scale(image)
+    affine = _nifti_pixdim_affine(image)
+    if affine is None:
+        affine = np.asarray(image.affine, dtype=np.float64)
+    affine = affine * _unit_scale(image)
     if not np.all(np.isfinite(affine[:3, :4])):
         raise invalid("image", "the affine has a non-finite entry")
     lengths = [math.hypot(affine[0, c], affine[1, c], affine[2, c]) for c in range(3)]
@@ -159,10 +193,16 @@ class TetMesh:
 LABEL_NAMES = ("gmsh:physical", "medit:ref", "region", "labels", "label", "CellEntityIds")
 
 
+# meshio's volume cell types other than "tetra" (tetra10, hexahedron, hexahedron27, wedge,
+# pyramid, polyhedron8, ...).
+_VOLUME_CELL_PREFIXES = ("tetra", "hexahedron", "wedge", "pyramid", "polyhedron")
+
+
 def mesh_from_meshio(mesh, label_name=None):
-    """A TetMesh from a meshio.Mesh: every "tetra" cell block in order (other cells, e.g.
-    boundary triangles, are skipped). labels from cell data `label_name`, or when None the first
-    of LABEL_NAMES the tetra blocks carry; None when there is none."""
+    """A TetMesh from a meshio.Mesh: every "tetra" cell block in order (surface and line cells,
+    e.g. boundary triangles, are skipped; other volume cells refuse the mesh). labels from cell
+    data `label_name`, or when None the first of LABEL_NAMES the tetra blocks carry; None when
+    there is none."""
     if not all(hasattr(mesh, a) for a in ("points", "cells", "cell_data", "point_data")):
         raise invalid("mesh", f"expected a meshio.Mesh, got {type(mesh).__name__}")
     points = np.asarray(mesh.points, dtype=np.float64)
@@ -172,6 +212,17 @@ def mesh_from_meshio(mesh, label_name=None):
     if not blocks:
         found = sorted({block.type for block in mesh.cells})
         raise invalid("mesh", f"no tetra cells (cell types: {', '.join(found) or 'none'})")
+    # Other volume cells (quadratic tets, hexahedra, wedges, pyramids) are part of the domain:
+    # dropping them would refine a mesh with a hole, so they refuse it, as the CLI's readers do.
+    others = {}
+    for block in mesh.cells:
+        if block.type != "tetra" and block.type.startswith(_VOLUME_CELL_PREFIXES):
+            others[block.type] = others.get(block.type, 0) + len(block.data)
+    if others:
+        tet_count = sum(len(mesh.cells[i].data) for i in blocks)
+        found = ", ".join(f"{n} {t}" for t, n in sorted(others.items()))
+        raise invalid("mesh", f"{found} cells beside {tet_count} tetra: only linear tets are "
+                      "refined; split or remove the other volume cells first")
     tets = np.concatenate([np.asarray(mesh.cells[i].data, dtype=np.int64) for i in blocks])
     names = [label_name] if label_name is not None else list(LABEL_NAMES)
     labels = None

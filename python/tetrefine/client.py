@@ -221,6 +221,9 @@ class Client:
         Raises: TetrefineError with the gRPC status code and the server's message (or ours, for
           input refused before sending: INVALID_ARGUMENT naming the argument).
         """
+        if on_iteration is not None and not callable(on_iteration):
+            raise invalid("on_iteration", "expected a callable taking an IterationStats or None, "
+                          f"got {type(on_iteration).__name__}")
         inputs = _requests.Inputs(volume, spacing, origin, points, tets, direction=direction,
                                   labels=labels)
         _requests.check_features(self._protocol, inputs)
