@@ -145,11 +145,10 @@ absl::StatusOr<std::string> ReadFileMaybeGzip(const std::string& path) {
 
 namespace {
 
-// Writes `content` into the special file `destination` (a character device or a FIFO) as it is:
-// opened for writing, never created, truncated or replaced.
-absl::Status WriteInPlace(const std::string& path, const std::string& destination,
-                          absl::string_view content) {
-  const int fd = ::open(destination.c_str(), O_WRONLY | O_CLOEXEC);
+// Writes `content` into the special file at `path` (a character device or a FIFO, or a link to
+// one) as it is: opened for writing, never created, truncated or replaced.
+absl::Status WriteInPlace(const std::string& path, absl::string_view content) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
   if (fd < 0) return ErrnoError(path, "cannot open for writing", errno);
   size_t done = 0;
   while (done < content.size()) {
@@ -169,20 +168,19 @@ absl::Status WriteInPlace(const std::string& path, const std::string& destinatio
 }  // namespace
 
 absl::Status WriteFileAtomically(const std::string& path, absl::string_view content) {
-  const std::string destination = FileBehindLinks(path).string();
   // Only a regular file (or none) is replaced. Renaming over a device or FIFO would destroy it:
   // `--output /dev/null`, or a link to it, turned /dev/null into a regular file (found by a
-  // sweep as root, 2026-11-27).
+  // sweep as root, 2026-11-27). stat follows links as the kernel does, /proc's too: /dev/stdout
+  // on a pipe is /proc/self/fd/1, a link to "pipe:[N]" that names no file.
   struct stat st;
-  if (::stat(destination.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
     if (S_ISDIR(st.st_mode)) return ErrnoError(path, "cannot write", EISDIR);
-    if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) {
-      return WriteInPlace(path, destination, content);
-    }
+    if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) return WriteInPlace(path, content);
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": not a regular file, character device or FIFO (",
         S_ISBLK(st.st_mode) ? "a block device" : "a socket", "): refusing to write over it"));
   }
+  const std::string destination = FileBehindLinks(path).string();
   const std::string temporary = TemporaryNameFor(destination);
   std::FILE* file = std::fopen(temporary.c_str(), "wb");
   if (file == nullptr) return ErrnoError(path, "cannot create temporary file", errno);

@@ -171,6 +171,17 @@ TEST_F(CliRefine, StatsJsonParsesAndAgreesWithTheRun) {
 // --lattice-max-tets sets the lattice check's sample: fewer tets than the output is a sample, and
 // the line says so; more covers every tet. 0 (the core's "every tet up to max_tets", which every
 // service refuses at the default budget) is a flag error.
+// --stats-json /dev/stdout into a pipe: /dev/stdout is then a /proc link to "pipe:[N]", which
+// names no file, and the writer looked for a directory to put a temporary file in.
+TEST_F(CliRefine, StatsJsonToStandardOutputGoesDownThePipe) {
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.05", "--output",
+                    dir_.File("p.vtu"), "--stats-json", "/dev/stdout", "--quiet"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.out, "\"iterations\": [")) << run.out;
+  EXPECT_TRUE(absl::StrContains(run.out, "statistics in /dev/stdout")) << run.out;
+}
+
 TEST_F(CliRefine, LatticeMaxTetsSetsTheSample) {
   const auto run = [&](const std::string& n) {
     return RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.05",
