@@ -401,19 +401,28 @@ TEST(IoMeshTest, SpecialFilesAreWrittenIntoNotReplaced) {
   const MeshFile mesh = RandomMesh(3);
   ASSERT_EQ(::mkfifo(dir.File("pipe").c_str(), 0600), 0);
   std::filesystem::create_symlink("pipe", dir.File("link.vtu"));
-  // The test holds the FIFO open for writing too, so that the reader's open returns at once and
-  // its read ends when the test lets go, whether or not the writer ever opened the FIFO (a
-  // replaced FIFO would otherwise leave the reader waiting forever).
+  // Both ends are opened here, before anything is written, the reading end without blocking
+  // (O_RDWR holds a writer, so the read end cannot see an end of file too early): a reader thread
+  // opening the FIFO itself raced the test's close under a loaded CI run and then waited forever
+  // for a writer. The read ends when the test lets go of its end, whether or not WriteMesh ever
+  // opened the FIFO (a replaced FIFO fails the test rather than hanging it).
   const int hold = ::open(dir.File("pipe").c_str(), O_RDWR);
   ASSERT_GE(hold, 0);
+  const int read_end = ::open(dir.File("pipe").c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(read_end, 0);
+  ASSERT_EQ(::fcntl(read_end, F_SETFL, 0), 0);  // blocking reads from here on
   std::string received;
   std::thread reader([&] {
-    std::ifstream in(dir.File("pipe"), std::ios::binary);
-    received.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    char buffer[4096];
+    ssize_t n;
+    while ((n = ::read(read_end, buffer, sizeof buffer)) > 0) {
+      received.append(buffer, static_cast<size_t>(n));
+    }
   });
   const absl::Status written = WriteMesh(dir.File("link.vtu"), mesh);
   ::close(hold);
   reader.join();
+  ::close(read_end);
   ASSERT_TRUE(written.ok()) << written;
   EXPECT_EQ(received, FormatVtu(mesh, {}));
   struct stat st;
