@@ -3,7 +3,7 @@
 # Target <name>: source fuzz/<name>_fuzzer.cc, corpus fuzz/corpus/<name>/.
 set(TETREFINE_FUZZ_DIR ${CMAKE_CURRENT_LIST_DIR})
 set(TETREFINE_FUZZ_TARGETS request response refine vtu vtk_legacy vtk_legacy_binary gmsh gmsh_binary
-  medit meshb nifti nrrd metaimage vti vtk_legacy_image pvtu_index pvti_index tetgen abaqus)
+  medit meshb nifti nrrd metaimage vti vtk_legacy_image pvtu_index pvti_index tetgen abaqus dicom)
 
 set(_tetrefine_fuzz_sources_request request_fuzzer.cc)
 set(_tetrefine_fuzz_libs_request tetrefine_wire)
@@ -21,7 +21,7 @@ foreach(_format vtu vtk_legacy vtk_legacy_binary gmsh gmsh_binary medit meshb te
   set(_tetrefine_fuzz_sources_${_format} ${_format}_fuzzer.cc)
   set(_tetrefine_fuzz_libs_${_format} tetrefine_fuzz_mesh_check tetrefine_io)
 endforeach()
-foreach(_format nifti nrrd metaimage vti vtk_legacy_image)
+foreach(_format nifti nrrd metaimage vti vtk_legacy_image dicom)
   set(_tetrefine_fuzz_sources_${_format} ${_format}_fuzzer.cc)
   set(_tetrefine_fuzz_libs_${_format} tetrefine_fuzz_volume_check tetrefine_io)
 endforeach()

@@ -21,9 +21,10 @@ packages=(
   nlohmann-json3-dev
 )
 # Independent readers and writers the tests compare against (VTK 9, Gmsh and TetGen, beside meshio
-# above); the container's build stage sets TETREFINE_WITH_TEST_TOOLS=0 as it builds no tests.
+# above; pydicom writes DICOM series and dcm2niix converts them for the DICOM reader's tests);
+# the container's build stage sets TETREFINE_WITH_TEST_TOOLS=0 as it builds no tests.
 if [ "${TETREFINE_WITH_TEST_TOOLS:-1}" = "1" ]; then
-  packages+=(python3-vtk9 gmsh tetgen)
+  packages+=(python3-vtk9 gmsh tetgen python3-pydicom dcm2niix)
 fi
 # Fuzzing and sanitizer runs (clang's libFuzzer) only when asked: TETREFINE_WITH_FUZZ=1.
 if [ "${TETREFINE_WITH_FUZZ:-0}" = "1" ]; then

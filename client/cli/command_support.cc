@@ -31,7 +31,7 @@ absl::StatusOr<io::VolumeFile> LoadVolume(const std::string& path, const std::st
   if (IsMeshPath(path) && !absl::EndsWithIgnoreCase(path, ".vtk")) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": is a mesh, but ", flag,
                                                    " takes a volume (.nii, .nii.gz, .nrrd, .nhdr, "
-                                                   ".mha, .mhd, .vti, .pvti, .vtk)"));
+                                                   ".mha, .mhd, .vti, .pvti, .vtk, DICOM)"));
   }
   return io::ReadVolume(path);
 }

@@ -18,6 +18,7 @@
 #include "client/cli/file_kind.h"
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_report.h"
+#include "client/io/dicom_series.h"
 #include "client/io/mesh_io.h"
 #include "client/io/vtk_legacy_format.h"
 
@@ -155,9 +156,10 @@ const CommandSpec& InfoSpec() {
       .summary = "Describe a volume or mesh file as tetrefine reads it",
       .usage = "tetrefine info FILE",
       .description =
-          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti, or a .vtk holding\n"
-          "STRUCTURED_POINTS): dims, voxel type, spacing, origin and world box in RAS mm, value\n"
-          "range, the file's own index-to-world affine, reading warnings. A mesh (.vtu .pvtu\n"
+          "A volume (.nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti, a .vtk holding\n"
+          "STRUCTURED_POINTS, or a DICOM series: its directory or one of its files): dims,\n"
+          "voxel type, spacing, origin and world box in RAS mm, value range, the file's own\n"
+          "index-to-world affine, reading warnings. A mesh (.vtu .pvtu\n"
           ".vtk .msh .mesh .meshb .ele .inp): vertices, tets, bounding box, volume, boundary\n"
           "area, mean-ratio quality, inverted tets, which arrays it carries.",
       .flags = {},
@@ -175,13 +177,14 @@ int RunInfo(const std::vector<std::string>& args) {
     return VolumeInfo(path);
   }
   if (IsMeshPath(path)) return MeshInfo(path);
+  if (io::IsDicomPath(path)) return VolumeInfo(path);
   if (io::IsSurfacePath(path))
     return Fail(std::string(io::UnknownExtension(path).message()), kExitUsage);
   return Fail(
       absl::StrCat(path,
                    ": unknown extension: expected a volume (.nii, .nii.gz, .hdr, .nrrd, "
-                   ".nhdr, .mha, .mhd, .vti, .pvti, .vtk image) or a mesh (.vtu, .pvtu, .vtk, "
-                   ".msh, .mesh, .meshb, .ele, .inp)"),
+                   ".nhdr, .mha, .mhd, .vti, .pvti, .vtk image, a DICOM series' directory or "
+                   "file) or a mesh (.vtu, .pvtu, .vtk, .msh, .mesh, .meshb, .ele, .inp)"),
       kExitUsage);
 }
 

@@ -34,7 +34,9 @@ const CommandSpec& MeshSpec() {
         .flags =
             {
                 {"volume", "FILE",
-                 "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk", true},
+                 "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk, DICOM series "
+                 "dir or file",
+                 true},
                 {"output", "FILE", "mesh to write: .vtu .vtk .msh .mesh .meshb .ele", true},
                 {"block", "B", "voxels per cell edge (default 1)"},
                 {"mask-threshold", "T", "mesh only cells whose 8 corner samples are all >= T"},

@@ -696,7 +696,9 @@ const CommandSpec& RefineSpec() {
         .flags =
             {
                 {"volume", "FILE",
-                 "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk", true},
+                 "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk, DICOM series "
+                 "dir or file",
+                 true},
                 {"mesh", "FILE", "input tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele .inp",
                  true},
                 {"epsilon", "E", "relative tolerance, > 0 (0.1 = 10% of normCoeff)", true},

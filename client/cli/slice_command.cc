@@ -104,7 +104,9 @@ const CommandSpec& SliceSpec() {
           "Prints the discrepancy on the plane per mesh (max, mean over covered pixels).",
       .flags =
           {
-              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk",
+              {"volume", "FILE",
+               "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk, DICOM series dir "
+               "or file",
                true},
               {"mesh", "FILE",
                "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele .inp (first row, e.g. before)",

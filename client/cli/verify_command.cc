@@ -77,7 +77,9 @@ const CommandSpec& VerifySpec() {
           "Exit: 0 valid, 1 not valid, 2 bad flags or unreadable input.",
       .flags =
           {
-              {"volume", "FILE", "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk",
+              {"volume", "FILE",
+               "volume: .nii .nii.gz .hdr .nrrd .nhdr .mha .mhd .vti .pvti .vtk, DICOM series dir "
+               "or file",
                true},
               {"mesh", "FILE", "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele .inp", true},
               {"epsilon", "E", "tolerance for the share of lattice points above it (default 0.1)"},

@@ -1,6 +1,7 @@
 #include "client/io/read_volume.h"
 
 #include "absl/strings/match.h"
+#include "client/io/dicom_series.h"
 #include "client/io/io_error.h"
 #include "client/io/metaimage_reader.h"
 #include "client/io/nifti_reader.h"
@@ -23,12 +24,13 @@ absl::StatusOr<VolumeFile> ReadVolume(const std::string& path) {
   if (has(".img") || has(".img.gz")) {
     return FileError(path, "an .img file holds only samples: read its .hdr");
   }
-  // DICOM (.dcm or extension-less series) is out of scope: a series needs slice sorting and
-  // per-vendor geometry rules. Convert it first, e.g. with dcm2niix, and read the NIfTI.
-  return FileError(
-      path,
-      "unknown extension for a volume: expected .nii, .nii.gz, .hdr, .nrrd, .nhdr, "
-      ".mha, .mhd, .vti, .pvti or .vtk (DICOM is not read: convert it to NIfTI with dcm2niix)");
+  // A DICOM series: its directory, or one of its files (.dcm, or named by the scanner without an
+  // extension and recognised by the magic).
+  if (IsDicomPath(path)) return ReadDicomSeries(path);
+  return FileError(path,
+                   "unknown extension for a volume: expected .nii, .nii.gz, .hdr, .nrrd, .nhdr, "
+                   ".mha, .mhd, .vti, .pvti, .vtk, or a DICOM series (its directory or one of "
+                   "its files)");
 }
 
 }  // namespace tetrefine::io

@@ -257,12 +257,16 @@ TEST(IoMetaImageTest, ObliqueTransformMatrixBecomesTheDirection) {
 }
 
 TEST(IoReadVolumeTest, UnknownExtensionNamesTheFile) {
-  for (const char* name : {"scan.dcm", "volume.tif", "noextension"}) {
+  for (const char* name : {"scan.jpg", "volume.tif", "noextension"}) {
     const absl::Status status = ReadVolume(name).status();
     EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
     EXPECT_THAT(std::string(status.message()), HasSubstr(name));
     EXPECT_THAT(std::string(status.message()), HasSubstr("unknown extension"));
   }
+  // A .dcm is read as one file of a DICOM series (tests/io/dicom_test.cc): a missing one is
+  // named.
+  EXPECT_THAT(std::string(ReadVolume("missing-scan.dcm").status().message()),
+              HasSubstr("missing-scan.dcm"));
 }
 
 // A device never ends: /dev/zero behind a volume or mesh name grew memory without bound until

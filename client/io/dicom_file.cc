@@ -1,0 +1,391 @@
+#include "client/io/dicom_file.h"
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "absl/strings/ascii.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "client/io/io_error.h"
+#include "client/io/number_text.h"
+
+namespace tetrefine::io {
+namespace {
+
+constexpr uint32_t kUndefinedLength = 0xFFFFFFFFu;
+constexpr uint16_t kItemGroup = 0xFFFE;
+constexpr uint16_t kItem = 0xE000;
+constexpr uint16_t kItemEnd = 0xE00D;
+constexpr uint16_t kSequenceEnd = 0xE0DD;
+// Nesting of undefined-length sequences the reader follows. Real files nest a few levels
+// (a procedure code inside a request attribute); the bound keeps a hostile file from recursing
+// without end.
+constexpr int kMaxSequenceDepth = 32;
+
+constexpr absl::string_view kImplicitLittle = "1.2.840.10008.1.2";
+constexpr absl::string_view kExplicitLittle = "1.2.840.10008.1.2.1";
+
+uint16_t U16(absl::string_view b, uint64_t at) {
+  uint16_t v;
+  std::memcpy(&v, b.data() + at, 2);
+  return v;
+}
+
+uint32_t U32(absl::string_view b, uint64_t at) {
+  uint32_t v;
+  std::memcpy(&v, b.data() + at, 4);
+  return v;
+}
+
+std::string TagText(uint16_t group, uint16_t element) {
+  return absl::StrFormat("(%04X,%04X)", group, element);
+}
+
+// The value representations whose explicit-VR header has two reserved bytes and a 32-bit length
+// (PS3.5 7.1.2).
+bool HasLongLength(const char vr[2]) {
+  static constexpr const char* kLong[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ",
+                                          "SV", "UC", "UN", "UR", "UT", "UV"};
+  for (const char* v : kLong) {
+    if (vr[0] == v[0] && vr[1] == v[1]) return true;
+  }
+  return false;
+}
+
+// A DICOM string value without its padding (trailing spaces or NUL, leading spaces).
+absl::string_view Trimmed(absl::string_view v) {
+  while (!v.empty() && (v.back() == ' ' || v.back() == '\0')) v.remove_suffix(1);
+  while (!v.empty() && v.front() == ' ') v.remove_prefix(1);
+  return v;
+}
+
+// What a transfer syntax is called, for the message that refuses it.
+std::string TransferSyntaxName(absl::string_view uid) {
+  struct Known {
+    absl::string_view uid, name;
+  };
+  static constexpr Known kKnown[] = {
+      {"1.2.840.10008.1.2.2", "explicit VR big endian"},
+      {"1.2.840.10008.1.2.1.99", "deflated explicit VR little endian"},
+      {"1.2.840.10008.1.2.4.50", "JPEG baseline"},
+      {"1.2.840.10008.1.2.4.51", "JPEG extended"},
+      {"1.2.840.10008.1.2.4.57", "JPEG lossless"},
+      {"1.2.840.10008.1.2.4.70", "JPEG lossless, first-order prediction"},
+      {"1.2.840.10008.1.2.4.80", "JPEG-LS lossless"},
+      {"1.2.840.10008.1.2.4.81", "JPEG-LS near-lossless"},
+      {"1.2.840.10008.1.2.4.90", "JPEG 2000 lossless"},
+      {"1.2.840.10008.1.2.4.91", "JPEG 2000"},
+      {"1.2.840.10008.1.2.5", "RLE lossless"},
+  };
+  for (const Known& k : kKnown) {
+    if (k.uid == uid) return absl::StrCat(uid, " (", k.name, ")");
+  }
+  return std::string(uid);
+}
+
+struct ElementHeader {
+  uint16_t group = 0;
+  uint16_t element = 0;
+  char vr[2] = {0, 0};  // explicit VR only; {0, 0} otherwise
+  uint32_t length = 0;
+  uint64_t value = 0;  // offset of the value's first byte
+};
+
+class DataSetParser {
+ public:
+  DataSetParser(absl::string_view bytes, absl::string_view path) : bytes_(bytes), path_(path) {}
+
+  // The element header at `pos`. Item and delimiter tags (FFFE,xxxx) have no VR in either form.
+  absl::StatusOr<ElementHeader> Header(uint64_t pos, bool explicit_vr) const {
+    if (pos + 8 > bytes_.size()) return Truncated(pos, "an element's header");
+    ElementHeader h;
+    h.group = U16(bytes_, pos);
+    h.element = U16(bytes_, pos + 2);
+    if (h.group == kItemGroup || !explicit_vr) {
+      h.length = U32(bytes_, pos + 4);
+      h.value = pos + 8;
+      return h;
+    }
+    h.vr[0] = bytes_[pos + 4];
+    h.vr[1] = bytes_[pos + 5];
+    if (!absl::ascii_isupper(static_cast<unsigned char>(h.vr[0])) ||
+        !absl::ascii_isupper(static_cast<unsigned char>(h.vr[1]))) {
+      return FileError(path_,
+                       absl::StrCat("DICOM element ", TagText(h.group, h.element), " at byte ", pos,
+                                    " has no value representation (two capital letters)"));
+    }
+    if (HasLongLength(h.vr)) {
+      if (pos + 12 > bytes_.size()) return Truncated(pos, "an element's header");
+      h.length = U32(bytes_, pos + 8);
+      h.value = pos + 12;
+    } else {
+      h.length = U16(bytes_, pos + 6);
+      h.value = pos + 8;
+    }
+    return h;
+  }
+
+  // The offset just past element `h`'s value, skipping a sequence of undefined length.
+  absl::StatusOr<uint64_t> Skip(const ElementHeader& h, bool explicit_vr, int depth) const {
+    if (h.length != kUndefinedLength) {
+      if (h.value + h.length > bytes_.size()) {
+        return Truncated(h.value, absl::StrCat("element ", TagText(h.group, h.element), "'s ",
+                                               h.length, "-byte value"));
+      }
+      return h.value + h.length;
+    }
+    // PS3.5 7.5: only sequences (SQ; UN holding one, whose items are then implicit VR; any
+    // element of an implicit-VR data set) have an undefined length.
+    const bool un = h.vr[0] == 'U' && h.vr[1] == 'N';
+    const bool sq = h.vr[0] == 'S' && h.vr[1] == 'Q';
+    if (explicit_vr && !un && !sq) {
+      return FileError(path_, absl::StrCat("DICOM element ", TagText(h.group, h.element), " (VR ",
+                                           absl::string_view(h.vr, 2),
+                                           ") has an undefined length, which only a sequence may "
+                                           "have"));
+    }
+    return SkipSequence(h.value, explicit_vr && !un, depth + 1);
+  }
+
+  absl::Status Truncated(uint64_t at, absl::string_view what) const {
+    return FileError(path_, absl::StrCat("truncated DICOM file: ", what, " at byte ", at,
+                                         " runs past its end (", bytes_.size(), " bytes)"));
+  }
+
+ private:
+  // Skips the items of an undefined-length sequence starting at `pos`, through its delimiter.
+  absl::StatusOr<uint64_t> SkipSequence(uint64_t pos, bool explicit_vr, int depth) const {
+    if (depth > kMaxSequenceDepth) {
+      return FileError(path_, absl::StrCat("DICOM sequences nest deeper than ", kMaxSequenceDepth,
+                                           " levels at byte ", pos));
+    }
+    while (true) {
+      absl::StatusOr<ElementHeader> item = Header(pos, explicit_vr);
+      if (!item.ok()) return item.status();
+      if (item->group == kItemGroup && item->element == kSequenceEnd) return item->value;
+      if (item->group != kItemGroup || item->element != kItem) {
+        return FileError(path_, absl::StrCat("DICOM sequence at byte ", pos, ": expected an item ",
+                                             TagText(kItemGroup, kItem), ", found ",
+                                             TagText(item->group, item->element)));
+      }
+      if (item->length != kUndefinedLength) {
+        if (item->value + item->length > bytes_.size()) {
+          return Truncated(item->value, "a sequence item");
+        }
+        pos = item->value + item->length;
+        continue;
+      }
+      pos = item->value;
+      while (true) {
+        absl::StatusOr<ElementHeader> e = Header(pos, explicit_vr);
+        if (!e.ok()) return e.status();
+        if (e->group == kItemGroup && e->element == kItemEnd) {
+          pos = e->value;
+          break;
+        }
+        if (e->group == kItemGroup) {
+          return FileError(path_,
+                           absl::StrCat("DICOM sequence item at byte ", pos, ": found ",
+                                        TagText(e->group, e->element), " before the item's end"));
+        }
+        absl::StatusOr<uint64_t> next = Skip(*e, explicit_vr, depth);
+        if (!next.ok()) return next.status();
+        pos = *next;
+      }
+    }
+  }
+
+  absl::string_view bytes_;
+  absl::string_view path_;
+};
+
+// Attribute names for messages.
+std::string Named(uint16_t group, uint16_t element, absl::string_view name) {
+  return absl::StrCat(name, " ", TagText(group, element));
+}
+
+absl::StatusOr<int> UnsignedShort(absl::string_view value, absl::string_view what,
+                                  absl::string_view path) {
+  if (value.size() < 2) {
+    return FileError(path, absl::StrCat("DICOM ", what, " has ", value.size(),
+                                        " bytes, expected a 2-byte unsigned short"));
+  }
+  return U16(value, 0);
+}
+
+// A decimal string (DS or IS) of exactly `n` finite numbers separated by backslashes.
+template <size_t n>
+absl::StatusOr<std::array<double, n>> Decimals(absl::string_view value, absl::string_view what,
+                                               absl::string_view path) {
+  std::array<double, n> out{};
+  size_t count = 0;
+  for (absl::string_view word : absl::StrSplit(value, '\\')) {
+    word = Trimmed(word);
+    double x;
+    if (count < n && (!ParseDouble(word, x) || !std::isfinite(x))) {
+      return FileError(path, absl::StrCat("DICOM ", what, ": \"", word.substr(0, 40),
+                                          "\" is not a finite number"));
+    }
+    if (count < n) out[count] = x;
+    ++count;
+  }
+  if (count != n) {
+    return FileError(path, absl::StrCat("DICOM ", what, " has ", count, " values, expected ", n));
+  }
+  return out;
+}
+
+}  // namespace
+
+bool HasDicomMagic(absl::string_view bytes) {
+  return bytes.size() >= 132 && bytes.substr(128, 4) == "DICM";
+}
+
+absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_view path) {
+  if (!HasDicomMagic(bytes)) {
+    return FileError(path, "not a DICOM file: no \"DICM\" after a 128-byte preamble");
+  }
+  DataSetParser parser(bytes, path);
+  DicomImage image;
+  uint64_t pos = 132;
+  // The file meta information (group 0002) is always explicit VR little endian.
+  while (pos + 2 <= bytes.size() && U16(bytes, pos) == 0x0002) {
+    absl::StatusOr<ElementHeader> h = parser.Header(pos, /*explicit_vr=*/true);
+    if (!h.ok()) return h.status();
+    if (h->length == kUndefinedLength || h->value + h->length > bytes.size()) {
+      return parser.Truncated(h->value,
+                              absl::StrCat("file meta element ", TagText(h->group, h->element)));
+    }
+    const absl::string_view value = Trimmed(bytes.substr(h->value, h->length));
+    if (h->element == 0x0002) image.media_sop_class = std::string(value);
+    if (h->element == 0x0010) image.transfer_syntax = std::string(value);
+    pos = h->value + h->length;
+  }
+  if (image.transfer_syntax.empty()) {
+    return FileError(path, "DICOM file meta information has no Transfer Syntax UID (0002,0010)");
+  }
+  const bool explicit_vr = image.transfer_syntax == kExplicitLittle;
+  if (!explicit_vr && image.transfer_syntax != kImplicitLittle) {
+    return FileUnsupported(
+        path, absl::StrCat("DICOM transfer syntax ", TransferSyntaxName(image.transfer_syntax),
+                           " is not read, only uncompressed little endian (", kImplicitLittle, ", ",
+                           kExplicitLittle,
+                           "): decompress the series with `gdcmconv --raw IN OUT` or convert it "
+                           "to NIfTI with dcm2niix"));
+  }
+  while (pos < bytes.size()) {
+    absl::StatusOr<ElementHeader> h = parser.Header(pos, explicit_vr);
+    if (!h.ok()) return h.status();
+    if (h->group == kItemGroup) {
+      return FileError(path, absl::StrCat("DICOM item or delimiter ", TagText(h->group, h->element),
+                                          " at byte ", pos, " outside any sequence"));
+    }
+    if (h->group == 0x7FE0 && h->element == 0x0010) {
+      if (h->length == kUndefinedLength) {
+        return FileUnsupported(path,
+                               "DICOM Pixel Data (7FE0,0010) is encapsulated (compressed) under "
+                               "an uncompressed transfer syntax");
+      }
+      if (h->value + h->length > bytes.size()) {
+        return parser.Truncated(h->value,
+                                absl::StrCat("Pixel Data (7FE0,0010), ", h->length, " bytes,"));
+      }
+      image.pixel_data = bytes.substr(h->value, h->length);
+      break;  // what follows the pixels (padding, signatures) places nothing
+    }
+    absl::StatusOr<uint64_t> next = parser.Skip(*h, explicit_vr, 0);
+    if (!next.ok()) return next.status();
+    if (h->length != kUndefinedLength) {
+      const absl::string_view value = bytes.substr(h->value, h->length);
+      const uint32_t tag = (uint32_t{h->group} << 16) | h->element;
+      const auto us = [&](absl::string_view name, int& out) -> absl::Status {
+        absl::StatusOr<int> v = UnsignedShort(value, Named(h->group, h->element, name), path);
+        if (!v.ok()) return v.status();
+        out = *v;
+        return absl::OkStatus();
+      };
+      absl::Status s;
+      int us_value = 0;
+      switch (tag) {
+        case 0x00080060:
+          image.modality = std::string(Trimmed(value));
+          break;
+        case 0x0020000E:
+          image.series_uid = std::string(Trimmed(value));
+          break;
+        case 0x00200032: {
+          auto v =
+              Decimals<3>(value, Named(h->group, h->element, "Image Position (Patient)"), path);
+          if (!v.ok()) return v.status();
+          image.position = *v;
+          break;
+        }
+        case 0x00200037: {
+          auto v =
+              Decimals<6>(value, Named(h->group, h->element, "Image Orientation (Patient)"), path);
+          if (!v.ok()) return v.status();
+          image.orientation = *v;
+          break;
+        }
+        case 0x00280002:
+          s = us("Samples per Pixel", image.samples_per_pixel);
+          break;
+        case 0x00280008: {
+          auto v = Decimals<1>(value, Named(h->group, h->element, "Number of Frames"), path);
+          if (!v.ok()) return v.status();
+          if ((*v)[0] < 1 || (*v)[0] != std::floor((*v)[0]) || (*v)[0] > 1e9) {
+            return FileError(path, absl::StrCat("DICOM Number of Frames (0028,0008) is ", (*v)[0],
+                                                ", not a positive count"));
+          }
+          image.frames = static_cast<int64_t>((*v)[0]);
+          break;
+        }
+        case 0x00280010:
+          s = us("Rows", us_value);
+          image.rows = us_value;
+          break;
+        case 0x00280011:
+          s = us("Columns", us_value);
+          image.columns = us_value;
+          break;
+        case 0x00280030: {
+          auto v = Decimals<2>(value, Named(h->group, h->element, "Pixel Spacing"), path);
+          if (!v.ok()) return v.status();
+          image.pixel_spacing = *v;
+          break;
+        }
+        case 0x00280100:
+          s = us("Bits Allocated", image.bits_allocated);
+          break;
+        case 0x00280101:
+          s = us("Bits Stored", image.bits_stored);
+          break;
+        case 0x00280103:
+          s = us("Pixel Representation", image.pixel_representation);
+          break;
+        case 0x00281052: {
+          auto v = Decimals<1>(value, Named(h->group, h->element, "Rescale Intercept"), path);
+          if (!v.ok()) return v.status();
+          image.rescale_intercept = (*v)[0];
+          break;
+        }
+        case 0x00281053: {
+          auto v = Decimals<1>(value, Named(h->group, h->element, "Rescale Slope"), path);
+          if (!v.ok()) return v.status();
+          image.rescale_slope = (*v)[0];
+          break;
+        }
+        default:
+          break;
+      }
+      if (!s.ok()) return s;
+    }
+    pos = *next;
+  }
+  return image;
+}
+
+}  // namespace tetrefine::io

@@ -1,0 +1,451 @@
+#include "client/io/dicom_series.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "client/io/dicom_file.h"
+#include "client/io/file_bytes.h"
+#include "client/io/grid_placement.h"
+#include "client/io/io_error.h"
+#include "client/io/voxel_decode.h"
+#include "client/io/world_frame.h"
+
+namespace tetrefine::io {
+namespace {
+
+constexpr absl::string_view kDicomDirClass = "1.2.840.10008.1.3.10";
+// Files a directory may hold: a series has at most kMaxVolumeAxis slices; the margin allows
+// the other files beside them. More means a wrong directory, not a series.
+constexpr size_t kMaxDirectoryFiles = size_t{1} << 21;
+// Orientation cosines of two slices of one series agree to this (they are written with about
+// six digits); pixel spacings to this fraction.
+constexpr double kOrientationTolerance = 1e-4;
+constexpr double kSpacingTolerance = 1e-4;
+// A slice may lie this fraction of the slice step off the line through the first and the last
+// (IPP values carry about six digits; a missing slice is a whole step off).
+constexpr double kPositionTolerance = 0.01;
+
+struct Slice {
+  std::string file;
+  DicomImage image;        // pixel_data cleared: the file is read again for its pixels
+  size_t pixel_bytes = 0;  // the size of its Pixel Data
+  double along = 0;        // Image Position (Patient) along the slice normal, mm
+};
+
+using Vec = std::array<double, 3>;
+
+Vec Cross(const Vec& a, const Vec& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double Dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double Norm(const Vec& a) { return std::sqrt(Dot(a, a)); }
+
+std::string FileName(const std::string& file) {
+  return std::filesystem::path(file).filename().string();
+}
+
+// The directory a file is in ("." for a bare name).
+std::string ParentDirectory(const std::string& file) {
+  const std::string parent = std::filesystem::path(file).parent_path().string();
+  return parent.empty() ? std::string(".") : parent;
+}
+
+// The regular files of `directory` (links followed), sorted by name so that every message and
+// tie is the same from run to run.
+absl::StatusOr<std::vector<std::string>> FilesIn(const std::string& directory) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  std::filesystem::directory_iterator it(directory, ec);
+  if (ec) return FileError(directory, absl::StrCat("cannot list the directory: ", ec.message()));
+  for (; it != std::filesystem::directory_iterator(); it.increment(ec)) {
+    if (ec) return FileError(directory, absl::StrCat("cannot list the directory: ", ec.message()));
+    std::error_code kind_ec;
+    if (!it->is_regular_file(kind_ec)) continue;
+    if (files.size() == kMaxDirectoryFiles) {
+      return FileError(directory, absl::StrCat("holds more than ", kMaxDirectoryFiles,
+                                               " files: not the directory of one series"));
+    }
+    files.push_back(it->path().string());
+  }
+  if (ec) return FileError(directory, absl::StrCat("cannot list the directory: ", ec.message()));
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// Whether the file starts with the DICOM magic, reading only its first 132 bytes.
+bool FileHasDicomMagic(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  char head[132];
+  if (!in.read(head, sizeof(head))) return false;
+  return HasDicomMagic(absl::string_view(head, sizeof(head)));
+}
+
+// Checks that `s` matches the series' first slice in everything that shapes the grid.
+absl::Status CheckSameShape(const Slice& first, const Slice& s) {
+  const DicomImage& a = first.image;
+  const DicomImage& b = s.image;
+  const auto differ = [&](absl::string_view what, double x, double y) {
+    return FileError(
+        s.file, absl::StrCat("DICOM ", what, " is ", y, " here but ", x, " in ",
+                             FileName(first.file), " of the same series: its slices must agree"));
+  };
+  if (a.rows != b.rows) return differ("Rows (0028,0010)", a.rows, b.rows);
+  if (a.columns != b.columns) return differ("Columns (0028,0011)", a.columns, b.columns);
+  if (a.bits_allocated != b.bits_allocated) {
+    return differ("Bits Allocated (0028,0100)", a.bits_allocated, b.bits_allocated);
+  }
+  if (a.bits_stored != b.bits_stored) {
+    return differ("Bits Stored (0028,0101)", a.bits_stored, b.bits_stored);
+  }
+  if (a.pixel_representation != b.pixel_representation) {
+    return differ("Pixel Representation (0028,0103)", a.pixel_representation,
+                  b.pixel_representation);
+  }
+  for (int c = 0; c < 6; ++c) {
+    if (std::abs((*a.orientation)[c] - (*b.orientation)[c]) > kOrientationTolerance) {
+      return differ(absl::StrCat("Image Orientation (Patient) (0020,0037) value ", c + 1),
+                    (*a.orientation)[c], (*b.orientation)[c]);
+    }
+  }
+  for (int c = 0; c < 2; ++c) {
+    const double x = (*a.pixel_spacing)[c], y = (*b.pixel_spacing)[c];
+    if (std::abs(x - y) > kSpacingTolerance * std::max(x, y)) {
+      return differ(absl::StrCat("Pixel Spacing (0028,0030) value ", c + 1), x, y);
+    }
+  }
+  return absl::OkStatus();
+}
+
+// Checks what a slice must have to be placed and decoded.
+absl::Status CheckPlaceable(const Slice& s) {
+  const DicomImage& im = s.image;
+  const auto missing = [&](absl::string_view what) {
+    return FileError(s.file, absl::StrCat("DICOM image has no ", what,
+                                          ": its slices cannot be placed in the world"));
+  };
+  if (!im.position) return missing("Image Position (Patient) (0020,0032)");
+  if (!im.orientation) return missing("Image Orientation (Patient) (0020,0037)");
+  if (!im.pixel_spacing) return missing("Pixel Spacing (0028,0030)");
+  if (im.samples_per_pixel != 1) {
+    return FileUnsupported(
+        s.file, absl::StrCat("DICOM Samples per Pixel (0028,0002) is ", im.samples_per_pixel,
+                             ": colour images are not read, only scalar ones"));
+  }
+  if (im.frames != 1) {
+    return FileUnsupported(
+        s.file, absl::StrCat("DICOM file holds ", im.frames,
+                             " frames (Number of Frames (0028,0008)): multi-frame (enhanced) "
+                             "images are not read; convert the series to NIfTI with dcm2niix"));
+  }
+  if (im.rows < 1 || im.columns < 1) {
+    return FileError(s.file, absl::StrCat("DICOM image is ", im.columns, " x ", im.rows,
+                                          " (Columns x Rows): empty"));
+  }
+  if (im.bits_allocated != 8 && im.bits_allocated != 16 && im.bits_allocated != 32) {
+    return FileUnsupported(s.file, absl::StrCat("DICOM Bits Allocated (0028,0100) is ",
+                                                im.bits_allocated, ": only 8, 16 and 32 are read"));
+  }
+  if (im.bits_stored < 0 || im.bits_stored > im.bits_allocated) {
+    return FileError(s.file, absl::StrCat("DICOM Bits Stored (0028,0101) is ", im.bits_stored,
+                                          ", more than Bits Allocated (", im.bits_allocated, ")"));
+  }
+  if (im.pixel_representation != 0 && im.pixel_representation != 1) {
+    return FileError(s.file, absl::StrCat("DICOM Pixel Representation (0028,0103) is ",
+                                          im.pixel_representation, ", expected 0 or 1"));
+  }
+  const Vec row{(*im.orientation)[0], (*im.orientation)[1], (*im.orientation)[2]};
+  const Vec col{(*im.orientation)[3], (*im.orientation)[4], (*im.orientation)[5]};
+  if (std::abs(Norm(row) - 1) > 1e-3 || std::abs(Norm(col) - 1) > 1e-3 ||
+      std::abs(Dot(row, col)) > 1e-3) {
+    return FileError(s.file,
+                     "DICOM Image Orientation (Patient) (0020,0037) is not two orthogonal unit "
+                     "vectors");
+  }
+  for (int c = 0; c < 2; ++c) {
+    const double sp = (*im.pixel_spacing)[c];
+    if (!(sp > 0)) {
+      return FileError(s.file, absl::StrCat("DICOM Pixel Spacing (0028,0030) value ", c + 1, " is ",
+                                            sp, ", not positive"));
+    }
+  }
+  const uint64_t need = static_cast<uint64_t>(im.rows) * static_cast<uint64_t>(im.columns) *
+                        static_cast<uint64_t>(im.bits_allocated / 8);
+  if (s.pixel_bytes < need) {
+    return FileError(s.file, absl::StrCat("DICOM Pixel Data (7FE0,0010) has ", s.pixel_bytes,
+                                          " bytes, the image needs ", need, " (", im.columns, " x ",
+                                          im.rows, " samples of ", im.bits_allocated, " bits)"));
+  }
+  return absl::OkStatus();
+}
+
+// The samples' storage type before any rescaling, and whether they need widening first: 8-bit
+// signed samples to int16 and 32-bit unsigned ones to float64 (Volume has neither type).
+VoxelType StoredType(const DicomImage& im) {
+  const bool is_signed = im.pixel_representation == 1;
+  switch (im.bits_allocated) {
+    case 8:
+      return is_signed ? VoxelType::kInt16 : VoxelType::kUint8;
+    case 16:
+      return is_signed ? VoxelType::kInt16 : VoxelType::kUint16;
+    default:
+      return is_signed ? VoxelType::kInt32 : VoxelType::kFloat64;
+  }
+}
+
+// Sample `n` of raw little-endian pixel data, masked to its stored bits and sign-extended.
+int64_t StoredSample(const DicomImage& im, absl::string_view pixels, size_t n) {
+  const int bytes = im.bits_allocated / 8;
+  uint64_t raw = 0;
+  std::memcpy(&raw, pixels.data() + n * bytes, bytes);  // little endian host (byte_order.h)
+  const int bits = im.bits_stored > 0 ? im.bits_stored : im.bits_allocated;
+  const uint64_t mask = bits >= 64 ? ~uint64_t{0} : (uint64_t{1} << bits) - 1;
+  raw &= mask;
+  if (im.pixel_representation == 1 && (raw >> (bits - 1)) != 0) raw |= ~mask;
+  return static_cast<int64_t>(raw);
+}
+
+// Writes the `count` stored samples of one slice to `out` as T, scaled by the slice's own
+// Rescale Slope and Intercept when `rescale`.
+template <typename T>
+void GatherSlice(const DicomImage& im, absl::string_view pixels, size_t count, std::byte* out,
+                 bool rescale = false) {
+  for (size_t m = 0; m < count; ++m) {
+    const int64_t v = StoredSample(im, pixels, m);
+    const T x =
+        rescale ? static_cast<T>(im.rescale_slope * static_cast<double>(v) + im.rescale_intercept)
+                : static_cast<T>(v);
+    std::memcpy(out + m * sizeof(T), &x, sizeof(T));
+  }
+}
+
+}  // namespace
+
+bool IsDicomPath(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return true;
+  if (absl::EndsWithIgnoreCase(path, ".dcm") || absl::EndsWithIgnoreCase(path, ".dicom")) {
+    return true;
+  }
+  return std::filesystem::is_regular_file(path, ec) && FileHasDicomMagic(path);
+}
+
+absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
+  std::error_code ec;
+  const bool is_directory = std::filesystem::is_directory(path, ec);
+  std::string directory = path;
+  std::optional<std::string> wanted_series;
+  if (!is_directory) {
+    absl::StatusOr<FileView> view = FileView::Open(path);
+    if (!view.ok()) return view.status();
+    absl::StatusOr<DicomImage> image = ParseDicomFile(view->bytes(), path);
+    if (!image.ok()) return image.status();
+    if (!image->pixel_data) {
+      return FileError(path, "DICOM file holds no image (no Pixel Data (7FE0,0010))");
+    }
+    wanted_series = image->series_uid;
+    directory = ParentDirectory(path);
+  }
+  absl::StatusOr<std::vector<std::string>> files = FilesIn(directory);
+  if (!files.ok()) return files.status();
+
+  // First pass: every file's header, grouped by series.
+  std::map<std::string, std::vector<Slice>> series;
+  int64_t not_dicom = 0, no_image = 0;
+  for (const std::string& file : *files) {
+    absl::StatusOr<FileView> view = FileView::Open(file);
+    if (!view.ok()) return view.status();
+    if (!HasDicomMagic(view->bytes())) {
+      ++not_dicom;
+      continue;
+    }
+    absl::StatusOr<DicomImage> image = ParseDicomFile(view->bytes(), file);
+    if (!image.ok()) return image.status();
+    if (image->media_sop_class == kDicomDirClass || !image->pixel_data) {
+      ++no_image;
+      continue;
+    }
+    if (wanted_series && image->series_uid != *wanted_series) continue;
+    // The pixels are read again in the second pass, so that no file stays mapped.
+    const size_t pixel_bytes = image->pixel_data->size();
+    image->pixel_data.reset();
+    series[image->series_uid].push_back(Slice{file, *std::move(image), pixel_bytes, 0.0});
+  }
+  if (series.empty()) {
+    // Exports often hold one directory per series under a patient or study directory.
+    bool has_subdirectories = false;
+    for (const auto& entry : std::filesystem::directory_iterator(directory, ec)) {
+      std::error_code kind_ec;
+      if (entry.is_directory(kind_ec)) has_subdirectories = true;
+    }
+    return FileError(
+        path, absl::StrCat("no DICOM image found (", files->size(), " files, ", not_dicom,
+                           " not DICOM, ", no_image, " without an image)",
+                           has_subdirectories
+                               ? "; subdirectories are not searched: name the directory of one "
+                                 "series, or one of its files"
+                               : ""));
+  }
+  if (series.size() > 1) {
+    std::string list;
+    int shown = 0;
+    for (const auto& [uid, slices] : series) {
+      if (shown++ == 4) {
+        absl::StrAppend(&list, ", ...");
+        break;
+      }
+      absl::StrAppend(&list, shown > 1 ? ", " : "", uid.empty() ? "(no UID)" : uid, ": ",
+                      slices.size(), " images, e.g. ", FileName(slices.front().file));
+    }
+    return FileError(path, absl::StrCat("directory holds ", series.size(), " DICOM series (", list,
+                                        "): name one file of the series to read instead of the "
+                                        "directory"));
+  }
+  std::vector<Slice>& slices = series.begin()->second;
+
+  for (const Slice& s : slices) {
+    if (absl::Status st = CheckPlaceable(s); !st.ok()) return st;
+    if (absl::Status st = CheckSameShape(slices.front(), s); !st.ok()) return st;
+  }
+  if (slices.size() < 2) {
+    return FileError(slices.front().file,
+                     "the DICOM series has a single slice: a volume needs at least two");
+  }
+  if (slices.size() > static_cast<size_t>(kMaxVolumeAxis)) {
+    return FileError(path, absl::StrCat("the DICOM series has ", slices.size(),
+                                        " slices, more than ", kMaxVolumeAxis));
+  }
+
+  const DicomImage& first = slices.front().image;
+  const Vec row{(*first.orientation)[0], (*first.orientation)[1], (*first.orientation)[2]};
+  const Vec col{(*first.orientation)[3], (*first.orientation)[4], (*first.orientation)[5]};
+  const Vec normal = Cross(row, col);
+  for (Slice& s : slices) s.along = Dot(*s.image.position, normal);
+  // By position along the normal; equal positions are refused below, so the order is fixed by
+  // geometry alone.
+  std::stable_sort(slices.begin(), slices.end(),
+                   [](const Slice& a, const Slice& b) { return a.along < b.along; });
+  const double in_plane = std::min((*first.pixel_spacing)[0], (*first.pixel_spacing)[1]);
+  for (size_t k = 1; k < slices.size(); ++k) {
+    if (slices[k].along - slices[k - 1].along <= 1e-4 * in_plane) {
+      return FileError(
+          path,
+          absl::StrCat("DICOM slices ", FileName(slices[k - 1].file), " and ",
+                       FileName(slices[k].file), " lie at the same position (", slices[k].along,
+                       " mm along the slice normal): the series holds several volumes "
+                       "(time points, echoes or b-values); split it, e.g. with dcm2niix"));
+    }
+  }
+  const size_t n = slices.size();
+  const Vec p0 = *slices.front().image.position;
+  const Vec pn = *slices.back().image.position;
+  Vec step;
+  for (int a = 0; a < 3; ++a) step[a] = (pn[a] - p0[a]) / static_cast<double>(n - 1);
+  const double step_length = Norm(step);
+  for (size_t k = 1; k + 1 < n; ++k) {
+    const Vec& p = *slices[k].image.position;
+    Vec off;
+    for (int a = 0; a < 3; ++a) off[a] = p[a] - (p0[a] + static_cast<double>(k) * step[a]);
+    if (Norm(off) > kPositionTolerance * step_length) {
+      return FileError(
+          path,
+          absl::StrCat("DICOM slice spacing is uneven: ", FileName(slices[k].file), " lies ",
+                       absl::StrFormat("%.4g", Norm(off)), " mm from where an even spacing of ",
+                       absl::StrFormat("%.4g", step_length), " mm puts slice ", k + 1, " of ", n,
+                       " (a missing slice, or a series of varying spacing; dcm2niix "
+                       "can resample it)"));
+    }
+  }
+
+  // Index (i, j, k) = (column, row, slice). Pixel Spacing is (between rows, between columns).
+  std::array<Vec, 3> axes;
+  for (int a = 0; a < 3; ++a) {
+    axes[0][a] = row[a] * (*first.pixel_spacing)[1];
+    axes[1][a] = col[a] * (*first.pixel_spacing)[0];
+    axes[2][a] = step[a];
+  }
+  const Affine affine = LpsToRas(AffineFromAxes(axes, p0));
+  const Index3 dims{first.columns, first.rows, static_cast<int64_t>(n)};
+
+  // Second pass: the samples, slice by slice in position order.
+  const size_t per_slice = static_cast<size_t>(first.columns * first.rows);
+  bool one_scaling = true;
+  for (const Slice& s : slices) {
+    const double slope = s.image.rescale_slope, inter = s.image.rescale_intercept;
+    if (slope == 0.0) {
+      return FileError(s.file,
+                       "DICOM Rescale Slope (0028,1053) is 0: every value would be the "
+                       "intercept");
+    }
+    one_scaling = one_scaling && slope == first.rescale_slope && inter == first.rescale_intercept;
+  }
+  const VoxelType stored = StoredType(first);
+  const bool scaled = !one_scaling || first.rescale_slope != 1.0 || first.rescale_intercept != 0.0;
+  // Scaled values of one scaling go through DecodeVoxels (float32 for at most 16 bits, as a
+  // NIfTI with scl_slope reads); per-slice scalings (PET) and wide samples are float64.
+  const bool to_float64 = !one_scaling || (scaled && stored == VoxelType::kFloat64) ||
+                          (scaled && first.bits_allocated == 32);
+  const VoxelType gathered = to_float64 ? VoxelType::kFloat64 : stored;
+  std::vector<std::byte> data(per_slice * n * VoxelSize(gathered));
+  for (size_t k = 0; k < n; ++k) {
+    const Slice& s = slices[k];
+    absl::StatusOr<FileView> view = FileView::Open(s.file);
+    if (!view.ok()) return view.status();
+    absl::StatusOr<DicomImage> image = ParseDicomFile(view->bytes(), s.file);
+    if (!image.ok()) return image.status();
+    const Slice again{s.file, *image, image->pixel_data ? image->pixel_data->size() : 0, 0.0};
+    absl::Status same = CheckPlaceable(again);
+    if (same.ok()) same = CheckSameShape(slices.front(), again);
+    if (!same.ok()) {
+      return FileError(s.file, absl::StrCat("changed while it was read: ", same.message()));
+    }
+    const absl::string_view pixels = *image->pixel_data;
+    std::byte* out = data.data() + k * per_slice * VoxelSize(gathered);
+    switch (gathered) {
+      case VoxelType::kUint8:
+        GatherSlice<uint8_t>(*image, pixels, per_slice, out);
+        break;
+      case VoxelType::kInt16:
+        GatherSlice<int16_t>(*image, pixels, per_slice, out);
+        break;
+      case VoxelType::kUint16:
+        GatherSlice<uint16_t>(*image, pixels, per_slice, out);
+        break;
+      case VoxelType::kInt32:
+        GatherSlice<int32_t>(*image, pixels, per_slice, out);
+        break;
+      default:
+        // Per-slice scaling is applied here (float64 holds 32-bit samples exactly).
+        GatherSlice<double>(*image, pixels, per_slice, out, to_float64 && scaled);
+        break;
+    }
+  }
+  VoxelType type = gathered;
+  if (scaled && !to_float64) {
+    absl::StatusOr<DecodedVoxels> voxels =
+        DecodeVoxels(absl::string_view(reinterpret_cast<const char*>(data.data()), data.size()),
+                     gathered, ByteOrder::kLittle, first.rescale_slope, first.rescale_intercept);
+    if (!voxels.ok()) return WithPath(path, voxels.status());
+    type = voxels->type;
+    data = std::move(voxels->data);
+  }
+  absl::StatusOr<VolumeFile> volume = PlaceOnGrid(path, affine, dims, type, std::move(data));
+  if (!volume.ok()) return volume.status();
+  if (not_dicom > 0 || no_image > 0) {
+    volume->warnings.push_back(absl::StrCat(directory, ": skipped ", not_dicom,
+                                            " files that are not DICOM and ", no_image,
+                                            " DICOM files without an image"));
+  }
+  return volume;
+}
+
+}  // namespace tetrefine::io

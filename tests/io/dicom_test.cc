@@ -1,0 +1,644 @@
+// DICOM series (client/io/dicom_series.h): files built here byte by byte for each case the
+// reader must place, decode or refuse, and series written by pydicom and converted by dcm2niix,
+// the converter imaging pipelines use, read voxel for voxel at the same world points.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "client/io/dicom_file.h"
+#include "client/io/dicom_series.h"
+#include "client/io/read_volume.h"
+#include "gtest/gtest.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/child_process.h"
+
+namespace tetrefine::io {
+namespace {
+
+using iotest::kPython;
+using iotest::ScratchDir;
+using iotest::WriteBytes;
+
+constexpr char kExplicitLe[] = "1.2.840.10008.1.2.1";
+constexpr char kImplicitLe[] = "1.2.840.10008.1.2";
+
+std::string U16(uint16_t v) { return std::string(reinterpret_cast<const char*>(&v), 2); }
+std::string U32(uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); }
+
+bool LongLength(const std::string& vr) {
+  for (const char* v : {"OB", "OW", "SQ", "UN", "UT", "OF", "OD"}) {
+    if (vr == v) return true;
+  }
+  return false;
+}
+
+// One data element, its value padded to an even length as PS3.5 asks.
+std::string Element(bool explicit_vr, uint16_t group, uint16_t element, const std::string& vr,
+                    std::string value) {
+  if (value.size() % 2 != 0) value.push_back(vr == "UI" || vr == "OB" ? '\0' : ' ');
+  std::string out = U16(group) + U16(element);
+  if (!explicit_vr) return out + U32(static_cast<uint32_t>(value.size())) + value;
+  out += vr;
+  if (LongLength(vr)) return out + U16(0) + U32(static_cast<uint32_t>(value.size())) + value;
+  return out + U16(static_cast<uint16_t>(value.size())) + value;
+}
+
+std::string Us(bool explicit_vr, uint16_t group, uint16_t element, uint16_t v) {
+  return Element(explicit_vr, group, element, "US", U16(v));
+}
+
+std::string Decimals(const std::vector<double>& v) {
+  std::vector<std::string> words;
+  // More digits than DS's 16 characters allow: the test's expected positions use the exact
+  // doubles, and the reader does not limit the length.
+  for (double x : v) words.push_back(absl::StrFormat("%.17g", x));
+  return absl::StrJoin(words, "\\");
+}
+
+// A sequence of undefined length whose items (each the bytes of its elements) have undefined
+// lengths too: the form the reader must walk to find the end.
+std::string UndefinedSequence(bool explicit_vr, uint16_t group, uint16_t element,
+                              const std::vector<std::string>& items) {
+  std::string out = U16(group) + U16(element);
+  out += explicit_vr ? std::string("SQ") + U16(0) + U32(0xFFFFFFFF) : U32(0xFFFFFFFF);
+  for (const std::string& item : items) {
+    out += U16(0xFFFE) + U16(0xE000) + U32(0xFFFFFFFF) + item;
+    out += U16(0xFFFE) + U16(0xE00D) + U32(0);
+  }
+  return out + U16(0xFFFE) + U16(0xE0DD) + U32(0);
+}
+
+struct SliceSpec {
+  bool explicit_vr = true;
+  std::string transfer_syntax;  // empty: the one explicit_vr says
+  std::string media_class = "1.2.840.10008.5.1.4.1.1.2";
+  std::string series = "1.2.826.0.1.3680043.2.1";
+  std::array<double, 3> position = {0, 0, 0};
+  std::array<double, 6> orientation = {1, 0, 0, 0, 1, 0};
+  std::array<double, 2> spacing = {0.8, 0.5};  // between rows, between columns
+  int rows = 4, columns = 3;
+  int bits_allocated = 16, bits_stored = 16, representation = 1;
+  std::optional<std::pair<double, double>> rescale;  // slope, intercept
+  int frames = 1;
+  int samples = 1;
+  bool with_position = true;
+  bool with_pixels = true;
+  std::string pixels;        // raw samples; empty: rows * columns zeros
+  std::string before_image;  // elements placed before group 0020 (sequences, private tags)
+};
+
+std::string SliceFile(const SliceSpec& s) {
+  const bool ex = s.explicit_vr;
+  const std::string ts =
+      s.transfer_syntax.empty() ? (ex ? kExplicitLe : kImplicitLe) : s.transfer_syntax;
+  std::string meta = Element(true, 0x0002, 0x0001, "OB", std::string("\0\1", 2)) +
+                     Element(true, 0x0002, 0x0002, "UI", s.media_class) +
+                     Element(true, 0x0002, 0x0003, "UI", "1.2.3.4.5") +
+                     Element(true, 0x0002, 0x0010, "UI", ts);
+  std::string file(128, '\0');
+  file += "DICM";
+  file += Element(true, 0x0002, 0x0000, "UL", U32(static_cast<uint32_t>(meta.size()))) + meta;
+  file += Element(ex, 0x0008, 0x0060, "CS", "CT");
+  file += s.before_image;
+  file += Element(ex, 0x0020, 0x000E, "UI", s.series);
+  if (s.with_position) {
+    file +=
+        Element(ex, 0x0020, 0x0032, "DS", Decimals({s.position[0], s.position[1], s.position[2]}));
+  }
+  file += Element(ex, 0x0020, 0x0037, "DS", Decimals({s.orientation.begin(), s.orientation.end()}));
+  file += Us(ex, 0x0028, 0x0002, static_cast<uint16_t>(s.samples));
+  if (s.frames != 1) file += Element(ex, 0x0028, 0x0008, "IS", absl::StrCat(s.frames));
+  file += Us(ex, 0x0028, 0x0010, static_cast<uint16_t>(s.rows));
+  file += Us(ex, 0x0028, 0x0011, static_cast<uint16_t>(s.columns));
+  file += Element(ex, 0x0028, 0x0030, "DS", Decimals({s.spacing[0], s.spacing[1]}));
+  file += Us(ex, 0x0028, 0x0100, static_cast<uint16_t>(s.bits_allocated));
+  file += Us(ex, 0x0028, 0x0101, static_cast<uint16_t>(s.bits_stored));
+  file += Us(ex, 0x0028, 0x0103, static_cast<uint16_t>(s.representation));
+  if (s.rescale) {
+    file += Element(ex, 0x0028, 0x1052, "DS", absl::StrCat(s.rescale->second));
+    file += Element(ex, 0x0028, 0x1053, "DS", absl::StrCat(s.rescale->first));
+  }
+  if (s.with_pixels) {
+    const std::string pixels =
+        s.pixels.empty()
+            ? std::string(static_cast<size_t>(s.rows * s.columns * s.bits_allocated / 8), '\0')
+            : s.pixels;
+    file += Element(ex, 0x7FE0, 0x0010, s.bits_allocated == 8 ? "OB" : "OW", pixels);
+  }
+  return file;
+}
+
+// Pixels of a 16-bit slice from its samples, row by row.
+std::string Pixels16(const std::vector<int>& v) {
+  std::string out;
+  for (int x : v) out += U16(static_cast<uint16_t>(x));
+  return out;
+}
+
+// The value the series places at column i, row j of slice k (a different value everywhere).
+int Value(int i, int j, int k) { return 100 * k + 10 * j + i - 50; }
+
+std::vector<int> SliceValues(const SliceSpec& s, int k) {
+  std::vector<int> v;
+  for (int j = 0; j < s.rows; ++j) {
+    for (int i = 0; i < s.columns; ++i) v.push_back(Value(i, j, k));
+  }
+  return v;
+}
+
+// The RAS world point of column i, row j of a slice, from its own attributes (LPS).
+Vec3 WorldRas(const SliceSpec& s, int i, int j) {
+  Vec3 p;
+  for (int a = 0; a < 3; ++a) {
+    p[a] = s.position[a] + i * s.orientation[a] * s.spacing[1] +
+           j * s.orientation[3 + a] * s.spacing[0];
+  }
+  return {-p[0], -p[1], p[2]};
+}
+
+// Expects the volume to hold `value(i, j)` at each sample's world point of slice spec `s`.
+template <typename F>
+void ExpectSliceAt(const Volume& volume, const SliceSpec& s, F value) {
+  for (int j = 0; j < s.rows; ++j) {
+    for (int i = 0; i < s.columns; ++i) {
+      const Vec3 u = volume.ContinuousIndex(WorldRas(s, i, j));
+      std::array<int64_t, 3> n;
+      for (int a = 0; a < 3; ++a) {
+        n[a] = std::llround(u[a]);
+        ASSERT_NEAR(u[a], static_cast<double>(n[a]), 1e-6) << "sample " << i << "," << j;
+      }
+      EXPECT_EQ(volume.At(n[0], n[1], n[2]), value(i, j)) << "sample " << i << "," << j;
+    }
+  }
+}
+
+// A series of `count` slices along the normal of `base`'s orientation, `step` mm apart, with an
+// in-plane drift per slice (a gantry tilt) of `drift` (LPS mm).
+std::vector<SliceSpec> Series(const SliceSpec& base, int count, double step,
+                              std::array<double, 3> drift = {0, 0, 0}) {
+  const auto& o = base.orientation;
+  const std::array<double, 3> normal = {o[1] * o[5] - o[2] * o[4], o[2] * o[3] - o[0] * o[5],
+                                        o[0] * o[4] - o[1] * o[3]};
+  std::vector<SliceSpec> slices;
+  for (int k = 0; k < count; ++k) {
+    SliceSpec s = base;
+    for (int a = 0; a < 3; ++a)
+      s.position[a] = base.position[a] + k * (step * normal[a] + drift[a]);
+    s.pixels = Pixels16(SliceValues(s, k));
+    slices.push_back(s);
+  }
+  return slices;
+}
+
+// Writes the slices into `dir`, named so that name order is not position order.
+void WriteSeries(const std::string& dir, const std::vector<SliceSpec>& slices) {
+  std::filesystem::create_directories(dir);
+  for (size_t k = 0; k < slices.size(); ++k) {
+    WriteBytes(absl::StrCat(dir, "/IM", (k * 7 + 3) % 11, "_", slices.size() - k),
+               SliceFile(slices[k]));
+  }
+}
+
+void ExpectSeries(const Volume& volume, const std::vector<SliceSpec>& slices) {
+  for (size_t k = 0; k < slices.size(); ++k) {
+    ExpectSliceAt(volume, slices[k],
+                  [&](int i, int j) { return Value(i, j, static_cast<int>(k)); });
+  }
+}
+
+TEST(IoDicomTest, AxialSeriesIsSortedByPositionAndPlacedInRas) {
+  ScratchDir dir;
+  SliceSpec base;
+  base.position = {-20.5, 31.25, -7};
+  const std::vector<SliceSpec> slices = Series(base, 5, 1.5);
+  WriteSeries(dir.File("ct"), slices);
+  absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("ct"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(read->volume.grid().dims, (Index3{3, 4, 5}));
+  EXPECT_EQ(read->volume.type(), VoxelType::kInt16);
+  EXPECT_TRUE(read->volume.axis_aligned());
+  EXPECT_DOUBLE_EQ(read->volume.grid().spacing[0], 0.5);
+  EXPECT_DOUBLE_EQ(read->volume.grid().spacing[1], 0.8);
+  EXPECT_DOUBLE_EQ(read->volume.grid().spacing[2], 1.5);
+  EXPECT_TRUE(read->warnings.empty());
+  ExpectSeries(read->volume, slices);
+}
+
+TEST(IoDicomTest, ImplicitVrAndNestedSequencesReadTheSame) {
+  for (const bool explicit_vr : {true, false}) {
+    SCOPED_TRACE(explicit_vr ? "explicit VR" : "implicit VR");
+    ScratchDir dir;
+    SliceSpec base;
+    base.explicit_vr = explicit_vr;
+    // A sequence of undefined length holding an item with a nested undefined-length sequence,
+    // then one of defined length, then a private tag: all skipped.
+    const std::string inner = UndefinedSequence(
+        explicit_vr, 0x0008, 0x1032, {Element(explicit_vr, 0x0008, 0x0100, "SH", "CODE1")});
+    std::string defined_item = Element(explicit_vr, 0x0008, 0x0104, "LO", "x");
+    std::string defined = U16(0x0008) + U16(0x1140);
+    const std::string item =
+        U16(0xFFFE) + U16(0xE000) + U32(static_cast<uint32_t>(defined_item.size())) + defined_item;
+    defined += explicit_vr ? std::string("SQ") + U16(0) + U32(static_cast<uint32_t>(item.size()))
+                           : U32(static_cast<uint32_t>(item.size()));
+    defined += item;
+    base.before_image =
+        UndefinedSequence(explicit_vr, 0x0008, 0x1111,
+                          {inner + Element(explicit_vr, 0x0008, 0x1150, "UI", "1.2")}) +
+        defined + Element(explicit_vr, 0x0009, 0x0010, "LO", "PRIVATE CREATOR");
+    const std::vector<SliceSpec> slices = Series(base, 3, 2.0);
+    WriteSeries(dir.File("s"), slices);
+    absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("s"));
+    ASSERT_TRUE(read.ok()) << read.status();
+    ExpectSeries(read->volume, slices);
+  }
+}
+
+TEST(IoDicomTest, ObliqueAndTiltedSeriesKeepTheirWorldPositions) {
+  ScratchDir dir;
+  SliceSpec base;
+  const double a = 0.4, b = -0.25;
+  // Rows along a rotated x, columns along a y rotated about both.
+  base.orientation = {
+      std::cos(a), std::sin(a), 0, -std::sin(a) * std::cos(b), std::cos(a) * std::cos(b),
+      std::sin(b)};
+  base.position = {12, -40, 88.5};
+  // The step along the normal plus an in-plane drift: positions sheared like a gantry tilt.
+  const std::vector<SliceSpec> slices = Series(base, 4, 2.5, {0, 0.6, 0});
+  WriteSeries(dir.File("tilt"), slices);
+  absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("tilt"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_FALSE(read->volume.axis_aligned());
+  ExpectSeries(read->volume, slices);
+}
+
+TEST(IoDicomTest, RescaleGivesModalityValues) {
+  ScratchDir dir;
+  SliceSpec base;
+  base.rescale = {{2.0, -1024.0}};
+  const std::vector<SliceSpec> slices = Series(base, 3, 1.0);
+  WriteSeries(dir.File("hu"), slices);
+  absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("hu"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(read->volume.type(), VoxelType::kFloat32);
+  for (size_t k = 0; k < slices.size(); ++k) {
+    ExpectSliceAt(read->volume, slices[k],
+                  [&](int i, int j) { return 2.0 * Value(i, j, static_cast<int>(k)) - 1024.0; });
+  }
+  // Per-slice scalings (as PET writes them) give float64 values, each slice its own.
+  std::vector<SliceSpec> pet = slices;
+  for (size_t k = 0; k < pet.size(); ++k) pet[k].rescale = {{0.5 + static_cast<double>(k), 3.0}};
+  WriteSeries(dir.File("pet"), pet);
+  read = ReadVolume(dir.File("pet"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(read->volume.type(), VoxelType::kFloat64);
+  for (size_t k = 0; k < pet.size(); ++k) {
+    ExpectSliceAt(read->volume, pet[k], [&](int i, int j) {
+      return (0.5 + static_cast<double>(k)) * Value(i, j, static_cast<int>(k)) + 3.0;
+    });
+  }
+}
+
+TEST(IoDicomTest, StoredBitsAreMaskedAndSignExtended) {
+  ScratchDir dir;
+  // 12 of 16 bits, signed: the high nibble carries junk (old overlay bits) to be dropped.
+  const std::vector<int> want = {-5, 2047, -2048, 0, 7, -1};
+  for (const int representation : {0, 1}) {
+    SCOPED_TRACE(representation);
+    SliceSpec base;
+    base.rows = 2;
+    base.columns = 3;
+    base.bits_stored = 12;
+    base.representation = representation;
+    std::vector<SliceSpec> slices;
+    for (int k = 0; k < 2; ++k) {
+      SliceSpec s = base;
+      s.position = {0, 0, static_cast<double>(k)};
+      std::vector<int> stored;
+      for (int v : want) stored.push_back((v & 0x0FFF) | 0xA000);
+      s.pixels = Pixels16(stored);
+      slices.push_back(s);
+    }
+    const std::string name = dir.File(absl::StrCat("bits", representation));
+    WriteSeries(name, slices);
+    absl::StatusOr<VolumeFile> read = ReadVolume(name);
+    ASSERT_TRUE(read.ok()) << read.status();
+    ExpectSliceAt(read->volume, slices[0], [&](int i, int j) {
+      const int v = want[static_cast<size_t>(j * 3 + i)];
+      return representation == 1 ? v : (v & 0x0FFF);
+    });
+  }
+}
+
+TEST(IoDicomTest, EightBitSignedAndThirtyTwoBitUnsignedWiden) {
+  ScratchDir dir;
+  struct Case {
+    int bits, representation;
+    VoxelType type;
+    std::vector<int64_t> values;
+  };
+  for (const Case& c : {Case{8, 1, VoxelType::kInt16, {-128, 127, -1, 0, 5, -7}},
+                        Case{8, 0, VoxelType::kUint8, {0, 255, 1, 128, 5, 7}},
+                        Case{32, 0, VoxelType::kFloat64, {4000000000, 0, 1, 2147483648, 5, 7}},
+                        Case{32, 1, VoxelType::kInt32, {-2000000000, 0, 1, 2000000000, 5, -7}}}) {
+    SCOPED_TRACE(absl::StrCat(c.bits, " bits, representation ", c.representation));
+    SliceSpec base;
+    base.rows = 2;
+    base.columns = 3;
+    base.bits_allocated = c.bits;
+    base.bits_stored = c.bits;
+    base.representation = c.representation;
+    std::vector<SliceSpec> slices;
+    for (int k = 0; k < 2; ++k) {
+      SliceSpec s = base;
+      s.position = {0, 0, 3.0 * k};
+      for (int64_t v : c.values) {
+        const uint64_t bits = static_cast<uint64_t>(v);
+        s.pixels += std::string(reinterpret_cast<const char*>(&bits), c.bits / 8);
+      }
+      slices.push_back(s);
+    }
+    const std::string name = dir.File(absl::StrCat("w", c.bits, "_", c.representation));
+    WriteSeries(name, slices);
+    absl::StatusOr<VolumeFile> read = ReadVolume(name);
+    ASSERT_TRUE(read.ok()) << read.status();
+    EXPECT_EQ(read->volume.type(), c.type);
+    ExpectSliceAt(read->volume, slices[1], [&](int i, int j) {
+      return static_cast<double>(c.values[static_cast<size_t>(j * 3 + i)]);
+    });
+  }
+}
+
+TEST(IoDicomTest, AFileSelectsItsSeriesAndADirectoryMustHoldOne) {
+  ScratchDir dir;
+  SliceSpec a, b;
+  b.series = "1.2.826.0.1.3680043.2.99";
+  b.position = {5, 5, 5};
+  const std::vector<SliceSpec> first = Series(a, 3, 1.0), second = Series(b, 4, 2.0);
+  const std::string d = dir.File("mixed");
+  std::filesystem::create_directories(d);
+  for (size_t k = 0; k < first.size(); ++k)
+    WriteBytes(absl::StrCat(d, "/a", k), SliceFile(first[k]));
+  for (size_t k = 0; k < second.size(); ++k) {
+    WriteBytes(absl::StrCat(d, "/b", k, ".dcm"), SliceFile(second[k]));
+  }
+  absl::StatusOr<VolumeFile> read = ReadVolume(d);
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.status().message().find("holds 2 DICOM series"), std::string::npos)
+      << read.status();
+  EXPECT_NE(read.status().message().find("1.2.826.0.1.3680043.2.99: 4 images"), std::string::npos)
+      << read.status();
+  read = ReadVolume(d + "/b2.dcm");
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(read->volume.grid().dims[2], 4);
+  ExpectSeries(read->volume, second);
+  // A file without an extension is recognised by its magic.
+  read = ReadVolume(d + "/a1");
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectSeries(read->volume, first);
+}
+
+TEST(IoDicomTest, OtherFilesAreSkippedWithAWarning) {
+  ScratchDir dir;
+  const std::vector<SliceSpec> slices = Series(SliceSpec{}, 3, 1.0);
+  const std::string d = dir.File("export");
+  WriteSeries(d, slices);
+  WriteBytes(d + "/README.txt", "exported by a PACS\n");
+  SliceSpec dicomdir;
+  dicomdir.media_class = "1.2.840.10008.1.3.10";
+  WriteBytes(d + "/DICOMDIR", SliceFile(dicomdir));
+  SliceSpec report;
+  report.with_pixels = false;
+  WriteBytes(d + "/SR0001", SliceFile(report));
+  std::filesystem::create_directories(d + "/subdir");
+  absl::StatusOr<VolumeFile> read = ReadVolume(d);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectSeries(read->volume, slices);
+  ASSERT_EQ(read->warnings.size(), 1u);
+  EXPECT_NE(read->warnings[0].find("skipped 1 files that are not DICOM and 2 DICOM files "
+                                   "without an image"),
+            std::string::npos)
+      << read->warnings[0];
+}
+
+// Each broken series is refused with a message naming what is wrong.
+TEST(IoDicomTest, BrokenSeriesAreRefusedNamingTheProblem) {
+  struct Case {
+    std::string name;
+    std::function<void(std::vector<SliceSpec>&)> damage;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {"a missing slice", [](auto& s) { s.erase(s.begin() + 2); }, "slice spacing is uneven"},
+      {"two slices at one position", [](auto& s) { s[3].position = s[2].position; },
+       "lie at the same position"},
+      {"a single slice", [](auto& s) { s.resize(1); }, "single slice"},
+      {"JPEG 2000", [](auto& s) { s[1].transfer_syntax = "1.2.840.10008.1.2.4.90"; },
+       "1.2.840.10008.1.2.4.90 (JPEG 2000 lossless) is not read"},
+      {"big endian", [](auto& s) { s[0].transfer_syntax = "1.2.840.10008.1.2.2"; },
+       "explicit VR big endian"},
+      {"multi-frame", [](auto& s) { s[0].frames = 40; }, "holds 40 frames"},
+      {"colour", [](auto& s) { s[2].samples = 3; }, "colour images are not read"},
+      {"no position", [](auto& s) { s[1].with_position = false; },
+       "no Image Position (Patient) (0020,0032)"},
+      {"short pixel data", [](auto& s) { s[1].pixels.resize(10); },
+       "Pixel Data (7FE0,0010) has 10 bytes, the image needs 24"},
+      {"slices of other sizes",
+       [](auto& s) {
+         s[2].rows = 5;
+         s[2].pixels += "xxxxxx";
+       },
+       "Rows (0028,0010) is 5 here but 4"},
+      {"other orientation", [](auto& s) { s[2].orientation = {0, 1, 0, -1, 0, 0}; },
+       "Image Orientation (Patient) (0020,0037) value 1"},
+      {"12-bit packed",
+       [](auto& s) {
+         for (auto& x : s) x.bits_allocated = 12;
+       },
+       "only 8, 16 and 32 are read"},
+      {"slope 0",
+       [](auto& s) {
+         s[0].rescale = {{0.0, 1.0}};
+       },
+       "Rescale Slope (0028,1053) is 0"},
+      {"not unit cosines",
+       [](auto& s) {
+         for (auto& x : s) x.orientation[0] = 2;
+       },
+       "not two orthogonal unit vectors"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    ScratchDir dir;
+    std::vector<SliceSpec> slices = Series(SliceSpec{}, 5, 1.25);
+    c.damage(slices);
+    WriteSeries(dir.File("s"), slices);
+    const absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("s"));
+    ASSERT_FALSE(read.ok());
+    EXPECT_NE(read.status().message().find(c.expected), std::string::npos) << read.status();
+    EXPECT_NE(read.status().message().find(dir.path()), std::string::npos) << read.status();
+  }
+}
+
+TEST(IoDicomTest, MalformedDataSetsAreErrorsNeverReadsOutside) {
+  const std::string good = SliceFile(Series(SliceSpec{}, 1, 1.0)[0]);
+  ASSERT_TRUE(ParseDicomFile(good, "x").ok());
+  // Every truncation: an error or (cut inside the trailing pixels) a short Pixel Data.
+  for (size_t n = 0; n < good.size(); ++n) {
+    const std::string cut = good.substr(0, n);
+    const absl::StatusOr<DicomImage> image = ParseDicomFile(cut, "cut.dcm");
+    if (image.ok()) {
+      EXPECT_FALSE(image->pixel_data.has_value() && image->pixel_data->size() >= 24) << n;
+    } else {
+      EXPECT_NE(image.status().message().find("cut.dcm"), std::string::npos);
+    }
+  }
+  // Random damage to every byte after the magic.
+  std::mt19937_64 rng(7);
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::string bad = good;
+    const int flips = 1 + static_cast<int>(rng() % 4);
+    for (int f = 0; f < flips; ++f) {
+      bad[132 + rng() % (bad.size() - 132)] = static_cast<char>(rng());
+    }
+    (void)ParseDicomFile(bad, "bad.dcm");
+  }
+  // Sequences nested past the bound.
+  std::string deep = Element(true, 0x0008, 0x0100, "SH", "X");
+  for (int level = 0; level < 40; ++level) deep = UndefinedSequence(true, 0x0008, 0x1111, {deep});
+  SliceSpec nested;
+  nested.before_image = deep;
+  absl::StatusOr<DicomImage> image = ParseDicomFile(SliceFile(nested), "deep.dcm");
+  ASSERT_FALSE(image.ok());
+  EXPECT_NE(image.status().message().find("nest deeper than 32"), std::string::npos)
+      << image.status();
+  // An item outside a sequence, and an explicit element without a VR.
+  SliceSpec stray;
+  stray.before_image = U16(0xFFFE) + U16(0xE000) + U32(0);
+  image = ParseDicomFile(SliceFile(stray), "stray.dcm");
+  ASSERT_FALSE(image.ok());
+  EXPECT_NE(image.status().message().find("outside any sequence"), std::string::npos);
+  SliceSpec no_vr;
+  no_vr.before_image = U16(0x0009) + U16(0x1001) + std::string("\x01\x02", 2) + U16(0);
+  image = ParseDicomFile(SliceFile(no_vr), "novr.dcm");
+  ASSERT_FALSE(image.ok());
+  EXPECT_NE(image.status().message().find("(0009,1001)"), std::string::npos) << image.status();
+  image = ParseDicomFile("not dicom at all", "plain.dcm");
+  ASSERT_FALSE(image.ok());
+  EXPECT_NE(image.status().message().find("no \"DICM\""), std::string::npos);
+}
+
+TEST(IoDicomTest, ATopDirectorySaysSubdirectoriesAreNotSearched) {
+  ScratchDir dir;
+  WriteSeries(dir.File("patient/series1"), Series(SliceSpec{}, 3, 1.0));
+  const absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("patient"));
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.status().message().find("no DICOM image found (0 files"), std::string::npos)
+      << read.status();
+  EXPECT_NE(read.status().message().find("subdirectories are not searched"), std::string::npos)
+      << read.status();
+}
+
+// --- An independent writer and converter: pydicom writes, dcm2niix converts -------------------
+
+bool HavePydicomAndDcm2niix() {
+  return std::filesystem::exists(kPython) && std::filesystem::exists("/usr/bin/dcm2niix") &&
+         testing::RunProcess({kPython, "-c", "import pydicom, numpy"}).exit_code == 0;
+}
+
+// Writes a CT-like series with pydicom: int16 samples with a rescale intercept, half the files
+// implicit VR, names and instance numbers in neither position order; `oblique` rotates it.
+constexpr char kWriteSeries[] = R"PY(
+import sys, numpy as np
+from pydicom.dataset import FileDataset, FileMetaDataset
+from pydicom.uid import ExplicitVRLittleEndian, ImplicitVRLittleEndian, generate_uid
+out, oblique = sys.argv[1], sys.argv[2] == "1"
+rng = np.random.default_rng(11)
+rows, cols, n = 13, 9, 6
+r, c = np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
+if oblique:
+    a, b = 0.3, 0.2
+    R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]]) @ \
+        np.array([[1, 0, 0], [0, np.cos(b), -np.sin(b)], [0, np.sin(b), np.cos(b)]])
+    r, c = R[:, 0], R[:, 1]
+normal = np.cross(r, c)
+series, study, frame = generate_uid(), generate_uid(), generate_uid()
+volume = rng.integers(-1000, 3000, size=(n, rows, cols)).astype(np.int16)
+for k in rng.permutation(n):
+    meta = FileMetaDataset()
+    meta.MediaStorageSOPClassUID = "1.2.840.10008.5.1.4.1.1.2"
+    meta.MediaStorageSOPInstanceUID = sop = generate_uid()
+    meta.TransferSyntaxUID = ExplicitVRLittleEndian if k % 2 else ImplicitVRLittleEndian
+    name = "%s/%08d" % (out, rng.integers(1e8))
+    ds = FileDataset(name, {}, file_meta=meta, preamble=b"\0" * 128)
+    ds.is_little_endian, ds.is_implicit_VR = True, not k % 2
+    ds.SOPClassUID, ds.SOPInstanceUID = meta.MediaStorageSOPClassUID, sop
+    ds.StudyInstanceUID, ds.SeriesInstanceUID, ds.FrameOfReferenceUID = study, series, frame
+    ds.Modality, ds.PatientName, ds.PatientID = "CT", "Phantom", "0"
+    ds.SeriesNumber, ds.InstanceNumber = 1, int(n - k)
+    ds.ImageType = ["ORIGINAL", "PRIMARY", "AXIAL"]
+    ds.ImagePositionPatient = ["%.6f" % x for x in np.array([-60.3, 40.2, 10.5]) + 2.5 * k * normal]
+    ds.ImageOrientationPatient = ["%.8f" % x for x in list(r) + list(c)]
+    ds.PixelSpacing, ds.SliceThickness = [0.7, 0.9], 2.5
+    ds.Rows, ds.Columns = rows, cols
+    ds.SamplesPerPixel, ds.PhotometricInterpretation = 1, "MONOCHROME2"
+    ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 16, 15, 1
+    ds.RescaleIntercept, ds.RescaleSlope = -1024, 1
+    ds.PixelData = volume[k].tobytes()
+    ds.save_as(name, write_like_original=False)
+)PY";
+
+TEST(IoDicomTest, SeriesMatchDcm2niixVoxelForVoxel) {
+  if (!HavePydicomAndDcm2niix()) GTEST_SKIP() << "python3-pydicom or dcm2niix is not installed";
+  for (const bool oblique : {false, true}) {
+    SCOPED_TRACE(oblique ? "oblique" : "axial");
+    ScratchDir dir;
+    const std::string series = dir.File("series");
+    std::filesystem::create_directories(series);
+    const testing::ProcessResult wrote =
+        testing::RunProcess({kPython, "-c", kWriteSeries, series, oblique ? "1" : "0"});
+    ASSERT_EQ(wrote.exit_code, 0) << wrote.out << wrote.err;
+    const testing::ProcessResult converted = testing::RunProcess(
+        {"/usr/bin/dcm2niix", "-z", "y", "-f", "converted", "-o", dir.path(), series});
+    ASSERT_EQ(converted.exit_code, 0) << converted.out << converted.err;
+    const absl::StatusOr<VolumeFile> dicom = ReadVolume(series);
+    ASSERT_TRUE(dicom.ok()) << dicom.status();
+    const absl::StatusOr<VolumeFile> nifti = ReadVolume(dir.File("converted.nii.gz"));
+    ASSERT_TRUE(nifti.ok()) << nifti.status();
+    EXPECT_EQ(dicom->volume.axis_aligned(), !oblique);
+    const Volume& d = dicom->volume;
+    const Volume& n = nifti->volume;
+    EXPECT_EQ(d.voxel_count(), n.voxel_count());
+    int64_t compared = 0;
+    for (int64_t k = 0; k < d.grid().dims[2]; ++k) {
+      for (int64_t j = 0; j < d.grid().dims[1]; ++j) {
+        for (int64_t i = 0; i < d.grid().dims[0]; ++i) {
+          const Vec3 world = WorldOfIndex(
+              d.grid(), {static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)});
+          const Vec3 u = n.ContinuousIndex(world);
+          std::array<int64_t, 3> m;
+          for (int a = 0; a < 3; ++a) {
+            m[a] = std::llround(u[a]);
+            ASSERT_NEAR(u[a], static_cast<double>(m[a]), 1e-4) << i << " " << j << " " << k;
+          }
+          ASSERT_EQ(d.At(i, j, k), n.At(m[0], m[1], m[2])) << i << " " << j << " " << k;
+          ++compared;
+        }
+      }
+    }
+    EXPECT_EQ(compared, 13 * 9 * 6);
+  }
+}
+
+}  // namespace
+}  // namespace tetrefine::io
