@@ -182,6 +182,30 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
     for (int i = 0; i < 9; ++i) scaled[i] *= grid.spacing[i % 3];
     v.world_to_index_ = Inverse(scaled);
   }
+  // The boundary tolerance grows with the rounding of the world coordinates themselves: a mesh
+  // vertex placed on the grid's last sample at origin 1e7 mm with 1e-4 mm voxels rounds to
+  // index 9 + 7e-6, beyond the fixed 1e-6 (found by a CLI sweep: `tetrefine mesh` wrote a
+  // mesh `refine` then refused). A few ulps of the largest world coordinate of the grid, mapped to
+  // index units by the world-to-index rows. It depends on the whole grid's geometry only, so a
+  // slab gets the same tolerance as the whole volume; for ordinary grids the added term is about
+  // 1e-13 voxels.
+  {
+    Vec3 last;
+    for (int a = 0; a < 3; ++a) last[a] = static_cast<double>(grid.dims[a] - 1);
+    double scale = 0.0;
+    for (const Vec3& c : WorldCorners(grid, {0.0, 0.0, 0.0}, last)) {
+      for (int a = 0; a < 3; ++a) scale = std::max(scale, std::abs(c[a]));
+    }
+    for (int a = 0; a < 3; ++a) {
+      double row = 0.0;
+      for (int b = 0; b < 3; ++b) {
+        row += v.axis_aligned_ ? (a == b ? 1.0 / grid.spacing[a] : 0.0)
+                               : std::abs(v.world_to_index_[3 * a + b]);
+      }
+      v.boundary_tolerance_[a] =
+          kGridBoundaryTolerance + 8.0 * std::numeric_limits<double>::epsilon() * scale * row;
+    }
+  }
   v.lo_ = lo;
   v.hi_ = hi;
   v.type_ = type;
@@ -234,8 +258,8 @@ bool Volume::Contains(const Vec3& u) const {
     double hi = static_cast<double>(hi_[a] - 1);
     // Only where the slab ends at the grid's own boundary: inside the grid a slab must hold the
     // cell, or it would not sample the same bits as the whole volume.
-    if (lo_[a] == 0) lo -= kGridBoundaryTolerance;
-    if (hi_[a] == grid_.dims[a]) hi += kGridBoundaryTolerance;
+    if (lo_[a] == 0) lo -= boundary_tolerance_[a];
+    if (hi_[a] == grid_.dims[a]) hi += boundary_tolerance_[a];
     // Written so that NaN fails the test.
     if (!(u[a] >= lo && u[a] <= hi)) return false;
   }

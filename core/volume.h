@@ -207,11 +207,18 @@ class Volume {
 
   // A point this far (in voxels) outside the grid's own box still counts as inside it: meshes
   // built to span a volume land there by rounding (origin + 11 * 5.74 gives index 11 + 2e-15).
+  // Grids far from the world origin with tiny voxels add the rounding of their world
+  // coordinates (boundary_tolerance()).
   static constexpr double kGridBoundaryTolerance = 1e-6;
 
   // True when the continuous index u lies in the slab's sampled box [lo, hi - 1] on every axis
-  // (widened by kGridBoundaryTolerance on sides where the slab reaches the grid's boundary).
+  // (widened by boundary_tolerance() on sides where the slab reaches the grid's boundary).
   bool Contains(const Vec3& u) const;
+
+  // Per index axis, in voxels: kGridBoundaryTolerance plus 8 ulps of the grid's largest world
+  // coordinate mapped to that axis. A function of the whole grid's geometry, the same for every
+  // slab of it.
+  const Vec3& boundary_tolerance() const { return boundary_tolerance_; }
 
   // Clamps a continuous index into the whole grid's box [0, dims - 1].
   Vec3 ClampToGrid(const Vec3& u) const;
@@ -245,6 +252,7 @@ class Volume {
   GridGeometry grid_;
   bool axis_aligned_ = true;
   Mat3 world_to_index_ = kIdentityDirection;  // (direction * diag(spacing))^-1 when oblique
+  Vec3 boundary_tolerance_{kGridBoundaryTolerance, kGridBoundaryTolerance, kGridBoundaryTolerance};
   Index3 lo_{0, 0, 0};
   Index3 hi_{0, 0, 0};
   VoxelType type_ = VoxelType::kFloat64;

@@ -212,5 +212,53 @@ TEST(ObliqueVolume, RefiningInARotatedFrameGivesTheRotatedResult) {
   }
 }
 
+// Found by a CLI sweep: with the grid at 1e7 mm and 1e-4 mm voxels, world points on the grid's
+// last samples round to index 9 + 7e-6, beyond the fixed tolerance, so `tetrefine mesh` wrote
+// vertices that `refine` refused as outside. The tolerance now covers the rounding of the world
+// coordinates, on axis-aligned and oblique grids alike, and still refuses real outside points.
+TEST(ObliqueVolume, GridCornersFarFromTheOriginAreInside) {
+  for (const bool oblique : {false, true}) {
+    for (const double origin : {1e5, 1e7, 1e8, -3e7}) {
+      for (const double spacing : {1e-2, 1e-4, 1e-5}) {
+        // Beyond 1e12 voxels from the world origin a float64 coordinate no longer resolves a
+        // hundredth of a voxel.
+        if (std::abs(origin) / spacing > 1e12) continue;
+        SCOPED_TRACE(::testing::Message() << oblique << " " << origin << " " << spacing);
+        GridGeometry grid;
+        grid.dims = {12, 10, 8};
+        grid.origin = {origin, origin, -origin};
+        grid.spacing = {spacing, 1.5 * spacing, 2 * spacing};
+        std::mt19937_64 rng(3);
+        if (oblique) grid.direction = testing::RandomRotation(rng);
+        absl::StatusOr<Volume> v = Volume::CreateWhole(
+            grid, VoxelType::kFloat64, std::vector<std::byte>(12 * 10 * 8 * sizeof(double)));
+        ASSERT_TRUE(v.ok()) << v.status();
+        for (int corner = 0; corner < 8; ++corner) {
+          for (const double inward : {0.0, 0.5}) {
+            Vec3 u;
+            for (int a = 0; a < 3; ++a) {
+              const double last = static_cast<double>(grid.dims[a] - 1);
+              u[a] = (corner >> a) & 1 ? last - inward : inward;
+            }
+            EXPECT_TRUE(v->Contains(v->ContinuousIndex(WorldOfIndex(grid, u)))) << corner;
+          }
+          // A hundredth of a voxel outside is outside.
+          Vec3 out;
+          for (int a = 0; a < 3; ++a) {
+            out[a] = (corner >> a) & 1 ? static_cast<double>(grid.dims[a] - 1) + 0.01 : -0.01;
+          }
+          EXPECT_FALSE(v->Contains(v->ContinuousIndex(WorldOfIndex(grid, out)))) << corner;
+        }
+        for (int a = 0; a < 3; ++a) EXPECT_LT(v->boundary_tolerance()[a], 5e-3);
+      }
+    }
+  }
+  // Ordinary grids keep the fixed tolerance but for about 1e-13 of a voxel.
+  const Volume ordinary = testing::TestVolume({5, 6, 7});
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(ordinary.boundary_tolerance()[a], Volume::kGridBoundaryTolerance, 1e-12);
+  }
+}
+
 }  // namespace
 }  // namespace tetrefine
