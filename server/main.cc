@@ -1,5 +1,7 @@
 // tetrefine_server: the tetrefine.v1 Refiner service over the network.
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <chrono>
 #include <fstream>
@@ -12,6 +14,7 @@
 #include "absl/flags/usage.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/str_cat.h"
+#include "absl/synchronization/mutex.h"
 #include "grpcpp/grpcpp.h"
 #include "grpcpp/security/server_credentials.h"
 #include "server/memory_budget.h"
@@ -67,6 +70,21 @@ std::string BoundAddress(const std::string& listen, int port) {
   return absl::StrCat(colon == std::string::npos ? listen : listen.substr(0, colon), ":", port);
 }
 
+// Raises the soft limit on open files to the hard one. gRPC 1.51 stops accepting connections
+// for good after one accept4 fails with EMFILE (a service sweep wedged a server under the common
+// soft limit of 1024 with 1,100 idle connections; it stayed unreachable after they closed).
+// Containers usually allow far more than their soft limit; what remains is bounded by the
+// handshake timeout and the idle-connection limit (server_setup.cc).
+void RaiseOpenFileLimit() {
+  rlimit limit{};
+  if (getrlimit(RLIMIT_NOFILE, &limit) != 0 || limit.rlim_cur >= limit.rlim_max) return;
+  const rlim_t before = limit.rlim_cur;
+  limit.rlim_cur = limit.rlim_max;
+  if (setrlimit(RLIMIT_NOFILE, &limit) == 0) {
+    spdlog::info("open file limit raised from {} to {}", before, limit.rlim_cur);
+  }
+}
+
 int Run(ShutdownSignals& signals) {
   absl::StatusOr<ServerSettings> settings = SettingsFromFlags();
   if (!settings.ok()) {
@@ -80,6 +98,11 @@ int Run(ShutdownSignals& signals) {
     return 2;
   }
   spdlog::set_level(level);
+  RaiseOpenFileLimit();
+  // gRPC 1.51 locks Abseil mutexes for every stream, and Debian's Abseil runs its deadlock
+  // detector on each lock: 8% of the server's CPU under a stream flood (perf, service sweep).
+  // The detector only reports lock-order cycles; tetrefine's own locks are std::mutex.
+  absl::SetMutexDeadlockDetectionMode(absl::OnDeadlockCycle::kIgnore);
   ServiceConfig& config = settings->service;
   const bool tls = !settings->tls_cert.empty();
 

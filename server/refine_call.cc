@@ -1,5 +1,6 @@
 #include "server/refine_call.h"
 
+#include <algorithm>
 #include <span>
 #include <thread>
 #include <utility>
@@ -163,10 +164,24 @@ void RefineCall::OnReadDone(bool ok) {
       last_read_ = Clock::now();
       absl::Status status = reader_.Add(request_);
       if (status.ok()) {
-        const int64_t bytes =
-            OpenCallBytes(limits_.max_message_bytes) + reader_.DeclaredInputBytes();
-        status = reservation_.GrowTo(bytes, "the input this call declares (volume and mesh)");
-        if (!status.ok() && env_.gate->FitsEver(bytes)) retry_after = kRetryBusyMs;
+        // An input that could never fit is refused from its header. Otherwise the budget is
+        // reserved as the input arrives, not as it is declared: a service sweep held a 2 GiB
+        // server's whole budget for minutes with three calls that declared large volumes and
+        // sent a byte every 10 s, and every other call was refused. Holding memory now costs
+        // sending it. (The reader reserves its buffers' address space at the header; pages are
+        // used as the data arrives.)
+        const int64_t open = OpenCallBytes(limits_.max_message_bytes);
+        const int64_t declared = reader_.DeclaredInputBytes();
+        if (!env_.gate->FitsEver(open + declared)) {
+          status = absl::ResourceExhaustedError(absl::StrCat(
+              "the input this call declares (volume and mesh) needs ", HumanBytes(open + declared),
+              ", more than this server's whole memory budget of ",
+              HumanBytes(env_.gate->config().memory_budget_bytes), " (--memory_budget_bytes)"));
+        } else {
+          status = reservation_.GrowTo(open + std::min(declared, reader_.bytes_received()),
+                                       "the input this call has sent (volume and mesh)");
+          if (!status.ok()) retry_after = kRetryBusyMs;
+        }
       }
       if (!status.ok()) {
         ClaimFinishLocked();
@@ -202,6 +217,9 @@ void RefineCall::Admit() {
     const int64_t base = OpenCallBytes(limits_.max_message_bytes) + reader_.DeclaredInputBytes();
     const int64_t per_tet = limits_.bytes_per_output_tet;
     total = base + out_tets * per_tet;
+    worst_case_bytes_ = total;
+    worst_case_input_bytes_ = base;
+    worst_case_tets_ = out_tets;
     if (!env_.gate->FitsEver(total)) {
       ClaimFinishLocked();
       const int64_t budget = env_.gate->config().memory_budget_bytes;
@@ -244,10 +262,20 @@ std::string RefineCall::WhyNotAdmitted() const {
     return absl::StrCat("all ", gate.config().slots,
                         " refinement slots of this server are busy (--max_concurrent)");
   }
-  return absl::StrCat(
-      "this call's worst case does not fit the memory left: ", HumanBytes(gate.reserved_bytes()),
-      " of ", HumanBytes(gate.config().memory_budget_bytes),
-      " are reserved by other calls (--memory_budget_bytes)");
+  // What this call needs and what would fit now (a service sweep saw small calls refused beside
+  // a large one with only the other calls' total: nothing said the call's own default tet budget
+  // was the reason, or that a max_tets would have run at once).
+  const int64_t budget = gate.config().memory_budget_bytes;
+  const int64_t others = gate.reserved_bytes() - reservation_.bytes();
+  const int64_t per_tet = limits_.bytes_per_output_tet;
+  const int64_t fits_now =
+      per_tet > 0 ? std::max<int64_t>(0, (budget - others - worst_case_input_bytes_) / per_tet) : 0;
+  return absl::StrCat("this call's worst case, ", HumanBytes(worst_case_bytes_), " (input ",
+                      HumanBytes(worst_case_input_bytes_), ", and up to ", worst_case_tets_,
+                      " output tets at ", per_tet, " bytes each), does not fit the memory left: ",
+                      HumanBytes(std::max<int64_t>(0, budget - others)), " of ", HumanBytes(budget),
+                      " are free (--memory_budget_bytes); a max_tets of at most ", fits_now,
+                      " fits now");
 }
 
 void RefineCall::StartRefinement() {

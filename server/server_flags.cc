@@ -42,6 +42,12 @@ ABSL_FLAG(double, keepalive_timeout_seconds, 20, "See --keepalive_seconds");
 ABSL_FLAG(double, max_connection_idle_seconds, 300,
           "Close a connection that has had no call for this long");
 ABSL_FLAG(bool, reflection, true, "Serve gRPC server reflection (what grpcurl uses)");
+ABSL_FLAG(int, max_streams_per_connection, 100,
+          "Streams (calls) one connection may have open at once; a client's next waits for one "
+          "to end");
+ABSL_FLAG(double, handshake_timeout_seconds, 20,
+          "Close a new connection that has not completed its handshake (HTTP/2 preface, TLS) "
+          "within this");
 
 // --- TLS and identity ------------------------------------------------------------------------
 ABSL_FLAG(std::string, tls_cert, "", "PEM server certificate chain (enables TLS, with --tls_key)");
@@ -214,9 +220,16 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   server.keepalive_timeout_seconds = absl::GetFlag(FLAGS_keepalive_timeout_seconds);
   server.max_connection_idle_seconds = absl::GetFlag(FLAGS_max_connection_idle_seconds);
   server.reflection = absl::GetFlag(FLAGS_reflection);
+  server.max_streams_per_connection = absl::GetFlag(FLAGS_max_streams_per_connection);
+  server.handshake_seconds = absl::GetFlag(FLAGS_handshake_timeout_seconds);
+  if (server.max_streams_per_connection < 1) {
+    return Invalid(absl::StrCat("--max_streams_per_connection: must be >= 1, got ",
+                                server.max_streams_per_connection));
+  }
   for (auto [name, value] : {std::pair{"keepalive_seconds", server.keepalive_seconds},
                              {"keepalive_timeout_seconds", server.keepalive_timeout_seconds},
-                             {"max_connection_idle_seconds", server.max_connection_idle_seconds}}) {
+                             {"max_connection_idle_seconds", server.max_connection_idle_seconds},
+                             {"handshake_timeout_seconds", server.handshake_seconds}}) {
     if (!Positive(value)) return Invalid(absl::StrCat("--", name, ": must be > 0, got ", value));
   }
   if (absl::Status valid = CheckSeconds("drain_seconds", s.drain_seconds, true); !valid.ok()) {

@@ -50,6 +50,19 @@ std::unique_ptr<grpc::Server> StartServer(const ServiceConfig& config, RefinerSe
   builder->SetMaxReceiveMessageSize(
       static_cast<int>(std::clamp<int64_t>(config.limits.max_message_bytes, 1, INT_MAX)));
   // Responses are chunked to at most 3 MiB; the send limit stays gRPC's default (unlimited).
+  // Compressed requests are refused (UNIMPLEMENTED, from their grpc-encoding header) rather than
+  // inflated: gRPC 1.51 inflates a message whole before it compares it with the size limit, so
+  // a 1.5 MB gzip message of zeros took a 2 GiB server to 1.7-2.3 GiB and 9-15 s of CPU before
+  // its RESOURCE_EXHAUSTED (found by a service sweep). Our clients never compress: the volume and
+  // mesh chunks are binary and already dense.
+  builder->SetCompressionAlgorithmSupportStatus(GRPC_COMPRESS_DEFLATE, false);
+  builder->SetCompressionAlgorithmSupportStatus(GRPC_COMPRESS_GZIP, false);
+  // A connection must finish its handshake (HTTP/2 preface, TLS) within this: gRPC's default
+  // of 120 s let silent sockets pile up against the open-file limit (service sweep).
+  builder->AddChannelArgument(GRPC_ARG_SERVER_HANDSHAKE_TIMEOUT_MS,
+                              Milliseconds(options.handshake_seconds));
+  builder->AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS,
+                              std::max(1, options.max_streams_per_connection));
   builder->AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, Milliseconds(options.keepalive_seconds));
   builder->AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS,
                               Milliseconds(options.keepalive_timeout_seconds));
@@ -63,6 +76,7 @@ std::unique_ptr<grpc::Server> StartServer(const ServiceConfig& config, RefinerSe
   // of different limits answering one address at random). A port in use is now refused.
   builder->AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder->SetOption(std::make_unique<ReflectionOption>(options.reflection));
+
   std::unique_ptr<grpc::Server> server = builder->BuildAndStart();
   if (server == nullptr) return nullptr;
   if (grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService()) {

@@ -308,6 +308,47 @@ Requests DeclaringAVolumeOf(int64_t bytes) {
   return requests;
 }
 
+// The header of DeclaringAVolumeOf(declared), then `sent` bytes of its volume in chunks of
+// 512 KiB (the input stays incomplete when sent < declared).
+Requests SendingAVolumeOf(int64_t declared, int64_t sent) {
+  Requests requests = DeclaringAVolumeOf(declared);
+  constexpr int64_t kChunk = int64_t{512} << 10;
+  for (int64_t offset = 0; offset < sent; offset += kChunk) {
+    v1::RefineRequest chunk;
+    chunk.mutable_volume_chunk()->set_offset(static_cast<uint64_t>(offset));
+    chunk.mutable_volume_chunk()->set_data(
+        std::string(static_cast<size_t>(std::min(kChunk, sent - offset)), '\0'));
+    requests.push_back(std::move(chunk));
+  }
+  return requests;
+}
+
+// Found by a service sweep: three calls that declared large volumes and sent a byte every 10 s
+// held a 2 GiB server's whole budget for minutes, and every other call was refused. The budget
+// is now reserved as the input arrives: calls that only declare hold their open-call bytes, and
+// the refinements of others go on.
+TEST(AdmissionTest, DeclaringAnInputHoldsNoBudgetUntilItIsSent) {
+  server::ServiceConfig config = Config(2);
+  config.limits.memory_budget_bytes = int64_t{64} << 20;
+  config.limits.bytes_per_output_tet = 160;
+  config.limits.max_message_bytes = int64_t{1} << 20;  // an open call: 2 MiB
+  LoopbackServer server(config);
+  std::vector<std::unique_ptr<OpenStream>> declaring;
+  for (int i = 0; i < 3; ++i) {
+    declaring.push_back(std::make_unique<OpenStream>(server.NewChannel()));
+    for (const v1::RefineRequest& r : DeclaringAVolumeOf(int64_t{40} << 20)) {
+      ASSERT_TRUE(declaring.back()->stream->Write(r));
+    }
+  }
+  ASSERT_TRUE(Eventually([&] { return server.service().gate().reserved_bytes() > 0; }));
+  EXPECT_LT(server.service().gate().reserved_bytes(), int64_t{8} << 20);
+  client::RefineRequestOptions fitting = Small().options;
+  fitting.SetMaxTets(180'000);
+  EXPECT_TRUE(
+      client::RefineViaService(server.NewChannel(), Small().volume, Small().mesh, fitting).ok());
+  for (auto& d : declaring) d->context.TryCancel();
+}
+
 TEST(AdmissionTest, TheMemoryBudgetHoldsForInputsAndWorstCases) {
   server::ServiceConfig config = Config(2);
   config.limits.memory_budget_bytes = int64_t{64} << 20;
@@ -335,20 +376,27 @@ TEST(AdmissionTest, TheMemoryBudgetHoldsForInputsAndWorstCases) {
   EXPECT_TRUE(
       client::RefineViaService(server.NewChannel(), Small().volume, Small().mesh, fitting).ok());
 
-  // An upload holding 40 MiB leaves no room for another one that size, nor for a call whose
-  // worst case needs 30 MiB: both are told what is free. Once it goes, both fit.
+  // An input above the whole budget is refused from its header.
   ASSERT_TRUE(Eventually([&] { return server.service().gate().reserved_bytes() == 0; }));
+  const grpc::Status huge = SendRaw(server.NewChannel(), DeclaringAVolumeOf(int64_t{80} << 20));
+  EXPECT_EQ(huge.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_THAT(huge.error_message(),
+              HasSubstr("the input this call declares (volume and mesh) needs 82.0 MiB, more "
+                        "than this server's whole memory budget of 64.0 MiB"));
+  // An upload holding 40 MiB (sent, not only declared) leaves no room for another one that
+  // size, nor for a call whose worst case needs 30 MiB: both are told what is free. Once it
+  // goes, both fit.
   auto holder = std::make_unique<OpenStream>(server.NewChannel());
-  const Requests declaring = DeclaringAVolumeOf(int64_t{40} << 20);
-  for (const v1::RefineRequest& r : declaring) ASSERT_TRUE(holder->stream->Write(r));
-  const int64_t held =
-      (int64_t{2} << 20) + static_cast<int64_t>(declaring[1].volume_header().total_bytes());
-  ASSERT_TRUE(Eventually([&] { return server.service().gate().reserved_bytes() == held; }));
-  const grpc::Status second = SendRaw(server.NewChannel(), DeclaringAVolumeOf(int64_t{40} << 20));
+  for (const v1::RefineRequest& r : SendingAVolumeOf(int64_t{40} << 20, int64_t{39} << 20)) {
+    ASSERT_TRUE(holder->stream->Write(r));
+  }
+  ASSERT_TRUE(
+      Eventually([&] { return server.service().gate().reserved_bytes() > (int64_t{40} << 20); }));
+  const grpc::Status second =
+      SendRaw(server.NewChannel(), SendingAVolumeOf(int64_t{40} << 20, int64_t{39} << 20));
   EXPECT_EQ(second.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   EXPECT_THAT(second.error_message(),
-              HasSubstr("the input this call declares (volume and mesh) needs 42.0 MiB of this "
-                        "server's memory budget"));
+              HasSubstr("the input this call has sent (volume and mesh) needs"));
   client::RefineRequestOptions thirty_mib = Small().options;
   thirty_mib.SetMaxTets(180'000);
   thirty_mib.refine.max_iterations = 16;
@@ -356,7 +404,8 @@ TEST(AdmissionTest, TheMemoryBudgetHoldsForInputsAndWorstCases) {
       client::RefineViaService(server.NewChannel(), Small().volume, Small().mesh, thirty_mib);
   EXPECT_EQ(waits.status().code(), absl::StatusCode::kResourceExhausted);
   EXPECT_THAT(waits.status().message(),
-              HasSubstr("this call's worst case does not fit the memory left"));
+              HasSubstr("output tets at 160 bytes each), does not fit the memory left"));
+  EXPECT_THAT(waits.status().message(), HasSubstr("a max_tets of at most"));
   holder->context.TryCancel();
   holder.reset();
   ASSERT_TRUE(Eventually([&] { return server.service().gate().reserved_bytes() == 0; }));

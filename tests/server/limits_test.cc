@@ -1,11 +1,17 @@
 // Server limits answer RESOURCE_EXHAUSTED, checked on declared sizes before any allocation.
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <thread>
 #include <vector>
 
 #include "client/refine_client.h"
 #include "gmock/gmock.h"
+#include "grpc/health/v1/health.grpc.pb.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
 #include "tests/support/loopback_server.h"
@@ -123,6 +129,96 @@ TEST_F(ServiceLimitsTest, MaxTetsAboveMaxOutputTets) {
 
 TEST_F(ServiceLimitsTest, MessageAboveMaxMessageBytes) {
   ExpectExhausted(GoodRequests(/*chunk_bytes=*/8000), {});
+}
+
+// Found by a service sweep: gRPC 1.51 inflates a compressed message whole before it compares
+// it with the size limit, so 1.5 MB of gzip took a 2 GiB server past its memory. Compressed
+// requests are refused from their header, before any inflating: a message that would inflate
+// to 64 MiB (against a 4 KiB limit) gets UNIMPLEMENTED, and good calls go on.
+TEST_F(ServiceLimitsTest, CompressedRequestsAreRefusedNotInflated) {
+  for (const grpc_compression_algorithm algorithm : {GRPC_COMPRESS_GZIP, GRPC_COMPRESS_DEFLATE}) {
+    SCOPED_TRACE(algorithm);
+    v1::Refiner::Stub stub(server_.NewChannel());
+    grpc::ClientContext context;
+    context.set_compression_algorithm(algorithm);
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    auto stream = stub.Refine(&context);
+    v1::RefineRequest bomb;
+    bomb.mutable_volume_chunk()->set_data(std::string(size_t{64} << 20, '\0'));
+    const auto start = std::chrono::steady_clock::now();
+    stream->Write(bomb);
+    stream->WritesDone();
+    v1::RefineResponse response;
+    while (stream->Read(&response)) {
+    }
+    const grpc::Status status = stream->Finish();
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::UNIMPLEMENTED) << status.error_message();
+    EXPECT_THAT(status.error_message(), HasSubstr("is disabled"));
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
+  }
+  EXPECT_TRUE(SendRaw(server_.NewChannel(), GoodRequests()).ok());
+}
+
+// Found by a service sweep: 160 k health Watch streams over 8 connections held 1.6 GB outside
+// the memory budget. A connection may have max_streams_per_connection streams open; a client's
+// next one waits until one ends.
+TEST(ServiceConnectionLimits, StreamsPerConnectionAreCapped) {
+  server::ServerOptions options;
+  options.max_streams_per_connection = 2;
+  LoopbackServer server({}, options);
+  const std::shared_ptr<grpc::Channel> channel = server.NewChannel();
+  v1::Refiner::Stub refiner(channel);
+  grpc::health::v1::Health::Stub health(channel);
+  const auto check = [&](double seconds) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() +
+                         std::chrono::milliseconds(static_cast<int>(seconds * 1000)));
+    grpc::health::v1::HealthCheckResponse response;
+    return health.Check(&context, {}, &response).error_code();
+  };
+  ASSERT_EQ(check(30), grpc::StatusCode::OK);
+  // Two Refine calls that have sent their options and wait for more hold both streams.
+  const Requests requests = GoodRequests();
+  grpc::ClientContext first, second;
+  auto a = refiner.Refine(&first);
+  auto b = refiner.Refine(&second);
+  ASSERT_TRUE(a->Write(requests[0]));
+  ASSERT_TRUE(b->Write(requests[0]));
+  // A third stream on the connection waits: no answer within its second.
+  EXPECT_EQ(check(1), grpc::StatusCode::DEADLINE_EXCEEDED);
+  // Once one ends, the next is served.
+  first.TryCancel();
+  a->Finish();
+  EXPECT_EQ(check(30), grpc::StatusCode::OK);
+  second.TryCancel();
+  b->Finish();
+}
+
+// A connection that never completes its HTTP/2 handshake is closed after handshake_seconds
+// (gRPC's default of 120 s let silent sockets pile up against the open-file limit).
+TEST(ServiceConnectionLimits, SilentConnectionsAreClosed) {
+  server::ServerOptions options;
+  options.handshake_seconds = 0.5;
+  LoopbackServer server({}, options);
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<uint16_t>(server.port()));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
+  timeval wait{.tv_sec = 30, .tv_usec = 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &wait, sizeof(wait));
+  const auto start = std::chrono::steady_clock::now();
+  // The server sends its own preface (SETTINGS), then closes the connection (0: end of stream)
+  // long before the 30 s a read would wait.
+  char bytes[256];
+  ssize_t got;
+  while ((got = recv(fd, bytes, sizeof(bytes), 0)) > 0) {
+  }
+  EXPECT_EQ(got, 0);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
+  close(fd);
 }
 
 TEST_F(ServiceLimitsTest, AStreamStillSendingItsInputHoldsNoRefinementSlot) {
