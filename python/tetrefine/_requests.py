@@ -95,7 +95,11 @@ def whole_numbers(values):
 
 
 def as_array(name, value):
-    """np.asarray(value), refusing ragged nested lists with a message naming the argument."""
+    """np.asarray(value), refusing ragged nested lists with a message naming the argument, and
+    masked arrays: their mask would be dropped without a word (a service sweep)."""
+    if isinstance(value, np.ma.MaskedArray):
+        raise invalid(name, "a masked array: its mask cannot be sent; fill the masked entries "
+                      "first (e.g. value.filled(0))")
     try:
         return np.asarray(value)
     except (TypeError, ValueError) as error:

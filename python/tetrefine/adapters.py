@@ -98,6 +98,17 @@ def _samples(image):
     return scaled.astype(np.float32 if narrow else np.float64)
 
 
+def _hypot3(x, y, z):
+    """std::hypot(x, y, z) as libstdc++ computes it (GCC 10 and later), which the C++ readers use
+    for a column's length: Python's math.hypot rounds differently in the last bit, and an oblique
+    grid's spacing and direction then differed from the CLI's (a service sweep)."""
+    x, y, z = abs(float(x)), abs(float(y)), abs(float(z))
+    a = (z if y < z else y) if x < y else (z if x < z else x)
+    if a == 0.0:
+        return 0.0
+    return a * math.sqrt((x / a) * (x / a) + (y / a) * (y / a) + (z / a) * (z / a))
+
+
 def volume_from_nibabel(image):
     """A VolumeGrid from a nibabel image (NIfTI-1/2, MGH, ...), in its world frame.
 
@@ -110,6 +121,9 @@ def volume_from_nibabel(image):
     NIfTI spatial units (metres, microns) are converted to millimetres. A 4-d image with one
     volume is accepted; more volumes are refused.
     """
+    if not (hasattr(image, "dataobj") and hasattr(image, "affine")):
+        raise invalid("image", f"expected a nibabel image (e.g. nibabel.load(path)), got "
+                      f"{type(image).__name__}; an array has no geometry: use VolumeGrid")
     data = _samples(image)
     if data.ndim == 4 and data.shape[3] == 1:
         data = data[..., 0]
@@ -121,7 +135,7 @@ def volume_from_nibabel(image):
     affine = affine * _unit_scale(image)
     if not np.all(np.isfinite(affine[:3, :4])):
         raise invalid("image", "the affine has a non-finite entry")
-    lengths = [math.hypot(affine[0, c], affine[1, c], affine[2, c]) for c in range(3)]
+    lengths = [_hypot3(affine[0, c], affine[1, c], affine[2, c]) for c in range(3)]
     if not all(length > 0 for length in lengths):
         raise invalid("image", "the affine is singular")
     diagonal = all(abs(affine[r, c]) <= OBLIQUE_TOLERANCE * lengths[c]
@@ -152,9 +166,15 @@ def fit_to_volume(points, grid):
     through the grid's affine (index x reversed when the direction mirrors, so tets keep their
     orientation). For meshes made in their own unit frame. Returns (n, 3) float64.
     """
+    if not all(hasattr(grid, a) for a in ("data", "spacing", "origin", "direction")):
+        raise invalid("grid", f"expected a VolumeGrid (e.g. from volume_from_nibabel), got "
+                      f"{type(grid).__name__}")
     points = np.asarray(points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
         raise invalid("points", f"expected shape (n, 3) with n > 0, got {points.shape}")
+    finite = np.isfinite(points).all(axis=1)
+    if not finite.all():
+        raise invalid("points", f"points[{int(np.argmin(finite))}] is not finite")
     p_lo, p_hi = points.min(axis=0), points.max(axis=0)
     flat = ~(p_hi > p_lo)
     if flat.any():
@@ -175,7 +195,16 @@ def fit_to_volume(points, grid):
     if np.linalg.det(direction) < 0:
         t[:, 0] = 1.0 - t[:, 0]
     u = np.where(t <= 0.0, to_lo, np.where(t >= 1.0, to_hi, to_lo + t * (to_hi - to_lo)))
-    return np.asarray(grid.origin, dtype=np.float64) + (u * spacing) @ direction.T
+    # origin + direction * (spacing * u), summed as core's WorldOfIndex sums it (columns 0, 1,
+    # then 2, then the origin), for the CLI's bits: a matrix product summed otherwise and moved
+    # 120 of 448 vertices by up to 3e-14 (a service sweep).
+    s = u * spacing
+    origin = np.asarray(grid.origin, dtype=np.float64)
+    world = np.empty_like(s)
+    for row in range(3):
+        world[:, row] = origin[row] + (direction[row, 0] * s[:, 0] + direction[row, 1] * s[:, 1]
+                                       + direction[row, 2] * s[:, 2])
+    return world
 
 
 class TetMesh:
@@ -223,6 +252,14 @@ def mesh_from_meshio(mesh, label_name=None):
         found = ", ".join(f"{n} {t}" for t, n in sorted(others.items()))
         raise invalid("mesh", f"{found} cells beside {tet_count} tetra: only linear tets are "
                       "refined; split or remove the other volume cells first")
+    for i in blocks:
+        data = np.asarray(mesh.cells[i].data)
+        if data.dtype.kind == "f" and not whole_numbers(data).all():
+            bad = np.argwhere(~whole_numbers(data))[0]
+            raise invalid("mesh", f"tetra block {i} holds vertex index {data[tuple(bad)]} (cell "
+                          f"{bad[0]}), not a whole number")
+        if data.dtype.kind not in "iuf":
+            raise invalid("mesh", f"tetra block {i} has dtype {data.dtype}, expected integers")
     tets = np.concatenate([np.asarray(mesh.cells[i].data, dtype=np.int64) for i in blocks])
     names = [label_name] if label_name is not None else list(LABEL_NAMES)
     labels = None
