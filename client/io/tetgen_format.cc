@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
 #include "core/huge_pages.h"
@@ -131,8 +132,12 @@ absl::StatusOr<MeshFile> ParseTetgen(absl::string_view node_text, absl::string_v
       absl::StatusOr<double> attribute = eles.Double("a region attribute");
       if (!attribute.ok()) return attribute.status();
       if (k > 0) continue;
-      if (!(std::abs(*attribute) <= 2147483647.0) || *attribute != std::floor(*attribute)) {
-        return eles.Error(absl::StrCat("region attribute ", *attribute, " of tet ", ele_base + t,
+      // int32's whole range: the writer puts INT32_MIN there as any other label (a CLI sweep
+      // found -2147483648 written and then refused).
+      if (!(*attribute >= -2147483648.0 && *attribute <= 2147483647.0) ||
+          *attribute != std::floor(*attribute)) {
+        return eles.Error(absl::StrCat("region attribute ", absl::StrFormat("%.17g", *attribute),
+                                       " of tet ", ele_base + t,
                                        " is not a whole number in int32's range (a label)"));
       }
       file.mesh.labels.push_back(static_cast<int32_t>(*attribute));

@@ -1,6 +1,7 @@
 // TetGen .node/.ele: TetGen's own files (a fixture, and tetgen run here when installed), round
 // trips, `tetgen -r` reading what tetrefine writes, and errors naming the file and line.
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -53,6 +54,21 @@ TEST(IoTetgenTest, RoundTripsKeepPointsTetsAndLabels) {
     EXPECT_EQ(back->mesh.labels, mesh.mesh.labels);
     EXPECT_TRUE(back->mesh.values.empty());  // TetGen's attributes have no names: not written
   }
+}
+
+// Found by a CLI sweep: the label -2147483648 was written and then refused as outside int32.
+TEST(IoTetgenTest, TheWholeInt32RangeOfLabelsRoundTrips) {
+  ScratchDir dir;
+  MeshFile mesh = RandomMesh(3, {.labels = true});
+  for (size_t t = 0; t < mesh.mesh.labels.size(); ++t) {
+    mesh.mesh.labels[t] =
+        t % 2 == 0 ? std::numeric_limits<int32_t>::min() : std::numeric_limits<int32_t>::max();
+  }
+  const std::string path = dir.File("extremes.ele");
+  ASSERT_TRUE(WriteMesh(path, mesh).ok());
+  absl::StatusOr<MeshFile> back = ReadMesh(path);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->mesh.labels, mesh.mesh.labels);
 }
 
 TEST(IoTetgenTest, ZeroBasedFilesCommentsAndExtraAttributes) {
