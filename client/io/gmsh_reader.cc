@@ -897,9 +897,11 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
       return in_.Error(absl::StrCat("iteration ", it, " is not a 32-bit integer"));
     }
   }
-  for (double q : quality_) {
+  // A quality that is not a finite float is kept as NaN: DropNonFiniteDerivedArrays drops the
+  // array, not the mesh.
+  for (double& q : quality_) {
     if (!std::isfinite(q) || std::abs(q) > std::numeric_limits<float>::max()) {
-      return in_.Error(absl::StrCat("quality ", q, " is not a finite float"));
+      q = std::numeric_limits<double>::quiet_NaN();
     }
   }
   // Tets in element-tag order: a writer may list elements in another order than their tags
@@ -933,6 +935,7 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
     file.label_name = "gmsh:physical";
     file.region_names = std::move(region_names_);
   }
+  DropNonFiniteDerivedArrays(&file);
   if (absl::Status s = ValidateMeshFile(file, path_); !s.ok()) return s;
   return file;
 }

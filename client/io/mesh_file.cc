@@ -1,5 +1,6 @@
 #include "client/io/mesh_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -23,6 +24,27 @@ absl::string_view FrameTag(MeshFrame frame) {
 
 std::string DroppedArray(bool point_data, absl::string_view name) {
   return absl::StrCat(point_data ? "point" : "cell", " data \"", name, "\"");
+}
+
+void DropNonFiniteDerivedArrays(MeshFile* file) {
+  std::vector<double>& values = file->mesh.values;
+  const auto bad_value =
+      std::find_if(values.begin(), values.end(), [](double x) { return !std::isfinite(x); });
+  if (bad_value != values.end()) {
+    file->dropped_arrays.push_back(absl::StrCat(DroppedArray(true, "value"),
+                                                " (not finite at vertex ",
+                                                bad_value - values.begin(), ": ", *bad_value, ")"));
+    values.clear();
+  }
+  std::vector<float>& quality = file->tet_quality;
+  const auto bad_quality =
+      std::find_if(quality.begin(), quality.end(), [](float x) { return !std::isfinite(x); });
+  if (bad_quality != quality.end()) {
+    file->dropped_arrays.push_back(
+        absl::StrCat(DroppedArray(false, "quality"), " (not finite at tet ",
+                     bad_quality - quality.begin(), ": ", *bad_quality, ")"));
+    quality.clear();
+  }
 }
 
 std::string LabelArrayName(const MeshFile& file) {

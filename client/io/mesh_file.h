@@ -58,6 +58,13 @@ struct MeshFile {
 // "point data \"name\"" or "cell data \"name\"": an entry of MeshFile::dropped_arrays.
 std::string DroppedArray(bool point_data, absl::string_view name);
 
+// What readers do with a "value" point array or a "quality" cell array holding a NaN or an
+// infinity: they are derived data (refine and verify sample the volume and measure the tets
+// again), so such an array is dropped, and named in dropped_arrays with its first bad entry,
+// rather than refusing a usable mesh (a CLI sweep found refine, verify and info all refusing
+// one). ValidateMeshFile still refuses them in what is written.
+void DropNonFiniteDerivedArrays(MeshFile* file);
+
 // Name of the label array VTK writers use: label_name, or "label" when that is empty.
 std::string LabelArrayName(const MeshFile& file);
 

@@ -143,6 +143,7 @@ absl::StatusOr<MeshFile> ReadMesh(const std::string& path) {
   if (!file.ok()) return file.status();
   // Every parser checks its own structure; this catches what they share (finite numbers,
   // indices in range, array lengths) in one place.
+  DropNonFiniteDerivedArrays(&*file);
   if (absl::Status s = ValidateMeshFile(*file, path); !s.ok()) return s;
   return file;
 }

@@ -156,6 +156,7 @@ class MeshbReader {
     if (absl::Status s = census.Check(path_); !s.ok()) return s;
     if (!have_tets) return Error("no Tetrahedra keyword (truncated, or a surface mesh?)");
     file.label_name = "medit:ref";
+    DropNonFiniteDerivedArrays(&file);
     if (absl::Status s = ValidateMeshFile(file, path_); !s.ok()) return s;
     return file;
   }

@@ -93,11 +93,13 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
       file.tet_iteration.push_back(static_cast<int32_t>(it));
     }
     if (!data.quality.empty()) {
+      // A quality that is not a finite float makes the array unusable, not the mesh: it is
+      // kept as NaN here and DropNonFiniteDerivedArrays drops the array.
       const double q = data.quality[c];
-      if (!std::isfinite(q) || std::abs(q) > std::numeric_limits<float>::max()) {
-        return FileError(path, absl::StrCat("cell ", c, ": quality ", q, " is not a finite float"));
-      }
-      file.tet_quality.push_back(static_cast<float>(q));
+      file.tet_quality.push_back(std::isfinite(q) &&
+                                         std::abs(q) <= std::numeric_limits<float>::max()
+                                     ? static_cast<float>(q)
+                                     : std::numeric_limits<float>::quiet_NaN());
     }
     if (!data.label.empty()) {
       if (!IsInt32(data.label[c])) {

@@ -605,6 +605,7 @@ absl::StatusOr<MeshFile> LegacyParser::ParseMesh() {
   file.dropped_arrays = std::move(dropped_);
   if (absl::Status s = CellsToTets(cells_, cell_data_, v, path_, file); !s.ok()) return s;
   FrameToRas(file);
+  DropNonFiniteDerivedArrays(&file);
   if (absl::Status s = ValidateMeshFile(file, path_); !s.ok()) return s;
   return file;
 }

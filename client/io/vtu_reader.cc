@@ -162,6 +162,7 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
   }
   if (absl::Status s = CellsToTets(vtk, cell_data, v, path, file); !s.ok()) return s;
   FrameToRas(file);
+  DropNonFiniteDerivedArrays(&file);
   if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
   return file;
 }
