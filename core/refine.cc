@@ -204,11 +204,14 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   // Only reoriented tets were copied; the points never are until a subdivision makes new ones.
   state.points = &input.points;
   state.tets = state.mesh.tets.empty() ? &input.tets : &state.mesh.tets;
+  const std::array<double, 2> range = volume.ValueRange();
   if (options.norm_coeff.has_value()) {
     result.norm_coeff = *options.norm_coeff;
   } else {
-    const auto range = volume.ValueRange();
     result.norm_coeff = range[1] > range[0] ? range[1] - range[0] : 1.0;
+  }
+  if (absl::Status s = CheckValuePrecision(result.norm_coeff, range, options.epsilon); !s.ok()) {
+    return s;
   }
   const bool clamp = options.outside == OutsidePolicy::kClamp;
   const double norm = result.norm_coeff;

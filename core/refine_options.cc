@@ -1,5 +1,6 @@
 #include "core/refine_options.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -89,6 +90,28 @@ absl::Status CheckNormCoeffForRange(double norm_coeff, const std::array<double, 
         "options.norm_coeff: ", norm_coeff, " is too small for the volume's value range [",
         range[0], ", ", range[1], "]: errors up to ", ratio,
         " would overflow the statistics; it must be at least range / ", kMaxRangeOverNorm));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>& range,
+                                 double epsilon) {
+  constexpr double kSmallestNorm = 1e-290;
+  if (norm_coeff < kSmallestNorm) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "volume: the normalisation ", norm_coeff, " (the value range [", range[0], ", ", range[1],
+        "] unless options.norm_coeff is given) is below ", kSmallestNorm,
+        ": float64 cannot resolve errors that small; scale the volume's values up"));
+  }
+  const double magnitude = std::max(std::abs(range[0]), std::abs(range[1]));
+  const double noise = 16.0 * std::numeric_limits<double>::epsilon() * magnitude / norm_coeff;
+  if (!(noise <= 0.01 * epsilon)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "volume: values reach ", magnitude, " but vary over only ", norm_coeff,
+        " (the normalisation): float64 rounding of the interpolation alone is about ", noise,
+        " of it, above a hundredth of epsilon ", epsilon,
+        ", so the errors would be rounding, not the data; subtract an offset (e.g. the minimum, ",
+        range[0], ") from the volume first"));
   }
   return absl::OkStatus();
 }

@@ -127,6 +127,17 @@ inline constexpr double kMaxRangeOverNorm = 1e280;
 // `tetrefine verify` before it samples).
 absl::Status CheckNormCoeffForRange(double norm_coeff, const std::array<double, 2>& range);
 
+// Whether float64 can resolve errors of epsilon x norm_coeff among values as large as the
+// volume's `range` (its smallest and largest sample). The interpolations that eq. 1-3 compare
+// round at about 16 ulps of the largest magnitude; when that noise exceeds a hundredth of
+// epsilon x norm_coeff, or norm_coeff is below 1e-290 (subnormal territory), the errors are
+// rounding, not the data: a CLI sweep saw "lattice max 2.0" (impossible in exact arithmetic) and
+// refinement to the tet budget for values {1e16, 1e16 + 2}, and 32 M tets for {0, 5e-324}.
+// INVALID_ARGUMENT naming the values and what to do (subtract an offset, scale the volume);
+// every volume of ordinary data passes (int16 CT: noise 1e-15 of its range).
+absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>& range,
+                                 double epsilon);
+
 // OK, or INVALID_ARGUMENT naming the first offending field and its value, e.g.
 // "options.epsilon: must be finite and > 0, got 0". Refine checks its options with this; so does
 // the wire layer on a request, before anything else is received.

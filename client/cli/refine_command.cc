@@ -591,7 +591,12 @@ int RunRefinement(const RefineSettings& s) {
   if (g_interrupted != 0) return Fail("interrupted; no output written", 130);
   if (!reply.ok()) {
     if (reply.status().code() == absl::StatusCode::kInvalidArgument) {
-      return Fail(absl::StrCat(s.mesh_path, ": ", reply.status().message()), kExitUsage);
+      // The service names the input it refuses ("mesh.points[7] ...", "volume: ..."): the file
+      // is the one that holds it.
+      const bool volume_error = absl::StartsWith(reply.status().message(), "volume");
+      return Fail(
+          absl::StrCat(volume_error ? s.volume_path : s.mesh_path, ": ", reply.status().message()),
+          kExitUsage);
     }
     const absl::Status failed = WithTlsHint(reply.status(), s.tls);
     return Fail(absl::StrCat((*backend)->Name(), ": ", absl::StatusCodeToString(failed.code()),
@@ -707,8 +712,10 @@ const CommandSpec& RefineSpec() {
                               ")")},
                 {"max-tets", "N",
                  absl::StrCat("stop before an iteration that would exceed N tets (default: the "
-                              "service's limit, ",
-                              wire::ServiceLimits{}.max_output_tets, ")")},
+                              "service's limit: ",
+                              wire::ServiceLimits{}.max_output_tets,
+                              " embedded; a server's own, smaller when its memory is, with "
+                              "--server)")},
                 {"scheme", "NAME",
                  absl::StrCat("which edges are split: longest-edge (the midpoint test, then "
                               "each marked tet's and face's longest edge, and the fewest more "

@@ -138,6 +138,35 @@ TEST(Validation, OptionLimitsNameTheFieldAndTheValue) {
   }
 }
 
+// Found by a CLI sweep: values {1e16, 1e16 + 2} refined to the tet budget with "lattice max
+// 2.0" (rounding, impossible in exact arithmetic), and {0, 5e-324} to 32 M tets. Volumes whose
+// errors float64 cannot resolve are refused, saying what to do; the same field offset back to
+// 0 refines, and so does the offset one with a normalisation its magnitude can carry.
+TEST(Validation, ValuesFloat64CannotResolveAreRefused) {
+  const GridGeometry grid{.dims = {6, 6, 6}, .origin = {0, 0, 0}, .spacing = {1, 1, 1}};
+  const auto two_level = [&](double low, double high) {
+    return testing::AnalyticVolume(grid,
+                                   [&](const Vec3& p) { return p[0] + p[1] > 5 ? high : low; });
+  };
+  const Mesh mesh = testing::FiveTetMesh({0.5, 0.5, 0.5}, {4.5, 4.5, 4.5}, {2, 2, 2});
+  RefineOptions options;
+  options.epsilon = 0.05;
+  options.max_iterations = 3;
+  const absl::StatusOr<RefineResult> offset = Refine(two_level(1e16, 1e16 + 2), mesh, options);
+  ASSERT_EQ(offset.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(offset.status().message().find("subtract an offset"), std::string::npos)
+      << offset.status();
+  const absl::StatusOr<RefineResult> tiny = Refine(two_level(0, 5e-324), mesh, options);
+  ASSERT_EQ(tiny.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_NE(tiny.status().message().find("below 1e-290"), std::string::npos) << tiny.status();
+  EXPECT_TRUE(Refine(two_level(0, 2), mesh, options).ok());
+  EXPECT_TRUE(Refine(two_level(1e6, 1e6 + 2), mesh, options).ok());
+  RefineOptions wide = options;
+  wide.norm_coeff = 1e16;
+  EXPECT_TRUE(Refine(two_level(1e16, 1e16 + 2), mesh, wide).ok());
+  EXPECT_TRUE(CheckValuePrecision(4096, {-1024, 3071}, 1e-6).ok());  // an int16 CT
+}
+
 TEST(Validation, FaceInThreeTetsIsRefused) {
   Mesh m = TwoTets();
   m.points.push_back({1.2, 1.2, 0.5});
