@@ -151,9 +151,9 @@ absl::StatusOr<RequestOptions> RequestOptionsFromWire(const v1::RefineOptions& i
   if (in.has_max_iterations()) r.max_iterations = in.max_iterations();
   if (in.has_max_tets()) {
     if (in.max_tets() > limits.max_output_tets) {
-      return absl::ResourceExhaustedError(absl::StrCat("options.max_tets: ", in.max_tets(),
-                                                       " exceeds this server's limit of ",
-                                                       limits.max_output_tets, " output tets"));
+      return absl::ResourceExhaustedError(
+          absl::StrCat("options.max_tets: ", in.max_tets(), " exceeds this server's limit of ",
+                       limits.max_output_tets, " output tets (--max_output_tets)"));
     }
     r.max_tets = in.max_tets();
     o.send_max_tets = true;

@@ -229,7 +229,7 @@ absl::Status RequestReader::AddVolumeHeader(const v1::VolumeHeader& header) {
       return absl::ResourceExhaustedError(
           absl::StrCat("volume_header: the slab [", lo_[0], ",", lo_[1], ",", lo_[2], ") - [",
                        hi_[0], ",", hi_[1], ",", hi_[2], ") has more than this server's limit of ",
-                       limits_.max_voxels, " voxels"));
+                       limits_.max_voxels, " voxels (--max_voxels)"));
     }
   }
   const uint64_t expected = static_cast<uint64_t>(voxels) * VoxelSize(voxel_type_);
@@ -293,9 +293,9 @@ absl::Status RequestReader::AddMeshHeader(const v1::MeshHeader& header) {
     return Invalid(absl::StrCat("mesh_header.vertex_count: must be >= 0, got ", vertex_count_));
   }
   if (tet_count_ > limits_.max_input_tets) {
-    return absl::ResourceExhaustedError(absl::StrCat("mesh_header.tet_count: ", tet_count_,
-                                                     " exceeds this server's limit of ",
-                                                     limits_.max_input_tets, " input tets"));
+    return absl::ResourceExhaustedError(
+        absl::StrCat("mesh_header.tet_count: ", tet_count_, " exceeds this server's limit of ",
+                     limits_.max_input_tets, " input tets (--max_input_tets)"));
   }
   // Checked here, before the tets are received, rather than left to the core.
   if (tet_count_ > ToCoreOptions(options_, limits_).max_tets) {
@@ -303,16 +303,16 @@ absl::Status RequestReader::AddMeshHeader(const v1::MeshHeader& header) {
       return Invalid(absl::StrCat("mesh_header.tet_count: ", tet_count_,
                                   " exceeds options.max_tets = ", options_.refine.max_tets));
     }
-    return absl::ResourceExhaustedError(absl::StrCat("mesh_header.tet_count: ", tet_count_,
-                                                     " exceeds this server's limit of ",
-                                                     limits_.max_output_tets, " output tets"));
+    return absl::ResourceExhaustedError(
+        absl::StrCat("mesh_header.tet_count: ", tet_count_, " exceeds this server's limit of ",
+                     limits_.max_output_tets, " output tets (--max_output_tets)"));
   }
   // A mesh needs at most 4 vertices a tet; more would be memory spent on nothing.
   const int64_t max_vertices = 4 * limits_.max_input_tets;
   if (vertex_count_ > max_vertices) {
-    return absl::ResourceExhaustedError(absl::StrCat("mesh_header.vertex_count: ", vertex_count_,
-                                                     " exceeds this server's limit of ",
-                                                     max_vertices, " input vertices"));
+    return absl::ResourceExhaustedError(absl::StrCat(
+        "mesh_header.vertex_count: ", vertex_count_, " exceeds this server's limit of ",
+        max_vertices, " input vertices (4 x --max_input_tets)"));
   }
   if (header.has_values()) {
     return Invalid(

@@ -436,3 +436,39 @@ def test_a_non_callable_on_iteration_is_refused_before_sending(server):
                            match="on_iteration: expected a callable .* got int") as caught:
             client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.1, on_iteration=5)
     assert caught.value.code == grpc.StatusCode.INVALID_ARGUMENT
+
+
+def test_lattice_and_guard_options(server, cli_binary, tmp_path):
+    # The CLI's --lattice-n and --lattice-max-tets, and the wire's lattice_seed, min_edge_length
+    # and min_quality, could not be given from Python (a service sweep).
+    output, stats = tmp_path / "cli.vtu", tmp_path / "cli.json"
+    run_cli(cli_binary, "refine", "--server", server.target, "--volume", EXAMPLE_VOLUME,
+            "--mesh", EXAMPLE_MESH, "--fit-mesh-to-volume", "--epsilon", "0.1", "--quiet",
+            "--lattice-n", "5", "--lattice-max-tets", "300", "--max-iterations", "4",
+            "--output", str(output), "--stats-json", str(stats))
+    volume = tetrefine.volume_from_nibabel(nibabel.load(EXAMPLE_VOLUME))
+    mesh = tetrefine.mesh_from_meshio(meshio.read(EXAMPLE_MESH))
+    points = tetrefine.fit_to_volume(mesh.points, volume)
+    args = (volume.data, volume.spacing, volume.origin, points, mesh.tets, 0.1)
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(*args, lattice_n=5, lattice_max_tets=300, max_iterations=4)
+        reseeded = client.refine(*args, lattice_n=5, lattice_max_tets=300, lattice_seed=7,
+                                 max_iterations=4)
+        guarded = client.refine(*args, min_edge_length=8.0, max_iterations=4)
+        floored = client.refine(*args, min_quality=0.9, max_iterations=4)
+        with pytest.raises(tetrefine.TetrefineError) as error:
+            client.refine(*args, lattice_n=-1)
+    assert "lattice_n" in error.value.details
+    assert_same_as_cli_output(result, output)
+    cli_lattice = json.load(open(stats))["lattice"]
+    assert result.lattice.n == 5 == cli_lattice["n"]
+    assert result.lattice.tets_sampled == 300 == cli_lattice["tets_sampled"]
+    assert result.lattice.max_error == cli_lattice["max_error"]
+    # Another seed samples other tets of the same mesh.
+    np.testing.assert_array_equal(reseeded.tets, result.tets)
+    assert reseeded.lattice.tets_sampled == 300
+    assert reseeded.lattice.mean_error != result.lattice.mean_error
+    # The edge-length guard keeps edges below 8 mm whole: fewer tets than without it; a
+    # quality floor of 0.9 refuses the first iteration.
+    assert len(guarded.tets) < len(result.tets)
+    assert floored.stop_reason == "quality_floor" and len(floored.tets) == len(mesh.tets)

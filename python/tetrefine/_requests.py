@@ -217,7 +217,9 @@ def _direction(direction):
 
 def build_options(pb, protocol, epsilon, *, max_iterations=None, max_tets=None, scheme=None,
                   certify=False, norm_coeff=None, clamp=False, fix_orientation=False,
-                  track_parents=False, quality_reference=None):
+                  track_parents=False, quality_reference=None, lattice_n=None,
+                  lattice_max_tets=None, lattice_seed=None, min_edge_length=None,
+                  min_quality=None):
     """The RefineOptions message; an unset argument leaves the server's default."""
     # Types are checked here (a string epsilon, a float iteration count, certify="no" were
     # coerced or raised numpy's and protobuf's own exceptions); ranges are the server's.
@@ -228,6 +230,18 @@ def build_options(pb, protocol, epsilon, *, max_iterations=None, max_tets=None, 
         options.max_tets = integer("max_tets", max_tets, 1, 2**63 - 1)
     if norm_coeff is not None:
         options.norm_coeff = real_number("norm_coeff", norm_coeff)
+    # What the CLI's --lattice-n, --lattice-max-tets, --lattice-seed, --min-edge-length and
+    # --min-quality set (a service sweep could not reproduce such CLI runs from Python).
+    if lattice_n is not None:
+        options.lattice_n = integer("lattice_n", lattice_n, 0, 2**31 - 1)
+    if lattice_max_tets is not None:
+        options.lattice_max_tets = integer("lattice_max_tets", lattice_max_tets, 0, 2**63 - 1)
+    if lattice_seed is not None:
+        options.lattice_seed = integer("lattice_seed", lattice_seed, 0, 2**64 - 1)
+    if min_edge_length is not None:
+        options.min_edge_length = real_number("min_edge_length", min_edge_length)
+    if min_quality is not None:
+        options.min_quality = real_number("min_quality", min_quality)
     certify = flag("certify", certify)
     track_parents = flag("track_parents", track_parents)
     if flag("clamp", clamp):

@@ -177,7 +177,9 @@ class Client:
     def refine(self, volume, spacing, origin, points, tets, epsilon, *, direction=None,
                labels=None, scheme=None, certify=False, max_iterations=None, max_tets=None,
                on_iteration=None, timeout=None, norm_coeff=None, clamp=False,
-               fix_orientation=False, track_parents=False, quality_reference=None):
+               fix_orientation=False, track_parents=False, quality_reference=None,
+               lattice_n=None, lattice_max_tets=None, lattice_seed=None, min_edge_length=None,
+               min_quality=None):
         """Refines the tet mesh (points, tets) immersed in a voxel volume.
 
         Args:
@@ -212,6 +214,15 @@ class Client:
           quality_reference: the mean ratio in (0, 1] the longest-edge scheme keeps new tets at
             half of where it can (default: the input's worst tet; pass the first input's when
             refining a result again).
+          lattice_n: order of the final lattice check, (n+1)(n+2)(n+3)/6 points a tet (server
+            default 8; 0 skips it); lattice_max_tets: results with more tets are checked on a
+            random sample of this many (default 200000; 0: every tet); lattice_seed: that
+            sample's seed (default 1). As the CLI's --lattice-n, --lattice-max-tets and
+            --lattice-seed.
+          min_edge_length: edges shorter than this (world units) are never split (default 1/64
+            of the smallest voxel spacing; 0 disables it).
+          min_quality: an iteration that would make a tet of mean ratio below this is not
+            applied (stop reason QUALITY_FLOOR); in [0, 1), default 1e-6.
 
         direction, labels, scheme and certify need a protocol that has them: without it they
         raise TetrefineError with code UNIMPLEMENTED naming the missing field.
@@ -231,7 +242,9 @@ class Client:
             pb, self._protocol, epsilon, max_iterations=max_iterations, max_tets=max_tets,
             scheme=scheme, certify=certify, norm_coeff=norm_coeff, clamp=clamp,
             fix_orientation=fix_orientation, track_parents=track_parents,
-            quality_reference=quality_reference)
+            quality_reference=quality_reference, lattice_n=lattice_n,
+            lattice_max_tets=lattice_max_tets, lattice_seed=lattice_seed,
+            min_edge_length=min_edge_length, min_quality=min_quality)
         timeout = _timeout(timeout)
         # One deadline for the whole call, the server-info round trip included.
         deadline = None if timeout is None else time.monotonic() + timeout

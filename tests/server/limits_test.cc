@@ -87,7 +87,7 @@ TEST_F(ServiceLimitsTest, VolumeAboveMaxVoxels) {
                              r.mutable_volume_header()->mutable_dims()->set_x(30);
                              r.mutable_volume_header()->mutable_slab_hi()->set_x(30);
                            }),
-                  {"volume_header", "limit of 2000 voxels"});
+                  {"volume_header", "limit of 2000 voxels (--max_voxels)"});
 }
 
 TEST_F(ServiceLimitsTest, HugeDeclaredVolume) {
@@ -110,21 +110,23 @@ TEST_F(ServiceLimitsTest, MeshAboveMaxInputTets) {
                            [](v1::RefineRequest& r) {
                              r.mutable_mesh_header()->set_tet_count(int64_t{1} << 40);
                            }),
-                  {"mesh_header.tet_count", "limit of 100 input tets"});
+                  {"mesh_header.tet_count", "limit of 100 input tets (--max_input_tets)"});
 }
 
 TEST_F(ServiceLimitsTest, MeshAboveMaxInputVertices) {
-  ExpectExhausted(CutAfter(v1::RefineRequest::kMeshHeader,
-                           [](v1::RefineRequest& r) {
-                             r.mutable_mesh_header()->set_vertex_count(int64_t{1} << 50);
-                           }),
-                  {"mesh_header.vertex_count", "limit of 400 input vertices"});
+  ExpectExhausted(
+      CutAfter(v1::RefineRequest::kMeshHeader,
+               [](v1::RefineRequest& r) {
+                 r.mutable_mesh_header()->set_vertex_count(int64_t{1} << 50);
+               }),
+      {"mesh_header.vertex_count", "limit of 400 input vertices (4 x --max_input_tets)"});
 }
 
 TEST_F(ServiceLimitsTest, MaxTetsAboveMaxOutputTets) {
   Requests requests = GoodRequests();
   requests[0].mutable_options()->set_max_tets(5001);
-  ExpectExhausted(requests, {"options.max_tets: 5001", "limit of 5000 output tets"});
+  ExpectExhausted(requests,
+                  {"options.max_tets: 5001", "limit of 5000 output tets (--max_output_tets)"});
 }
 
 TEST_F(ServiceLimitsTest, MessageAboveMaxMessageBytes) {
