@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -178,6 +179,10 @@ int RunInfo(const std::vector<std::string>& args) {
   }
   if (IsMeshPath(path)) return MeshInfo(path);
   if (io::IsDicomPath(path)) return VolumeInfo(path);
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    return Fail(absl::StrCat(path, ": cannot open: No such file or directory"), kExitUsage);
+  }
   if (io::IsSurfacePath(path))
     return Fail(std::string(io::UnknownExtension(path).message()), kExitUsage);
   return Fail(

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -39,6 +40,24 @@ uint32_t U32(absl::string_view b, uint64_t at) {
   std::memcpy(&v, b.data() + at, 4);
   return v;
 }
+
+}  // namespace
+
+std::string Printable(absl::string_view bytes) {
+  std::string out;
+  for (const char c : bytes.substr(0, 64)) {
+    const unsigned char u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u < 0x7f && c != '\\') {
+      out.push_back(c);
+    } else {
+      absl::StrAppend(&out, absl::StrFormat("\\x%02x", u));
+    }
+  }
+  if (bytes.size() > 64) out += "...";
+  return out;
+}
+
+namespace {
 
 std::string TagText(uint16_t group, uint16_t element) {
   return absl::StrFormat("(%04X,%04X)", group, element);
@@ -83,7 +102,7 @@ std::string TransferSyntaxName(absl::string_view uid) {
   for (const Known& k : kKnown) {
     if (k.uid == uid) return absl::StrCat(uid, " (", k.name, ")");
   }
-  return std::string(uid);
+  return Printable(uid);
 }
 
 struct ElementHeader {
@@ -226,7 +245,7 @@ absl::StatusOr<std::array<double, n>> Decimals(absl::string_view value, absl::st
     word = Trimmed(word);
     double x;
     if (count < n && (!ParseDouble(word, x) || !std::isfinite(x))) {
-      return FileError(path, absl::StrCat("DICOM ", what, ": \"", word.substr(0, 40),
+      return FileError(path, absl::StrCat("DICOM ", what, ": \"", Printable(word.substr(0, 40)),
                                           "\" is not a finite number"));
     }
     if (count < n) out[count] = x;
@@ -267,15 +286,22 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
   if (image.transfer_syntax.empty()) {
     return FileError(path, "DICOM file meta information has no Transfer Syntax UID (0002,0010)");
   }
-  const bool explicit_vr = image.transfer_syntax == kExplicitLittle;
+  // The compressed syntaxes (JPEG family, JPEG-LS, JPEG 2000, RLE) keep the data set in
+  // explicit VR little endian and only encapsulate the pixels: their headers are read, so that
+  // a compressed image of another series (a dose screen) can be told apart and skipped, and the
+  // series reader refuses one only when it is part of the series read.
+  const bool encapsulated = absl::StartsWith(image.transfer_syntax, "1.2.840.10008.1.2.4.") ||
+                            image.transfer_syntax == "1.2.840.10008.1.2.5";
+  const bool explicit_vr = image.transfer_syntax == kExplicitLittle || encapsulated;
+  const std::string refusal = absl::StrCat(
+      "DICOM transfer syntax ", TransferSyntaxName(image.transfer_syntax),
+      " is not read, only uncompressed little endian (", kImplicitLittle, ", ", kExplicitLittle,
+      "): decompress the series with `gdcmconv --raw IN OUT` or convert it to NIfTI with "
+      "dcm2niix");
   if (!explicit_vr && image.transfer_syntax != kImplicitLittle) {
-    return FileUnsupported(
-        path, absl::StrCat("DICOM transfer syntax ", TransferSyntaxName(image.transfer_syntax),
-                           " is not read, only uncompressed little endian (", kImplicitLittle, ", ",
-                           kExplicitLittle,
-                           "): decompress the series with `gdcmconv --raw IN OUT` or convert it "
-                           "to NIfTI with dcm2niix"));
+    return FileUnsupported(path, refusal);
   }
+  if (encapsulated) image.unsupported = refusal;
   while (pos < bytes.size()) {
     absl::StatusOr<ElementHeader> h = parser.Header(pos, explicit_vr);
     if (!h.ok()) return h.status();
@@ -284,6 +310,7 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
                                           " at byte ", pos, " outside any sequence"));
     }
     if (h->group == 0x7FE0 && h->element == 0x0010) {
+      if (encapsulated) break;  // an image, but not one this reader decodes: `unsupported`
       if (h->length == kUndefinedLength) {
         return FileUnsupported(path,
                                "DICOM Pixel Data (7FE0,0010) is encapsulated (compressed) under "
@@ -298,8 +325,12 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
     }
     absl::StatusOr<uint64_t> next = parser.Skip(*h, explicit_vr, 0);
     if (!next.ok()) return next.status();
-    if (h->length != kUndefinedLength) {
+    // An empty value (length zero, or only padding in a text value) is an attribute left empty,
+    // as anonymisers leave Rescale Slope and Intercept: absent, as dcm2niix takes it, rather than
+    // a malformed number. (Binary values such as Rows are never trimmed: 32 is a space.)
+    if (h->length != kUndefinedLength && h->length > 0) {
       const absl::string_view value = bytes.substr(h->value, h->length);
+      const bool blank = Trimmed(value).empty();
       const uint32_t tag = (uint32_t{h->group} << 16) | h->element;
       const auto us = [&](absl::string_view name, int& out) -> absl::Status {
         absl::StatusOr<int> v = UnsignedShort(value, Named(h->group, h->element, name), path);
@@ -310,13 +341,23 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
       absl::Status s;
       int us_value = 0;
       switch (tag) {
+        case 0x00080018:
+          image.sop_instance_uid = std::string(Trimmed(value));
+          break;
         case 0x00080060:
           image.modality = std::string(Trimmed(value));
+          break;
+        case 0x0008103E:
+          image.series_description = Printable(Trimmed(value));
+          break;
+        case 0x00200011:
+          image.series_number = Printable(Trimmed(value));
           break;
         case 0x0020000E:
           image.series_uid = std::string(Trimmed(value));
           break;
         case 0x00200032: {
+          if (blank) break;
           auto v =
               Decimals<3>(value, Named(h->group, h->element, "Image Position (Patient)"), path);
           if (!v.ok()) return v.status();
@@ -324,6 +365,7 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
           break;
         }
         case 0x00200037: {
+          if (blank) break;
           auto v =
               Decimals<6>(value, Named(h->group, h->element, "Image Orientation (Patient)"), path);
           if (!v.ok()) return v.status();
@@ -334,6 +376,7 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
           s = us("Samples per Pixel", image.samples_per_pixel);
           break;
         case 0x00280008: {
+          if (blank) break;
           auto v = Decimals<1>(value, Named(h->group, h->element, "Number of Frames"), path);
           if (!v.ok()) return v.status();
           if ((*v)[0] < 1 || (*v)[0] != std::floor((*v)[0]) || (*v)[0] > 1e9) {
@@ -352,6 +395,7 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
           image.columns = us_value;
           break;
         case 0x00280030: {
+          if (blank) break;
           auto v = Decimals<2>(value, Named(h->group, h->element, "Pixel Spacing"), path);
           if (!v.ok()) return v.status();
           image.pixel_spacing = *v;
@@ -367,12 +411,14 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
           s = us("Pixel Representation", image.pixel_representation);
           break;
         case 0x00281052: {
+          if (blank) break;
           auto v = Decimals<1>(value, Named(h->group, h->element, "Rescale Intercept"), path);
           if (!v.ok()) return v.status();
           image.rescale_intercept = (*v)[0];
           break;
         }
         case 0x00281053: {
+          if (blank) break;
           auto v = Decimals<1>(value, Named(h->group, h->element, "Rescale Slope"), path);
           if (!v.ok()) return v.status();
           image.rescale_slope = (*v)[0];

@@ -14,17 +14,20 @@ namespace tetrefine::io {
 // group, then the data set) that place its image in a volume. Only the data set's top level is
 // read; sequences are skipped. Geometry is in DICOM's patient frame, LPS millimetres.
 struct DicomImage {
-  std::string media_sop_class;   // (0002,0002); a DICOMDIR says 1.2.840.10008.1.3.10
-  std::string transfer_syntax;   // (0002,0010)
-  std::string series_uid;        // (0020,000E)
-  std::string modality;          // (0008,0060), for messages
-  int64_t rows = 0;              // (0028,0010): samples along a column, the j axis
-  int64_t columns = 0;           // (0028,0011): samples along a row, the i axis
-  int samples_per_pixel = 1;     // (0028,0002)
-  int64_t frames = 1;            // (0028,0008)
-  int bits_allocated = 0;        // (0028,0100)
-  int bits_stored = 0;           // (0028,0101); 0 when absent (then bits_allocated)
-  int pixel_representation = 0;  // (0028,0103): 0 unsigned, 1 two's complement
+  std::string media_sop_class;     // (0002,0002); a DICOMDIR says 1.2.840.10008.1.3.10
+  std::string transfer_syntax;     // (0002,0010)
+  std::string series_uid;          // (0020,000E)
+  std::string sop_instance_uid;    // (0008,0018): the same image exported twice has the same
+  std::string modality;            // (0008,0060), for messages
+  std::string series_number;       // (0020,0011), for messages: what a radiologist calls it
+  std::string series_description;  // (0008,103E), for messages
+  int64_t rows = 0;                // (0028,0010): samples along a column, the j axis
+  int64_t columns = 0;             // (0028,0011): samples along a row, the i axis
+  int samples_per_pixel = 1;       // (0028,0002)
+  int64_t frames = 1;              // (0028,0008)
+  int bits_allocated = 0;          // (0028,0100)
+  int bits_stored = 0;             // (0028,0101); 0 when absent (then bits_allocated)
+  int pixel_representation = 0;    // (0028,0103): 0 unsigned, 1 two's complement
   // (0020,0032) Image Position (Patient): the world position of the first sample, LPS mm.
   std::optional<std::array<double, 3>> position;
   // (0020,0037) Image Orientation (Patient): the unit world direction of a row (increasing
@@ -36,18 +39,29 @@ struct DicomImage {
   double rescale_slope = 1.0;      // (0028,1053)
   double rescale_intercept = 0.0;  // (0028,1052)
   // (7FE0,0010) Pixel Data: the stored samples, little-endian, a view into the parsed bytes.
-  // Empty when the file has no image (a report, a DICOMDIR).
+  // Empty when the file has no image (a report, a DICOMDIR), or holds one this reader does not
+  // decode (then `unsupported` says why).
   std::optional<absl::string_view> pixel_data;
+  // Non-empty for an image in a compressed transfer syntax (JPEG, JPEG-LS, JPEG 2000, RLE):
+  // its header was read, its pixels cannot be; the message names the syntax and the fix.
+  std::string unsupported;
 };
 
 // True when `bytes` start like a DICOM Part 10 file: a 128-byte preamble, then "DICM".
 bool HasDicomMagic(absl::string_view bytes);
 
+// `bytes` from a file for a message: printable ASCII kept, every other byte escaped (\x1b),
+// at most 64 bytes, so that a hostile file cannot write terminal escapes through an error.
+std::string Printable(absl::string_view bytes);
+
 // Parses a DICOM Part 10 file held in `bytes` (which the result's pixel_data points into).
 // Reads the uncompressed little-endian transfer syntaxes (implicit and explicit VR: what
-// scanners and PACS export by default); any other, compressed ones included, is an error naming
-// it and how to convert the file. Errors name `path` and the element (gggg,eeee) where the data
-// set is malformed or truncated. Never reads outside `bytes`; sequences nest at most 32 deep.
+// scanners and PACS export by default). For the compressed ones (JPEG family, JPEG-LS, JPEG
+// 2000, RLE) the header is read and `unsupported` set; any other syntax (big endian, deflated)
+// is an error naming it and how to convert the file. Errors name `path` and the element (gggg,eeee)
+// where the data set is malformed or truncated. Never reads outside `bytes`; sequences nest at most
+// 32 deep. A value of length zero (as anonymisers leave Rescale Slope and Intercept) counts as
+// absent.
 absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_view path);
 
 }  // namespace tetrefine::io

@@ -7,12 +7,14 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <utility>
 #include <vector>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
 #include "client/io/dicom_file.h"
 #include "client/io/file_bytes.h"
 #include "client/io/grid_placement.h"
@@ -249,6 +251,7 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
     if (!view.ok()) return view.status();
     absl::StatusOr<DicomImage> image = ParseDicomFile(view->bytes(), path);
     if (!image.ok()) return image.status();
+    if (!image->unsupported.empty()) return FileUnsupported(path, image->unsupported);
     if (!image->pixel_data) {
       return FileError(path, "DICOM file holds no image (no Pixel Data (7FE0,0010))");
     }
@@ -258,9 +261,17 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   absl::StatusOr<std::vector<std::string>> files = FilesIn(directory);
   if (!files.ok()) return files.status();
 
-  // First pass: every file's header, grouped by series.
+  // First pass: every file's header, grouped by series. Files that are not DICOM images, or
+  // that this reader cannot read (a compressed dose screen, a deflated report, an interrupted
+  // copy beside the series), are skipped and counted: a sweep had a valid series refused for
+  // such a neighbour. If one was a slice of the series, the gap it leaves is found below, and
+  // the message then mentions the unreadable files.
   std::map<std::string, std::vector<Slice>> series;
-  int64_t not_dicom = 0, no_image = 0;
+  std::map<std::string, std::set<std::string>> instances;  // per series: SOP Instance UIDs
+  int64_t not_dicom = 0, no_image = 0, duplicates = 0;
+  std::map<std::string, std::string> compressed;  // series -> why one of its images is refused
+  int64_t unreadable = 0;
+  std::string first_unreadable;  // "file: why" of the first"
   for (const std::string& file : *files) {
     absl::StatusOr<FileView> view = FileView::Open(file);
     if (!view.ok()) return view.status();
@@ -269,16 +280,43 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
       continue;
     }
     absl::StatusOr<DicomImage> image = ParseDicomFile(view->bytes(), file);
-    if (!image.ok()) return image.status();
-    if (image->media_sop_class == kDicomDirClass || !image->pixel_data) {
+    if (!image.ok()) {
+      if (unreadable++ == 0) first_unreadable = std::string(image.status().message());
+      continue;
+    }
+    if (image->media_sop_class == kDicomDirClass ||
+        (!image->pixel_data && image->unsupported.empty())) {
       ++no_image;
       continue;
     }
     if (wanted_series && image->series_uid != *wanted_series) continue;
+    if (!image->unsupported.empty()) {
+      // A compressed image: refused if it belongs to the series read, skipped otherwise.
+      compressed[image->series_uid] = image->unsupported;
+      continue;
+    }
+    // The same image exported twice ("IM0003 (1).dcm"): one copy is read.
+    if (!image->sop_instance_uid.empty() &&
+        !instances[image->series_uid].insert(image->sop_instance_uid).second) {
+      ++duplicates;
+      continue;
+    }
     // The pixels are read again in the second pass, so that no file stays mapped.
     const size_t pixel_bytes = image->pixel_data->size();
     image->pixel_data.reset();
     series[image->series_uid].push_back(Slice{file, *std::move(image), pixel_bytes, 0.0});
+  }
+  // Said after an error about the series, when files were skipped as unreadable.
+  const std::string unreadable_note =
+      unreadable == 0
+          ? std::string()
+          : absl::StrCat(" (", unreadable, " files of the directory could not be read, e.g. ",
+                         first_unreadable, ")");
+  const auto series_error = [&](const std::string& where, absl::string_view problem) {
+    return FileError(where, absl::StrCat(problem, unreadable_note));
+  };
+  if (series.empty() && compressed.size() == 1) {
+    return FileUnsupported(path, compressed.begin()->second);
   }
   if (series.empty()) {
     // Exports often hold one directory per series under a patient or study directory.
@@ -288,8 +326,11 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
       if (entry.is_directory(kind_ec)) has_subdirectories = true;
     }
     return FileError(
-        path, absl::StrCat("no DICOM image found (", files->size(), " files, ", not_dicom,
-                           " not DICOM, ", no_image, " without an image)",
+        path, absl::StrCat("no DICOM image found (", files->size(), " files: ", not_dicom,
+                           " without a DICOM Part 10 header (\"DICM\" at byte 128; convert files "
+                           "written without one with dcm2niix), ",
+                           no_image, " without an image, ", unreadable, " unreadable",
+                           unreadable == 0 ? "" : absl::StrCat(", e.g. ", first_unreadable), ")",
                            has_subdirectories
                                ? "; subdirectories are not searched: name the directory of one "
                                  "series, or one of its files"
@@ -303,22 +344,30 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
         absl::StrAppend(&list, ", ...");
         break;
       }
-      absl::StrAppend(&list, shown > 1 ? ", " : "", uid.empty() ? "(no UID)" : uid, ": ",
-                      slices.size(), " images, e.g. ", FileName(slices.front().file));
+      const DicomImage& im = slices.front().image;
+      absl::StrAppend(
+          &list, shown > 1 ? "; " : "",
+          im.series_number.empty() ? "" : absl::StrCat("series ", im.series_number, " "),
+          im.series_description.empty() ? "" : absl::StrCat("\"", im.series_description, "\" "),
+          uid.empty() ? "(no UID)" : Printable(uid), ": ", slices.size(), " images, e.g. ",
+          FileName(slices.front().file));
     }
     return FileError(path, absl::StrCat("directory holds ", series.size(), " DICOM series (", list,
                                         "): name one file of the series to read instead of the "
                                         "directory"));
   }
   std::vector<Slice>& slices = series.begin()->second;
+  if (const auto it = compressed.find(series.begin()->first); it != compressed.end()) {
+    return FileUnsupported(path, it->second);
+  }
 
   for (const Slice& s : slices) {
     if (absl::Status st = CheckPlaceable(s); !st.ok()) return st;
     if (absl::Status st = CheckSameShape(slices.front(), s); !st.ok()) return st;
   }
   if (slices.size() < 2) {
-    return FileError(slices.front().file,
-                     "the DICOM series has a single slice: a volume needs at least two");
+    return series_error(slices.front().file,
+                        "the DICOM series has a single slice: a volume needs at least two");
   }
   if (slices.size() > static_cast<size_t>(kMaxVolumeAxis)) {
     return FileError(path, absl::StrCat("the DICOM series has ", slices.size(),
@@ -351,18 +400,37 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   Vec step;
   for (int a = 0; a < 3; ++a) step[a] = (pn[a] - p0[a]) / static_cast<double>(n - 1);
   const double step_length = Norm(step);
+  // Even spacing along the normal: the gap between neighbours that departs most from the mean
+  // gap names the two slices around it (a missing slice leaves a gap of twice the others; a
+  // sweep found the first slice off the line named instead).
+  const double mean_gap = (slices.back().along - slices.front().along) / static_cast<double>(n - 1);
+  const auto gap = [&](size_t k) { return slices[k + 1].along - slices[k].along; };
+  size_t worst = 0;
+  for (size_t k = 1; k + 1 < n; ++k) {
+    if (std::abs(gap(k) - mean_gap) > std::abs(gap(worst) - mean_gap)) worst = k;
+  }
+  if (std::abs(gap(worst) - mean_gap) > kPositionTolerance * mean_gap) {
+    return series_error(
+        path,
+        absl::StrCat("DICOM slice spacing is uneven: ", FileName(slices[worst].file), " and ",
+                     FileName(slices[worst + 1].file), " are ", absl::StrFormat("%.4g", gap(worst)),
+                     " mm apart along the slice normal, where the series averages ",
+                     absl::StrFormat("%.4g", mean_gap),
+                     " mm (a missing slice, or a series of varying spacing; dcm2niix can "
+                     "resample it)"));
+  }
+  // The positions must also lie on one line: an in-plane drift (a gantry tilt) makes a sheared
+  // grid only when it is the same from slice to slice.
   for (size_t k = 1; k + 1 < n; ++k) {
     const Vec& p = *slices[k].image.position;
     Vec off;
     for (int a = 0; a < 3; ++a) off[a] = p[a] - (p0[a] + static_cast<double>(k) * step[a]);
     if (Norm(off) > kPositionTolerance * step_length) {
-      return FileError(
-          path,
-          absl::StrCat("DICOM slice spacing is uneven: ", FileName(slices[k].file), " lies ",
-                       absl::StrFormat("%.4g", Norm(off)), " mm from where an even spacing of ",
-                       absl::StrFormat("%.4g", step_length), " mm puts slice ", k + 1, " of ", n,
-                       " (a missing slice, or a series of varying spacing; dcm2niix "
-                       "can resample it)"));
+      return series_error(
+          path, absl::StrCat("DICOM slice positions do not lie on one line: ",
+                             FileName(slices[k].file), " lies ", absl::StrFormat("%.4g", Norm(off)),
+                             " mm off the line through the first and last slices (a varying "
+                             "gantry tilt, or a mixed series)"));
     }
   }
 
@@ -440,10 +508,22 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   }
   absl::StatusOr<VolumeFile> volume = PlaceOnGrid(path, affine, dims, type, std::move(data));
   if (!volume.ok()) return volume.status();
-  if (not_dicom > 0 || no_image > 0) {
-    volume->warnings.push_back(absl::StrCat(directory, ": skipped ", not_dicom,
-                                            " files that are not DICOM and ", no_image,
-                                            " DICOM files without an image"));
+  std::vector<std::string> skipped;
+  if (not_dicom > 0) skipped.push_back(absl::StrCat(not_dicom, " files that are not DICOM"));
+  if (no_image > 0) skipped.push_back(absl::StrCat(no_image, " DICOM files without an image"));
+  if (duplicates > 0) {
+    skipped.push_back(absl::StrCat(duplicates, " duplicate images (the same SOP Instance UID)"));
+  }
+  if (unreadable > 0) {
+    skipped.push_back(
+        absl::StrCat(unreadable, " files that could not be read (e.g. ", first_unreadable, ")"));
+  }
+  if (!compressed.empty()) {
+    skipped.push_back(
+        absl::StrCat("the compressed images of ", compressed.size(), " other series"));
+  }
+  if (!skipped.empty()) {
+    volume->warnings.push_back(absl::StrCat(directory, ": skipped ", absl::StrJoin(skipped, ", ")));
   }
   return volume;
 }

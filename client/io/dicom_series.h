@@ -10,10 +10,13 @@ namespace tetrefine::io {
 // Reads a DICOM series (CT, MR, PET, SPECT slices as scanners and PACS export them) as one
 // volume. `path` is either a directory, whose files (not its subdirectories) must hold one
 // series, or one file of a series, which selects the files of its directory that share its
-// Series Instance UID (0020,000E). Files without the DICOM magic (notes, .DS_Store) and DICOM
-// files without an image (a DICOMDIR, a report) are skipped, and a warning counts them.
+// Series Instance UID (0020,000E). Files without the DICOM magic (notes, .DS_Store), DICOM
+// files without an image (a DICOMDIR, a report), second copies of an image (the same SOP
+// Instance UID), compressed images of other series and files that cannot be parsed are skipped,
+// and a warning counts them (a file that was a slice of the series leaves a gap, refused below).
 //
-// Geometry, as dcm2niix and ITK place a series: the slices are sorted by their Image Position
+// Geometry, by the DICOM formula (as ITK places a series, and dcm2niix an untilted one): the
+// slices are sorted by their Image Position
 // (Patient) along the normal of their common Image Orientation (Patient), never by file name or
 // Instance Number. Sample (i, j, k) is column i, row j of the k-th slice, at
 //   IPP_0 + i * row_direction * column_spacing + j * column_direction * row_spacing + k * step,

@@ -1,5 +1,7 @@
 #include "client/io/read_volume.h"
 
+#include <filesystem>
+
 #include "absl/strings/match.h"
 #include "client/io/dicom_series.h"
 #include "client/io/io_error.h"
@@ -27,6 +29,12 @@ absl::StatusOr<VolumeFile> ReadVolume(const std::string& path) {
   // A DICOM series: its directory, or one of its files (.dcm, or named by the scanner without an
   // extension and recognised by the magic).
   if (IsDicomPath(path)) return ReadDicomSeries(path);
+  // A mistyped series directory has no extension either: say it is missing (a sweep got
+  // "unknown extension" for one).
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    return FileError(path, "cannot open: No such file or directory");
+  }
   return FileError(path,
                    "unknown extension for a volume: expected .nii, .nii.gz, .hdr, .nrrd, .nhdr, "
                    ".mha, .mhd, .vti, .pvti, .vtk, or a DICOM series (its directory or one of "

@@ -84,6 +84,7 @@ struct SliceSpec {
   std::string transfer_syntax;  // empty: the one explicit_vr says
   std::string media_class = "1.2.840.10008.5.1.4.1.1.2";
   std::string series = "1.2.826.0.1.3680043.2.1";
+  std::string sop_instance;  // (0008,0018); empty: not written
   std::array<double, 3> position = {0, 0, 0};
   std::array<double, 6> orientation = {1, 0, 0, 0, 1, 0};
   std::array<double, 2> spacing = {0.8, 0.5};  // between rows, between columns
@@ -109,6 +110,7 @@ std::string SliceFile(const SliceSpec& s) {
   std::string file(128, '\0');
   file += "DICM";
   file += Element(true, 0x0002, 0x0000, "UL", U32(static_cast<uint32_t>(meta.size()))) + meta;
+  if (!s.sop_instance.empty()) file += Element(ex, 0x0008, 0x0018, "UI", s.sop_instance);
   file += Element(ex, 0x0008, 0x0060, "CS", "CT");
   file += s.before_image;
   file += Element(ex, 0x0020, 0x000E, "UI", s.series);
@@ -196,6 +198,7 @@ std::vector<SliceSpec> Series(const SliceSpec& base, int count, double step,
     for (int a = 0; a < 3; ++a)
       s.position[a] = base.position[a] + k * (step * normal[a] + drift[a]);
     s.pixels = Pixels16(SliceValues(s, k));
+    s.sop_instance = absl::StrCat(base.series, ".", k + 1);
     slices.push_back(s);
   }
   return slices;
@@ -425,7 +428,7 @@ TEST(IoDicomTest, OtherFilesAreSkippedWithAWarning) {
   ASSERT_TRUE(read.ok()) << read.status();
   ExpectSeries(read->volume, slices);
   ASSERT_EQ(read->warnings.size(), 1u);
-  EXPECT_NE(read->warnings[0].find("skipped 1 files that are not DICOM and 2 DICOM files "
+  EXPECT_NE(read->warnings[0].find("skipped 1 files that are not DICOM, 2 DICOM files "
                                    "without an image"),
             std::string::npos)
       << read->warnings[0];
@@ -439,14 +442,16 @@ TEST(IoDicomTest, BrokenSeriesAreRefusedNamingTheProblem) {
     std::string expected;
   };
   const std::vector<Case> cases = {
-      {"a missing slice", [](auto& s) { s.erase(s.begin() + 2); }, "slice spacing is uneven"},
+      {"a missing slice", [](auto& s) { s.erase(s.begin() + 2); },
+       "slice spacing is uneven: IM10_3 and IM6_2 are 2.5 mm apart along the slice normal, where "
+       "the series averages 1.667 mm"},
+      {"a slice off the line", [](auto& s) { s[2].position[0] += 0.5; },
+       "do not lie on one line: IM6_3 lies 0.5 mm off the line"},
       {"two slices at one position", [](auto& s) { s[3].position = s[2].position; },
        "lie at the same position"},
       {"a single slice", [](auto& s) { s.resize(1); }, "single slice"},
       {"JPEG 2000", [](auto& s) { s[1].transfer_syntax = "1.2.840.10008.1.2.4.90"; },
        "1.2.840.10008.1.2.4.90 (JPEG 2000 lossless) is not read"},
-      {"big endian", [](auto& s) { s[0].transfer_syntax = "1.2.840.10008.1.2.2"; },
-       "explicit VR big endian"},
       {"multi-frame", [](auto& s) { s[0].frames = 40; }, "holds 40 frames"},
       {"colour", [](auto& s) { s[2].samples = 3; }, "colour images are not read"},
       {"no position", [](auto& s) { s[1].with_position = false; },
@@ -488,6 +493,76 @@ TEST(IoDicomTest, BrokenSeriesAreRefusedNamingTheProblem) {
     EXPECT_NE(read.status().message().find(c.expected), std::string::npos) << read.status();
     EXPECT_NE(read.status().message().find(dir.path()), std::string::npos) << read.status();
   }
+}
+
+// Found by a sweep: a valid series was refused for its neighbours (a JPEG dose screen of
+// another series, a truncated copy, a big-endian file), an anonymiser's empty Rescale Slope and
+// Intercept were refused as numbers, and a slice exported twice was called a second volume. Now
+// the series reads, the warning says what was skipped, and file bytes in messages are escaped.
+TEST(IoDicomTest, NeighboursDuplicatesAndEmptyValuesDoNotStopASeries) {
+  ScratchDir dir;
+  SliceSpec base;
+  base.rescale = {{1.0, 0.0}};
+  std::vector<SliceSpec> slices = Series(base, 4, 1.5);
+  const std::string d = dir.File("study");
+  WriteSeries(d, slices);
+  // Empty Rescale Slope and Intercept: absent, so the samples keep their integer type.
+  for (size_t k = 0; k < slices.size(); ++k) {
+    std::string bytes = SliceFile(slices[k]);
+    for (const std::string& number : {std::string("0 "), std::string("1 ")}) {
+      for (const bool ex : {true}) {
+        (void)ex;
+        const std::string tag = U16(0x0028) + U16(number == "0 " ? 0x1052 : 0x1053);
+        const size_t at = bytes.find(tag + "DS");
+        ASSERT_NE(at, std::string::npos);
+        bytes.replace(at, 10, tag + "DS" + U16(2) + "  ");
+      }
+    }
+    WriteBytes(absl::StrCat(d, "/IM", (k * 7 + 3) % 11, "_", slices.size() - k), bytes);
+  }
+  WriteBytes(d + "/IM3_4 (1)", SliceFile(slices[0]));  // a duplicate: same SOP Instance UID
+  SliceSpec screen = base;
+  screen.series = "1.2.826.0.1.3680043.2.77";
+  screen.transfer_syntax = "1.2.840.10008.1.2.4.50";
+  WriteBytes(d + "/zz_dose_screen.dcm", SliceFile(screen));
+  WriteBytes(d + "/zz_truncated.dcm", SliceFile(screen).substr(0, 300));
+  SliceSpec big_endian = base;
+  big_endian.transfer_syntax = "1.2.840.10008.1.2.2";
+  WriteBytes(d + "/zz_big_endian.dcm", SliceFile(big_endian));
+  for (const std::string& path : {d, d + "/IM3_4"}) {
+    SCOPED_TRACE(path);
+    absl::StatusOr<VolumeFile> read = ReadVolume(path);
+    ASSERT_TRUE(read.ok()) << read.status();
+    EXPECT_EQ(read->volume.type(), VoxelType::kInt16);
+    ExpectSeries(read->volume, slices);
+    ASSERT_EQ(read->warnings.size(), 1u);
+    for (const char* text :
+         {"1 duplicate images (the same SOP Instance UID)", "2 files that could not be read"}) {
+      EXPECT_NE(read->warnings[0].find(text), std::string::npos) << read->warnings[0];
+    }
+    // A named file reads only its own series: the other series' images are not looked at.
+    EXPECT_EQ(
+        read->warnings[0].find("the compressed images of 1 other series") != std::string::npos,
+        path == d)
+        << read->warnings[0];
+  }
+  // The dose screen named itself is refused as compressed.
+  const absl::StatusOr<VolumeFile> screen_read = ReadVolume(d + "/zz_dose_screen.dcm");
+  ASSERT_FALSE(screen_read.ok());
+  EXPECT_NE(screen_read.status().message().find("(JPEG baseline) is not read"), std::string::npos)
+      << screen_read.status();
+  // A terminal escape in a value is escaped in the message.
+  SliceSpec hostile;
+  hostile.before_image = Element(true, 0x0018, 0x0050, "DS", "1");
+  std::string bytes = SliceFile(hostile);
+  const std::string position = Decimals({0, 0, 0});
+  const size_t at = bytes.find(position);
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, 1, "\x1b");
+  const absl::StatusOr<DicomImage> image = ParseDicomFile(bytes, "hostile.dcm");
+  ASSERT_FALSE(image.ok());
+  EXPECT_EQ(image.status().message().find('\x1b'), std::string::npos) << image.status();
+  EXPECT_NE(image.status().message().find("\\x1b"), std::string::npos) << image.status();
 }
 
 TEST(IoDicomTest, MalformedDataSetsAreErrorsNeverReadsOutside) {

@@ -257,16 +257,21 @@ TEST(IoMetaImageTest, ObliqueTransformMatrixBecomesTheDirection) {
 }
 
 TEST(IoReadVolumeTest, UnknownExtensionNamesTheFile) {
-  for (const char* name : {"scan.jpg", "volume.tif", "noextension"}) {
+  ScratchDir dir;
+  for (const std::string& name :
+       {dir.File("scan.jpg"), dir.File("volume.tif"), dir.File("noextension")}) {
+    WriteBytes(name, "not a volume");
     const absl::Status status = ReadVolume(name).status();
     EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
     EXPECT_THAT(std::string(status.message()), HasSubstr(name));
     EXPECT_THAT(std::string(status.message()), HasSubstr("unknown extension"));
   }
   // A .dcm is read as one file of a DICOM series (tests/io/dicom_test.cc): a missing one is
-  // named.
+  // named; so is a missing path without an extension (a mistyped series directory).
   EXPECT_THAT(std::string(ReadVolume("missing-scan.dcm").status().message()),
               HasSubstr("missing-scan.dcm"));
+  EXPECT_THAT(std::string(ReadVolume(dir.File("no_such_series")).status().message()),
+              HasSubstr("no_such_series: cannot open: No such file or directory"));
 }
 
 // A device never ends: /dev/zero behind a volume or mesh name grew memory without bound until
