@@ -72,6 +72,9 @@ constexpr std::pair<absl::string_view, absl::string_view> kFlagOfField[] = {
     {"lattice_n", "lattice-n"},
     {"lattice_max_tets", "lattice-max-tets"},
     {"quality_reference", "quality-reference"},
+    {"lattice_seed", "lattice-seed"},
+    {"min_edge_length", "min-edge-length"},
+    {"min_quality", "min-quality"},
 };
 
 absl::Status AsFlagError(const absl::Status& status) {
@@ -114,6 +117,24 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
     absl::StatusOr<double> x = ParseFiniteDouble("quality-reference", *text);
     if (!x.ok()) return x.status();
     s->options.refine.quality_reference = *x;
+  }
+  // The request's other fields, which Python and the wire had and the command line did not (a
+  // sweep could not reproduce such a Python run from the CLI).
+  if (auto text = args.Get("lattice-seed")) {
+    absl::StatusOr<int64_t> n =
+        ParseInteger("lattice-seed", *text, 0, std::numeric_limits<int64_t>::max());
+    if (!n.ok()) return n.status();
+    s->options.refine.lattice_seed = static_cast<uint64_t>(*n);
+  }
+  if (auto text = args.Get("min-edge-length")) {
+    absl::StatusOr<double> x = ParseFiniteDouble("min-edge-length", *text);
+    if (!x.ok()) return x.status();
+    s->options.refine.min_edge_length = *x;
+  }
+  if (auto text = args.Get("min-quality")) {
+    absl::StatusOr<double> x = ParseFiniteDouble("min-quality", *text);
+    if (!x.ok()) return x.status();
+    s->options.refine.min_quality = *x;
   }
   if (auto text = args.Get("threads")) {
     absl::StatusOr<int64_t> n = ParseInteger("threads", *text, 0, 4096);
@@ -246,8 +267,11 @@ absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const
         return std::find(t.begin(), t.end(), static_cast<uint32_t>(out)) != t.end();
       });
       return absl::InvalidArgumentError(absl::StrCat(
-          s.mesh_path, ": vertex ", out, " at (", p[0], ", ", p[1], ", ", p[2],
-          ") lies outside the volume ", s.volume_path, " (", where, "); ",
+          s.mesh_path, ": vertex ", out, " at ",
+          // Ten digits: with six, a vertex just outside a grid far from the origin (1e7 mm)
+          // printed like the box limit it breaks (a CLI sweep).
+          absl::StrFormat("(%.10g, %.10g, %.10g)", p[0], p[1], p[2]), " lies outside the volume ",
+          s.volume_path, " (", where, "); ",
           used ? "use --fit-mesh-to-volume to place the mesh inside it, or --clamp"
                : "no tet uses it: remove the unused vertices from the mesh, or use --clamp"));
     }
@@ -739,6 +763,16 @@ const CommandSpec& RefineSpec() {
                      "); N above the output's tets checks every tet; with --server, within "
                      "that server's cap on sampled points (tetrefine_server "
                      "--max_lattice_points, 2e8 by default: 1.2 M tets at --lattice-n 8)")},
+                {"lattice-seed", "N",
+                 absl::StrCat("seed of the lattice check's sample (default ",
+                              RefineOptions{}.lattice_seed, ")")},
+                {"min-edge-length", "MM",
+                 "edges shorter than this (world units) are never split (default 1/64 of the "
+                 "smallest voxel spacing; 0 disables the guard)"},
+                {"min-quality", "Q",
+                 absl::StrCat("an iteration that would make a tet of mean-ratio quality below Q is "
+                              "not applied (stop reason quality_floor); in [0, 1), default ",
+                              RefineOptions{}.min_quality)},
                 {"output", "FILE",
                  "refined mesh, .vtu .vtk .msh .mesh .meshb .ele, or .pvtu with --shards (default "
                  "<mesh name>.refined.vtu "

@@ -472,3 +472,20 @@ def test_lattice_and_guard_options(server, cli_binary, tmp_path):
     # quality floor of 0.9 refuses the first iteration.
     assert len(guarded.tets) < len(result.tets)
     assert floored.stop_reason == "quality_floor" and len(floored.tets) == len(mesh.tets)
+
+    # The CLI has the same options: a run with all of them equals Python's.
+    guarded_cli = tmp_path / "guarded.vtu"
+    run_cli(cli_binary, "refine", "--server", server.target, "--volume", EXAMPLE_VOLUME,
+            "--mesh", EXAMPLE_MESH, "--fit-mesh-to-volume", "--epsilon", "0.1", "--quiet",
+            "--lattice-n", "5", "--lattice-max-tets", "300", "--lattice-seed", "7",
+            "--min-edge-length", "8", "--min-quality", "0.001", "--max-iterations", "4",
+            "--output", str(guarded_cli))
+    with tetrefine.Client(server.target) as client:
+        same = client.refine(*args, lattice_n=5, lattice_max_tets=300, lattice_seed=7,
+                             min_edge_length=8.0, min_quality=0.001, max_iterations=4)
+    assert_same_as_cli_output(same, guarded_cli)
+    refused = subprocess.run([cli_binary, "refine", "--volume", EXAMPLE_VOLUME, "--mesh",
+                              EXAMPLE_MESH, "--fit-mesh-to-volume", "--epsilon", "0.1",
+                              "--min-quality", "2", "--output", str(tmp_path / "x.vtu")],
+                             capture_output=True, text=True, timeout=60)
+    assert refused.returncode == 2 and "--min-quality" in refused.stderr, refused.stderr
