@@ -459,9 +459,8 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   const VoxelType stored = StoredType(first);
   const bool scaled = !one_scaling || first.rescale_slope != 1.0 || first.rescale_intercept != 0.0;
   // Scaled values of one scaling go through DecodeVoxels (float32 for at most 16 bits, as a
-  // NIfTI with scl_slope reads); per-slice scalings (PET) and wide samples are float64.
-  const bool to_float64 = !one_scaling || (scaled && stored == VoxelType::kFloat64) ||
-                          (scaled && first.bits_allocated == 32);
+  // NIfTI with scl_slope reads); per-slice scalings (PET) and scaled 32-bit samples are float64.
+  const bool to_float64 = !one_scaling || (scaled && first.bits_allocated == 32);
   const VoxelType gathered = to_float64 ? VoxelType::kFloat64 : stored;
   std::vector<std::byte> data(per_slice * n * VoxelSize(gathered));
   for (size_t k = 0; k < n; ++k) {
