@@ -259,19 +259,65 @@ absl::StatusOr<std::array<double, n>> Decimals(absl::string_view value, absl::st
 
 }  // namespace
 
-bool HasDicomMagic(absl::string_view bytes) {
-  return bytes.size() >= 132 && bytes.substr(128, 4) == "DICM";
+namespace {
+
+// Whether the two bytes at `at` are a value representation of PS3.5 6.2 (explicit VR).
+bool IsVr(absl::string_view bytes, size_t at) {
+  static constexpr const char* kVrs[] = {"AE", "AS", "AT", "CS", "DA", "DS", "DT", "FD", "FL",
+                                         "IS", "LO", "LT", "OB", "OD", "OF", "OL", "OV", "OW",
+                                         "PN", "SH", "SL", "SQ", "SS", "ST", "SV", "TM", "UC",
+                                         "UI", "UL", "UN", "UR", "US", "UT", "UV"};
+  if (at + 2 > bytes.size()) return false;
+  for (const char* v : kVrs) {
+    if (bytes[at] == v[0] && bytes[at + 1] == v[1]) return true;
+  }
+  return false;
 }
 
+// How a file's data set begins (PS3.10 7.1, and what older software wrote without it).
+enum class Framing {
+  kNone,       // not recognised as DICOM
+  kPart10,     // a 128-byte preamble, "DICM", the file meta group
+  kMetaFirst,  // the file meta group without the preamble and "DICM"
+  kBare,       // the data set alone, no file meta: its transfer syntax is inferred
+};
+
+// The first element decides. A data set written without its file meta information (ACR-NEMA
+// era archives, some research exporters; pydicom and dcm2niix read these too) starts at group
+// 0008 with a low element number (group length, character set, image type, SOP class); its
+// syntax is explicit VR when a value representation follows the tag, else implicit VR with a
+// 32-bit length that must fit in the file. Other binary files are unlikely to pass all of
+// these, and one that does is refused by the parser with the element it stopped at.
+Framing FramingOf(absl::string_view bytes) {
+  if (bytes.size() >= 132 && bytes.substr(128, 4) == "DICM") return Framing::kPart10;
+  if (bytes.size() < 8) return Framing::kNone;
+  const uint16_t group = U16(bytes, 0), element = U16(bytes, 2);
+  if (group == 0x0002 && element <= 0x0002 && IsVr(bytes, 4)) return Framing::kMetaFirst;
+  if (group != 0x0008 || element > 0x00FF) return Framing::kNone;
+  if (IsVr(bytes, 4)) return Framing::kBare;
+  const uint32_t length = U32(bytes, 4);
+  return length % 2 == 0 && length <= bytes.size() - 8 ? Framing::kBare : Framing::kNone;
+}
+
+}  // namespace
+
+bool HasDicomMagic(absl::string_view bytes) { return FramingOf(bytes) != Framing::kNone; }
+
 absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_view path) {
-  if (!HasDicomMagic(bytes)) {
-    return FileError(path, "not a DICOM file: no \"DICM\" after a 128-byte preamble");
+  const Framing framing = FramingOf(bytes);
+  if (framing == Framing::kNone) {
+    return FileError(path,
+                     "not a DICOM file: no \"DICM\" after a 128-byte preamble, and it does not "
+                     "start with a file meta (0002,xxxx) or a group 0008 element");
   }
   DataSetParser parser(bytes, path);
   DicomImage image;
-  uint64_t pos = 132;
+  uint64_t pos = framing == Framing::kPart10 ? 132 : 0;
+  if (framing == Framing::kBare) {
+    image.transfer_syntax = std::string(IsVr(bytes, 4) ? kExplicitLittle : kImplicitLittle);
+  }
   // The file meta information (group 0002) is always explicit VR little endian.
-  while (pos + 2 <= bytes.size() && U16(bytes, pos) == 0x0002) {
+  while (framing != Framing::kBare && pos + 2 <= bytes.size() && U16(bytes, pos) == 0x0002) {
     absl::StatusOr<ElementHeader> h = parser.Header(pos, /*explicit_vr=*/true);
     if (!h.ok()) return h.status();
     if (h->length == kUndefinedLength || h->value + h->length > bytes.size()) {

@@ -47,21 +47,26 @@ struct DicomImage {
   std::string unsupported;
 };
 
-// True when `bytes` start like a DICOM Part 10 file: a 128-byte preamble, then "DICM".
+// True when `bytes` (a file's first 132 bytes suffice) start like a DICOM file: a Part 10
+// file (a 128-byte preamble, then "DICM"), its file meta group without the preamble, or a data
+// set without file meta information that begins at group 0008, as ACR-NEMA-era archives and
+// some exporters write it.
 bool HasDicomMagic(absl::string_view bytes);
 
 // `bytes` from a file for a message: printable ASCII kept, every other byte escaped (\x1b),
 // at most 64 bytes, so that a hostile file cannot write terminal escapes through an error.
 std::string Printable(absl::string_view bytes);
 
-// Parses a DICOM Part 10 file held in `bytes` (which the result's pixel_data points into).
-// Reads the uncompressed little-endian transfer syntaxes (implicit and explicit VR: what
-// scanners and PACS export by default). For the compressed ones (JPEG family, JPEG-LS, JPEG
-// 2000, RLE) the header is read and `unsupported` set; any other syntax (big endian, deflated)
-// is an error naming it and how to convert the file. Errors name `path` and the element (gggg,eeee)
-// where the data set is malformed or truncated. Never reads outside `bytes`; sequences nest at most
-// 32 deep. A value of length zero (as anonymisers leave Rescale Slope and Intercept) counts as
-// absent.
+// Parses a DICOM file held in `bytes` (which the result's pixel_data points into): Part 10, or
+// one of the forms without the preamble that HasDicomMagic accepts; without file meta, the
+// transfer syntax is little endian, explicit VR when the first element has a value
+// representation, else implicit. Reads the uncompressed little-endian transfer syntaxes
+// (implicit and explicit VR: what scanners and PACS export by default). For the compressed ones
+// (JPEG family, JPEG-LS, JPEG 2000, RLE) the header is read and `unsupported` set; any other syntax
+// (big endian, deflated) is an error naming it and how to convert the file. Errors name `path` and
+// the element (gggg,eeee) where the data set is malformed or truncated. Never reads outside
+// `bytes`; sequences nest at most 32 deep. A value of length zero (as anonymisers leave Rescale
+// Slope and Intercept) counts as absent.
 absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_view path);
 
 }  // namespace tetrefine::io

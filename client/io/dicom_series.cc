@@ -84,12 +84,12 @@ absl::StatusOr<std::vector<std::string>> FilesIn(const std::string& directory) {
   return files;
 }
 
-// Whether the file starts with the DICOM magic, reading only its first 132 bytes.
+// Whether the file starts like DICOM (HasDicomMagic), reading only its first 132 bytes.
 bool FileHasDicomMagic(const std::string& file) {
   std::ifstream in(file, std::ios::binary);
   char head[132];
-  if (!in.read(head, sizeof(head))) return false;
-  return HasDicomMagic(absl::string_view(head, sizeof(head)));
+  in.read(head, sizeof(head));
+  return HasDicomMagic(absl::string_view(head, static_cast<size_t>(in.gcount())));
 }
 
 // Checks that `s` matches the series' first slice in everything that shapes the grid.
@@ -326,15 +326,14 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
       if (entry.is_directory(kind_ec)) has_subdirectories = true;
     }
     return FileError(
-        path, absl::StrCat("no DICOM image found (", files->size(), " files: ", not_dicom,
-                           " without a DICOM Part 10 header (\"DICM\" at byte 128; convert files "
-                           "written without one with dcm2niix), ",
-                           no_image, " without an image, ", unreadable, " unreadable",
-                           unreadable == 0 ? "" : absl::StrCat(", e.g. ", first_unreadable), ")",
-                           has_subdirectories
-                               ? "; subdirectories are not searched: name the directory of one "
-                                 "series, or one of its files"
-                               : ""));
+        path,
+        absl::StrCat("no DICOM image found (", files->size(), " files: ", not_dicom, " not DICOM, ",
+                     no_image, " without an image, ", unreadable, " unreadable",
+                     unreadable == 0 ? "" : absl::StrCat(", e.g. ", first_unreadable), ")",
+                     has_subdirectories
+                         ? "; subdirectories are not searched: name the directory of one "
+                           "series, or one of its files"
+                         : ""));
   }
   if (series.size() > 1) {
     std::string list;

@@ -79,7 +79,11 @@ std::string UndefinedSequence(bool explicit_vr, uint16_t group, uint16_t element
   return out + U16(0xFFFE) + U16(0xE0DD) + U32(0);
 }
 
+// How a file begins: Part 10, or the two forms without the preamble older software writes.
+enum class Framing { kPart10, kMetaWithoutPreamble, kDataSetOnly };
+
 struct SliceSpec {
+  Framing framing = Framing::kPart10;
   bool explicit_vr = true;
   std::string transfer_syntax;  // empty: the one explicit_vr says
   std::string media_class = "1.2.840.10008.5.1.4.1.1.2";
@@ -107,9 +111,11 @@ std::string SliceFile(const SliceSpec& s) {
                      Element(true, 0x0002, 0x0002, "UI", s.media_class) +
                      Element(true, 0x0002, 0x0003, "UI", "1.2.3.4.5") +
                      Element(true, 0x0002, 0x0010, "UI", ts);
-  std::string file(128, '\0');
-  file += "DICM";
-  file += Element(true, 0x0002, 0x0000, "UL", U32(static_cast<uint32_t>(meta.size()))) + meta;
+  std::string file;
+  if (s.framing == Framing::kPart10) file = std::string(128, '\0') + "DICM";
+  if (s.framing != Framing::kDataSetOnly) {
+    file += Element(true, 0x0002, 0x0000, "UL", U32(static_cast<uint32_t>(meta.size()))) + meta;
+  }
   if (!s.sop_instance.empty()) file += Element(ex, 0x0008, 0x0018, "UI", s.sop_instance);
   file += Element(ex, 0x0008, 0x0060, "CS", "CT");
   file += s.before_image;
@@ -265,6 +271,48 @@ TEST(IoDicomTest, ImplicitVrAndNestedSequencesReadTheSame) {
     ASSERT_TRUE(read.ok()) << read.status();
     ExpectSeries(read->volume, slices);
   }
+}
+
+// Files without the 128-byte preamble and "DICM" (ACR-NEMA-era archives, some exporters),
+// with or without their file meta group; without it the syntax is inferred from the first
+// element. Each form, with either VR, reads as the Part 10 series does.
+TEST(IoDicomTest, FilesWithoutPreambleReadTheSame) {
+  for (const Framing framing : {Framing::kMetaWithoutPreamble, Framing::kDataSetOnly}) {
+    for (const bool explicit_vr : {true, false}) {
+      for (const bool with_uid : {true, false}) {
+        SCOPED_TRACE(
+            absl::StrCat(framing == Framing::kDataSetOnly ? "data set only" : "no preamble",
+                         explicit_vr ? ", explicit VR" : ", implicit VR",
+                         with_uid ? "" : ", first element (0008,0060)"));
+        ScratchDir dir;
+        SliceSpec base;
+        base.framing = framing;
+        base.explicit_vr = explicit_vr;
+        std::vector<SliceSpec> slices = Series(base, 3, 2.0);
+        if (!with_uid) {
+          for (SliceSpec& slice : slices) slice.sop_instance.clear();
+        }
+        WriteSeries(dir.File("old"), slices);
+        absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("old"));
+        ASSERT_TRUE(read.ok()) << read.status();
+        ExpectSeries(read->volume, slices);
+        EXPECT_TRUE(read->warnings.empty());
+        // One file names its series, recognised without an extension.
+        read = ReadVolume(dir.File("old/IM3_3"));
+        ASSERT_TRUE(read.ok()) << read.status();
+        ExpectSeries(read->volume, slices);
+      }
+    }
+  }
+  // Other binary files beside a series are still told apart and skipped.
+  ScratchDir dir;
+  WriteSeries(dir.File("s"), Series(SliceSpec{}, 3, 1.0));
+  WriteBytes(dir.File("s/notes.bin"),
+             std::string("\x08\x00\x10\x00\xff\xff\xff\x7f", 8) + std::string(100, 'x'));
+  const absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("s"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  ASSERT_EQ(read->warnings.size(), 1u);
+  EXPECT_NE(read->warnings[0].find("1 file"), std::string::npos) << read->warnings[0];
 }
 
 TEST(IoDicomTest, ObliqueAndTiltedSeriesKeepTheirWorldPositions) {
@@ -637,7 +685,7 @@ constexpr char kWriteSeries[] = R"PY(
 import sys, numpy as np
 from pydicom.dataset import FileDataset, FileMetaDataset
 from pydicom.uid import ExplicitVRLittleEndian, ImplicitVRLittleEndian, generate_uid
-out, oblique = sys.argv[1], sys.argv[2] == "1"
+out, oblique, bare = sys.argv[1], sys.argv[2] == "1", sys.argv[3] == "1"
 rng = np.random.default_rng(11)
 rows, cols, n = 13, 9, 6
 r, c = np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
@@ -670,18 +718,20 @@ for k in rng.permutation(n):
     ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 16, 15, 1
     ds.RescaleIntercept, ds.RescaleSlope = -1024, 1
     ds.PixelData = volume[k].tobytes()
-    ds.save_as(name, write_like_original=False)
+    if bare:  # the data set alone, as ACR-NEMA-era archives hold it
+        ds.preamble, ds.file_meta = None, FileMetaDataset()
+    ds.save_as(name, write_like_original=bare)
 )PY";
 
 TEST(IoDicomTest, SeriesMatchDcm2niixVoxelForVoxel) {
   if (!HavePydicomAndDcm2niix()) GTEST_SKIP() << "python3-pydicom or dcm2niix is not installed";
-  for (const bool oblique : {false, true}) {
-    SCOPED_TRACE(oblique ? "oblique" : "axial");
+  for (const auto& [oblique, bare] : {std::pair{false, false}, {true, false}, {false, true}}) {
+    SCOPED_TRACE(absl::StrCat(oblique ? "oblique" : "axial", bare ? ", without file meta" : ""));
     ScratchDir dir;
     const std::string series = dir.File("series");
     std::filesystem::create_directories(series);
-    const testing::ProcessResult wrote =
-        testing::RunProcess({kPython, "-c", kWriteSeries, series, oblique ? "1" : "0"});
+    const testing::ProcessResult wrote = testing::RunProcess(
+        {kPython, "-c", kWriteSeries, series, oblique ? "1" : "0", bare ? "1" : "0"});
     ASSERT_EQ(wrote.exit_code, 0) << wrote.out << wrote.err;
     const testing::ProcessResult converted = testing::RunProcess(
         {"/usr/bin/dcm2niix", "-z", "y", "-f", "converted", "-o", dir.path(), series});
