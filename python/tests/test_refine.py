@@ -139,6 +139,72 @@ def test_certify_labels_and_parents(server):
     assert plain.certified_max_error is None and plain.parent is None
 
 
+def test_on_mesh_streams_every_iterations_mesh(server):
+    """on_mesh gets each iteration's mesh after its statistics: as many tets as they say, the
+    input's volume and each region's, labels following the tets, and the last one equal to the
+    result."""
+    data = smooth_volume((13, 11, 9))
+    points, tets = box_mesh((0.5, 0.5, 0.5), (11.5, 9.5, 7.5), (3, 3, 2))
+    labels = np.arange(len(tets)) % 2 + 4
+    events = []
+
+    def volumes(p, t):
+        a, b, c, d = (p[t[:, k]] for k in range(4))
+        return np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) / 6.0
+
+    region_volumes = np.bincount(labels, weights=volumes(points, tets))
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(data, (1, 1, 1), (0, 0, 0), points, tets, 0.02, labels=labels,
+                               on_iteration=lambda stats: events.append(stats),
+                               on_mesh=lambda mesh: events.append(mesh))
+        plain = client.refine(data, (1, 1, 1), (0, 0, 0), points, tets, 0.02, labels=labels)
+    assert len(result.iterations) >= 2
+    assert len(events) == 2 * len(result.iterations)
+    for k, stats in enumerate(result.iterations):
+        assert events[2 * k] is stats
+        mesh = events[2 * k + 1]
+        assert isinstance(mesh, tetrefine.IterationMesh)
+        assert mesh.iteration == stats.iteration == k + 1
+        assert len(mesh.tets) == stats.final_tets
+        assert mesh.tets.dtype == np.int64 and mesh.tets.shape[1] == 4
+        assert len(mesh.values) == len(mesh.points) and len(mesh.labels) == len(mesh.tets)
+        v = volumes(mesh.points, mesh.tets)
+        assert (v > 0).all()
+        np.testing.assert_allclose(np.bincount(mesh.labels, weights=v), region_volumes,
+                                   rtol=1e-12)
+    last = events[-1]
+    np.testing.assert_array_equal(last.points, result.points)
+    np.testing.assert_array_equal(last.tets, result.tets)
+    np.testing.assert_array_equal(last.values, result.values)
+    np.testing.assert_array_equal(last.labels, result.labels)
+    # Streaming changes nothing in the result.
+    np.testing.assert_array_equal(plain.tets, result.tets)
+    np.testing.assert_array_equal(plain.points, result.points)
+    assert [s.as_dict() | {"seconds": 0} for s in plain.iterations] == \
+        [s.as_dict() | {"seconds": 0} for s in result.iterations]
+
+
+def test_on_mesh_raising_cancels_the_call_and_must_be_callable(own_server):
+    volume, points, tets = _heavy_input()
+    seen = []
+
+    def stop(mesh):
+        seen.append(mesh.iteration)
+        raise Stop()
+
+    with tetrefine.Client(own_server.target) as client:
+        with pytest.raises(Stop):
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01, max_iterations=16,
+                          on_mesh=stop)
+        assert seen == [1]
+        lines = own_server.wait_for_refine_lines(1)
+        assert len(lines) == 1 and "status=CANCELLED" in lines[0], lines
+        with pytest.raises(tetrefine.TetrefineError) as error:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01, on_mesh="yes")
+    assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    assert "on_mesh" in error.value.details
+
+
 def test_volume_axes_are_x_y_z(server):
     """On a volume linear along one axis the vertex values are that coordinate: any axis or
     memory-order mix-up would give another axis's coordinate."""

@@ -13,12 +13,13 @@ from tetrefine.adapters import (TetMesh, VolumeGrid, fit_to_volume, mesh_from_me
                                 result_to_meshio, volume_from_nibabel)
 from tetrefine.client import Client
 from tetrefine.errors import TetrefineError
-from tetrefine.results import CONFIGURATIONS, IterationStats, Record, RefineResult
+from tetrefine.results import (CONFIGURATIONS, IterationMesh, IterationStats, Record,
+                               RefineResult)
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "CONFIGURATIONS", "Client", "IterationStats", "Record", "RefineResult", "TetMesh",
-    "TetrefineError", "VolumeGrid", "fit_to_volume", "mesh_from_meshio", "result_to_meshio",
-    "volume_from_nibabel",
+    "CONFIGURATIONS", "Client", "IterationMesh", "IterationStats", "Record", "RefineResult",
+    "TetMesh", "TetrefineError", "VolumeGrid", "fit_to_volume", "mesh_from_meshio",
+    "result_to_meshio", "volume_from_nibabel",
 ]

@@ -4,7 +4,7 @@ import grpc
 import numpy as np
 
 from tetrefine.errors import TetrefineError
-from tetrefine.results import IterationStats, Record, RefineResult
+from tetrefine.results import IterationMesh, IterationStats, Record, RefineResult
 
 # Response chunk kind -> (its repeated field, numpy dtype, values per element, mesh array name).
 _CHUNKS = {
@@ -28,6 +28,8 @@ class _MeshParts:
 
     def __init__(self, header, label_kind):
         self.final = header.final
+        self.iteration = header.iteration
+        self.label_count = header.tet_label_count
         self.sizes = {
             "points": header.vertex_count, "values": header.value_count,
             "tets": header.tet_count, "iteration": header.tet_iteration_count,
@@ -60,6 +62,11 @@ class _MeshParts:
         if self.filled[name] > self.sizes[name]:
             raise _broken(f"more {name} than the mesh header's {self.sizes[name]}")
 
+    def complete(self):
+        """Whether every announced element has arrived."""
+        return (self.filled == self.sizes and
+                (self.label_kind is None or self.labels_filled == self.label_count))
+
     def finish(self):
         for name, size in self.sizes.items():
             if self.filled[name] != size:
@@ -76,9 +83,11 @@ class _MeshParts:
 class ResponseReader:
     """Feed responses in order with add(); result() once the stream has ended."""
 
-    def __init__(self, protocol, on_iteration=None):
+    def __init__(self, protocol, on_iteration=None, on_mesh=None, labels_sent=False):
         self.protocol = protocol
         self.on_iteration = on_iteration
+        self.on_mesh = on_mesh
+        self.labels_sent = labels_sent
         self.iterations = []
         self.mesh = None
         self.final = None
@@ -94,7 +103,10 @@ class ResponseReader:
         elif kind == "mesh_header":
             if self.mesh is not None and self.mesh.final:
                 raise _broken("a mesh header after the final mesh")
+            if self.mesh is not None and not self.mesh.complete():
+                self.mesh.finish()  # raises, naming what is missing
             self.mesh = _MeshParts(response.mesh_header, self.protocol.response_labels)
+            self._deliver_if_complete()
         elif kind == "summary":
             self.summary = Record.from_message(response.summary)
         elif kind is None:
@@ -103,6 +115,24 @@ class ResponseReader:
             if self.mesh is None:
                 raise _broken(f"{kind} before any mesh header")
             self.mesh.add(kind, getattr(response, kind))
+            self._deliver_if_complete()
+
+    def _deliver_if_complete(self):
+        # An intermediate mesh goes to on_mesh as soon as its last chunk has arrived, and is
+        # not kept: a long run streams many.
+        mesh = self.mesh
+        if mesh.final or not mesh.complete():
+            return
+        arrays = mesh.finish()
+        self.mesh = None
+        if self.on_mesh is not None:
+            labels = arrays["labels"] if self.labels_sent else None
+            if self.labels_sent and (labels is None or len(labels) != len(arrays["tets"])):
+                raise _broken(f"labels were sent, but {0 if labels is None else len(labels)} "
+                              f"came back for the {len(arrays['tets'])} tets of iteration "
+                              f"{mesh.iteration}'s mesh")
+            self.on_mesh(IterationMesh(mesh.iteration, arrays["points"],
+                                       arrays["tets"].astype(np.int64), arrays["values"], labels))
 
     def result(self, labels_sent):
         if self.summary is None:

@@ -176,7 +176,7 @@ class Client:
 
     def refine(self, volume, spacing, origin, points, tets, epsilon, *, direction=None,
                labels=None, scheme=None, certify=False, max_iterations=None, max_tets=None,
-               on_iteration=None, timeout=None, norm_coeff=None, clamp=False,
+               on_iteration=None, on_mesh=None, timeout=None, norm_coeff=None, clamp=False,
                fix_orientation=False, track_parents=False, quality_reference=None,
                lattice_n=None, lattice_max_tets=None, lattice_seed=None, min_edge_length=None,
                min_quality=None):
@@ -206,6 +206,11 @@ class Client:
           max_tets: stop before an iteration that would exceed this many tets.
           on_iteration: called with each IterationStats as soon as that iteration has finished
             on the server. If it raises, the call is cancelled and the exception propagates.
+          on_mesh: called with each iteration's mesh (an IterationMesh: iteration, points, tets,
+            values, labels) as soon as it has arrived, right after that iteration's
+            on_iteration; the server then streams every iteration's mesh (as the CLI's
+            --every-iteration). The last iteration's mesh comes here too, before the result.
+            Raising cancels the call, as for on_iteration.
           timeout: seconds for the whole call (DEADLINE_EXCEEDED after that); None (or inf):
             no limit.
           norm_coeff: normCoeff of eq. 3 (default: the volume's max - min).
@@ -235,6 +240,9 @@ class Client:
         if on_iteration is not None and not callable(on_iteration):
             raise invalid("on_iteration", "expected a callable taking an IterationStats or None, "
                           f"got {type(on_iteration).__name__}")
+        if on_mesh is not None and not callable(on_mesh):
+            raise invalid("on_mesh", "expected a callable taking an IterationMesh or None, "
+                          f"got {type(on_mesh).__name__}")
         inputs = _requests.Inputs(volume, spacing, origin, points, tets, direction=direction,
                                   labels=labels)
         _requests.check_features(self._protocol, inputs)
@@ -245,13 +253,16 @@ class Client:
             quality_reference=quality_reference, lattice_n=lattice_n,
             lattice_max_tets=lattice_max_tets, lattice_seed=lattice_seed,
             min_edge_length=min_edge_length, min_quality=min_quality)
+        if on_mesh is not None:
+            options.stream_every_iteration = True
         timeout = _timeout(timeout)
         # One deadline for the whole call, the server-info round trip included.
         deadline = None if timeout is None else time.monotonic() + timeout
         chunk_bytes = self._request_chunk_bytes(timeout)
         remaining = None if deadline is None else max(0.0, deadline - time.monotonic())
         stream = _requests.requests(pb, self._protocol, options, inputs, chunk_bytes)
-        reader = ResponseReader(self._protocol, on_iteration)
+        reader = ResponseReader(self._protocol, on_iteration, on_mesh,
+                                labels_sent=inputs.labels is not None)
         try:
             call = self._stub.Refine(stream, timeout=remaining, metadata=self._metadata)
         except ValueError as error:  # grpc's own refusal, e.g. a closed channel
@@ -262,7 +273,7 @@ class Client:
         except grpc.RpcError as error:
             raise TetrefineError.from_rpc_error(error) from None
         except BaseException:
-            # on_iteration raised, or KeyboardInterrupt: stop the server's work too.
+            # on_iteration or on_mesh raised, or KeyboardInterrupt: stop the server's work too.
             call.cancel()
             raise
         return reader.result(labels_sent=inputs.labels is not None)

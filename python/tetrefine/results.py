@@ -80,6 +80,31 @@ class IterationStats(Record):
         return dict(zip(CONFIGURATIONS, self.configuration_counts))
 
 
+class IterationMesh:
+    """The mesh an iteration produced, as refine(on_mesh=...) streams it.
+
+    iteration: the iteration that produced it (1-based).
+    points:    (n, 3) float64 world coordinates.
+    tets:      (m, 4) int64 vertex indices, positively oriented.
+    values:    (n,) float64, the volume's trilinear value at each vertex.
+    labels:    (m,) int32 per-tet labels inherited from the input tets, or None when the call
+               sent no labels.
+    The final mesh is the RefineResult; its per-tet iteration, quality and parent arrays are
+    only there.
+    """
+
+    def __init__(self, iteration, points, tets, values, labels):
+        self.iteration = iteration
+        self.points = points
+        self.tets = tets
+        self.values = values
+        self.labels = labels
+
+    def __repr__(self):
+        return (f"IterationMesh(iteration {self.iteration}: {len(self.points)} vertices, "
+                f"{len(self.tets)} tets)")
+
+
 class RefineResult:
     """The refined mesh and how the refinement went.
 
