@@ -184,27 +184,6 @@ def test_on_mesh_streams_every_iterations_mesh(server):
         [s.as_dict() | {"seconds": 0} for s in result.iterations]
 
 
-def test_on_mesh_raising_cancels_the_call_and_must_be_callable(own_server):
-    volume, points, tets = _heavy_input()
-    seen = []
-
-    def stop(mesh):
-        seen.append(mesh.iteration)
-        raise Stop()
-
-    with tetrefine.Client(own_server.target) as client:
-        with pytest.raises(Stop):
-            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01, max_iterations=16,
-                          on_mesh=stop)
-        assert seen == [1]
-        lines = own_server.wait_for_refine_lines(1)
-        assert len(lines) == 1 and "status=CANCELLED" in lines[0], lines
-        with pytest.raises(tetrefine.TetrefineError) as error:
-            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01, on_mesh="yes")
-    assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
-    assert "on_mesh" in error.value.details
-
-
 def test_volume_axes_are_x_y_z(server):
     """On a volume linear along one axis the vertex values are that coordinate: any axis or
     memory-order mix-up would give another axis's coordinate."""
@@ -266,18 +245,19 @@ class Stop(Exception):
     pass
 
 
-def test_on_iteration_raising_cancels_the_call(own_server):
+@pytest.mark.parametrize("callback", ["on_iteration", "on_mesh"])
+def test_a_callback_raising_cancels_the_call(own_server, callback):
     volume, points, tets = _heavy_input()
     calls = []
 
-    def stop(stats):
-        calls.append(stats.iteration)
+    def stop(stats_or_mesh):
+        calls.append(stats_or_mesh.iteration)
         raise Stop()
 
     with tetrefine.Client(own_server.target) as client:
         with pytest.raises(Stop):
             client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01, max_iterations=16,
-                          on_iteration=stop)
+                          **{callback: stop})
         assert calls == [1]
         lines = own_server.wait_for_refine_lines(1)
         assert len(lines) == 1 and "status=CANCELLED" in lines[0], lines
@@ -494,13 +474,14 @@ def test_tls_with_a_client_certificate(server_binary, tmp_path):
     with pytest.raises(tetrefine.TetrefineError, match="tls\\['ca'\\]: .*missing.pem"):
         tetrefine.Client("127.0.0.1:1", tls={"ca": tmp_path / "missing.pem"})
 
-def test_a_non_callable_on_iteration_is_refused_before_sending(server):
+@pytest.mark.parametrize("callback", ["on_iteration", "on_mesh"])
+def test_a_non_callable_callback_is_refused_before_sending(server, callback):
     points, tets = box_mesh((1, 1, 1), (5, 5, 5), (1, 1, 1))
     volume = np.zeros((8, 8, 8))
     with tetrefine.Client(server.target) as client:
         with pytest.raises(tetrefine.TetrefineError,
-                           match="on_iteration: expected a callable .* got int") as caught:
-            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.1, on_iteration=5)
+                           match=f"{callback}: expected a callable .* got int") as caught:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.1, **{callback: 5})
     assert caught.value.code == grpc.StatusCode.INVALID_ARGUMENT
 
 
