@@ -169,52 +169,90 @@ class DataSetParser {
     return SkipSequence(h.value, explicit_vr && !un, depth + 1);
   }
 
+  // Calls visit(item, header, items_explicit_vr, depth) for every element at the top level of
+  // every item of sequence `h` (item counting from 0), in order; the walk skips each element
+  // after its visit. An explicit-VR sequence that is not SQ or UN is not walked (nothing is
+  // visited). Errors name where the structure breaks; never reads outside the bytes.
+  template <typename Visit>
+  absl::Status ForEachItemElement(const ElementHeader& h, bool explicit_vr, int depth,
+                                  Visit&& visit) const {
+    const bool un = h.vr[0] == 'U' && h.vr[1] == 'N';
+    const bool sq = h.vr[0] == 'S' && h.vr[1] == 'Q';
+    if (explicit_vr && !un && !sq) return absl::OkStatus();
+    if (depth > kMaxSequenceDepth) return TooDeep(h.value);
+    const bool defined = h.length != kUndefinedLength;
+    if (defined && h.value + h.length > bytes_.size()) return Truncated(h.value, "a sequence");
+    // PS3.5 7.5.1: the items of a UN element of undefined length are implicit VR.
+    return WalkItems(h.value, defined ? h.value + h.length : bytes_.size(), !defined,
+                     explicit_vr && !un, depth, /*into_defined_items=*/true, visit)
+        .status();
+  }
+
   absl::Status Truncated(uint64_t at, absl::string_view what) const {
     return FileError(path_, absl::StrCat("truncated DICOM file: ", what, " at byte ", at,
                                          " runs past its end (", bytes_.size(), " bytes)"));
   }
 
  private:
+  absl::Status TooDeep(uint64_t at) const {
+    return FileError(path_, absl::StrCat("DICOM sequences nest deeper than ", kMaxSequenceDepth,
+                                         " levels at byte ", at));
+  }
+
   // Skips the items of an undefined-length sequence starting at `pos`, through its delimiter.
   absl::StatusOr<uint64_t> SkipSequence(uint64_t pos, bool explicit_vr, int depth) const {
-    if (depth > kMaxSequenceDepth) {
-      return FileError(path_, absl::StrCat("DICOM sequences nest deeper than ", kMaxSequenceDepth,
-                                           " levels at byte ", pos));
-    }
-    while (true) {
-      absl::StatusOr<ElementHeader> item = Header(pos, explicit_vr);
-      if (!item.ok()) return item.status();
-      if (item->group == kItemGroup && item->element == kSequenceEnd) return item->value;
-      if (item->group != kItemGroup || item->element != kItem) {
+    if (depth > kMaxSequenceDepth) return TooDeep(pos);
+    return WalkItems(pos, bytes_.size(), /*delimited=*/true, explicit_vr, depth,
+                     /*into_defined_items=*/false,
+                     [](int64_t, const ElementHeader&, bool, int) { return absl::OkStatus(); });
+  }
+
+  // The items of a sequence from `pos`: up to `end` (defined length), or through its delimiter
+  // (`delimited`, undefined length; `end` is then the end of the bytes). Each element of an
+  // item is visited, then skipped. Items of defined length are stepped over whole unless
+  // `into_defined_items` (skipping needs only their lengths). Returns the offset past the
+  // sequence.
+  template <typename Visit>
+  absl::StatusOr<uint64_t> WalkItems(uint64_t pos, uint64_t end, bool delimited, bool explicit_vr,
+                                     int depth, bool into_defined_items, Visit&& visit) const {
+    for (int64_t item = 0; pos < end; ++item) {
+      absl::StatusOr<ElementHeader> ih = Header(pos, explicit_vr);
+      if (!ih.ok()) return ih.status();
+      if (ih->group == kItemGroup && ih->element == kSequenceEnd) return ih->value;
+      if (ih->group != kItemGroup || ih->element != kItem) {
         return FileError(path_, absl::StrCat("DICOM sequence at byte ", pos, ": expected an item ",
                                              TagText(kItemGroup, kItem), ", found ",
-                                             TagText(item->group, item->element)));
+                                             TagText(ih->group, ih->element)));
       }
-      if (item->length != kUndefinedLength) {
-        if (item->value + item->length > bytes_.size()) {
-          return Truncated(item->value, "a sequence item");
-        }
-        pos = item->value + item->length;
-        continue;
-      }
-      pos = item->value;
-      while (true) {
-        absl::StatusOr<ElementHeader> e = Header(pos, explicit_vr);
-        if (!e.ok()) return e.status();
-        if (e->group == kItemGroup && e->element == kItemEnd) {
-          pos = e->value;
+      const bool item_defined = ih->length != kUndefinedLength;
+      const uint64_t item_end = item_defined ? ih->value + ih->length : end;
+      if (item_end > end) return Truncated(ih->value, "a sequence item");
+      uint64_t e = ih->value;
+      bool item_ended = item_defined;
+      while (e < item_end && (!item_defined || into_defined_items)) {
+        absl::StatusOr<ElementHeader> eh = Header(e, explicit_vr);
+        if (!eh.ok()) return eh.status();
+        if (eh->group == kItemGroup && eh->element == kItemEnd) {
+          e = eh->value;
+          item_ended = true;
           break;
         }
-        if (e->group == kItemGroup) {
+        if (eh->group == kItemGroup) {
           return FileError(path_,
-                           absl::StrCat("DICOM sequence item at byte ", pos, ": found ",
-                                        TagText(e->group, e->element), " before the item's end"));
+                           absl::StrCat("DICOM sequence item at byte ", e, ": found ",
+                                        TagText(eh->group, eh->element), " before the item's end"));
         }
-        absl::StatusOr<uint64_t> next = Skip(*e, explicit_vr, depth);
+        if (absl::Status st = visit(item, *eh, explicit_vr, depth); !st.ok()) return st;
+        absl::StatusOr<uint64_t> next = Skip(*eh, explicit_vr, depth);
         if (!next.ok()) return next.status();
-        pos = *next;
+        e = *next;
       }
+      if (!item_ended) return Truncated(ih->value, "a sequence item of undefined length");
+      pos = item_defined ? item_end : e;
     }
+    // A sequence of undefined length ends at its delimiter, never at the end of the bytes.
+    if (delimited) return Truncated(pos, "a sequence of undefined length");
+    return pos;
   }
 
   absl::string_view bytes_;
@@ -299,9 +337,97 @@ Framing FramingOf(absl::string_view bytes) {
   return length % 2 == 0 && length <= bytes.size() - 8 ? Framing::kBare : Framing::kNone;
 }
 
+// Reads the functional groups sequence `h` ((5200,9229) or (5200,9230)) into `out`, one entry
+// per item, at most `max_items` (more is an error: a hostile file cannot make the reader hold
+// more entries than the frames it declares). Only the first item of each nested sequence
+// counts (each holds one); other groups and attributes are skipped.
+absl::Status ReadFunctionalGroups(const DataSetParser& parser, absl::string_view bytes,
+                                  absl::string_view path, const ElementHeader& h, bool explicit_vr,
+                                  int64_t max_items, std::vector<DicomFrameGroups>* out) {
+  const std::string sequence = TagText(h.group, h.element);
+  return parser.ForEachItemElement(
+      h, explicit_vr, 1,
+      [&](int64_t item, const ElementHeader& group, bool items_explicit,
+          int depth) -> absl::Status {
+        if (item >= max_items) {
+          return FileError(path, absl::StrCat("DICOM functional groups ", sequence, " has more ",
+                                              "items than the image's ", max_items, " frames"));
+        }
+        if (static_cast<int64_t>(out->size()) <= item) out->resize(static_cast<size_t>(item) + 1);
+        DicomFrameGroups& frame = (*out)[static_cast<size_t>(item)];
+        const uint32_t group_tag = (uint32_t{group.group} << 16) | group.element;
+        if (group_tag != 0x00209113 && group_tag != 0x00209116 && group_tag != 0x00289110 &&
+            group_tag != 0x00289145) {
+          return absl::OkStatus();
+        }
+        return parser.ForEachItemElement(
+            group, items_explicit, depth,
+            [&](int64_t inner, const ElementHeader& e, bool, int) -> absl::Status {
+              if (inner != 0 || e.length == kUndefinedLength || e.value + e.length > bytes.size()) {
+                return absl::OkStatus();  // the walk itself reports a broken length
+              }
+              const absl::string_view value = bytes.substr(e.value, e.length);
+              if (Trimmed(value).empty()) return absl::OkStatus();
+              const std::string where = absl::StrCat(" in ", sequence, " item ", item + 1, " ",
+                                                     TagText(group.group, group.element));
+              const uint32_t tag = (uint32_t{e.group} << 16) | e.element;
+              if (group_tag == 0x00209113 && tag == 0x00200032) {
+                auto v = Decimals<3>(
+                    value, absl::StrCat("Image Position (Patient) (0020,0032)", where), path);
+                if (!v.ok()) return v.status();
+                frame.position = *v;
+              } else if (group_tag == 0x00209116 && tag == 0x00200037) {
+                auto v = Decimals<6>(
+                    value, absl::StrCat("Image Orientation (Patient) (0020,0037)", where), path);
+                if (!v.ok()) return v.status();
+                frame.orientation = *v;
+              } else if (group_tag == 0x00289110 && tag == 0x00280030) {
+                auto v = Decimals<2>(value, absl::StrCat("Pixel Spacing (0028,0030)", where), path);
+                if (!v.ok()) return v.status();
+                frame.pixel_spacing = *v;
+              } else if (group_tag == 0x00289145 && tag == 0x00281053) {
+                auto v = Decimals<1>(value, absl::StrCat("Rescale Slope (0028,1053)", where), path);
+                if (!v.ok()) return v.status();
+                frame.rescale_slope = (*v)[0];
+              } else if (group_tag == 0x00289145 && tag == 0x00281052) {
+                auto v =
+                    Decimals<1>(value, absl::StrCat("Rescale Intercept (0028,1052)", where), path);
+                if (!v.ok()) return v.status();
+                frame.rescale_intercept = (*v)[0];
+              }
+              return absl::OkStatus();
+            });
+      });
+}
+
 }  // namespace
 
 bool HasDicomMagic(absl::string_view bytes) { return FramingOf(bytes) != Framing::kNone; }
+
+DicomImage FrameOf(const DicomImage& image, int64_t frame) {
+  DicomImage out = image;
+  out.pixel_data.reset();
+  out.frame_groups.clear();
+  out.shared_groups = DicomFrameGroups{};
+  const DicomFrameGroups* own =
+      frame >= 0 && frame < static_cast<int64_t>(image.frame_groups.size())
+          ? &image.frame_groups[static_cast<size_t>(frame)]
+          : nullptr;
+  const DicomFrameGroups& shared = image.shared_groups;
+  const auto pick = [&](auto member, auto& target) {
+    if (own != nullptr && (own->*member).has_value()) {
+      target = *(own->*member);
+    } else if ((shared.*member).has_value()) {
+      target = *(shared.*member);
+    }
+  };
+  pick(&DicomFrameGroups::position, out.position);
+  pick(&DicomFrameGroups::orientation, out.orientation);
+  pick(&DicomFrameGroups::pixel_spacing, out.pixel_spacing);
+  pick(&DicomFrameGroups::rescale_slope, out.rescale_slope);
+  pick(&DicomFrameGroups::rescale_intercept, out.rescale_intercept);
+  return out;
+}
 
 absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_view path) {
   const Framing framing = FramingOf(bytes);
@@ -368,6 +494,18 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
       }
       image.pixel_data = bytes.substr(h->value, h->length);
       break;  // what follows the pixels (padding, signatures) places nothing
+    }
+    const uint32_t top_tag = (uint32_t{h->group} << 16) | h->element;
+    if (top_tag == 0x52009229 || top_tag == 0x52009230) {
+      std::vector<DicomFrameGroups> groups;
+      absl::Status st = ReadFunctionalGroups(parser, bytes, path, *h, explicit_vr,
+                                             top_tag == 0x52009229 ? 1 : image.frames, &groups);
+      if (!st.ok()) return st;
+      if (top_tag == 0x52009230) {
+        image.frame_groups = std::move(groups);
+      } else if (!groups.empty()) {
+        image.shared_groups = groups.front();
+      }
     }
     absl::StatusOr<uint64_t> next = parser.Skip(*h, explicit_vr, 0);
     if (!next.ok()) return next.status();

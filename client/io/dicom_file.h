@@ -4,11 +4,27 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
 
 namespace tetrefine::io {
+
+// What the functional groups of an enhanced multi-frame image (PS3.3 C.7.6.16) say about one
+// frame (or, shared, about every frame), each where the file gives it.
+struct DicomFrameGroups {
+  // Plane Position Sequence (0020,9113) > Image Position (Patient) (0020,0032), LPS mm.
+  std::optional<std::array<double, 3>> position;
+  // Plane Orientation Sequence (0020,9116) > Image Orientation (Patient) (0020,0037).
+  std::optional<std::array<double, 6>> orientation;
+  // Pixel Measures Sequence (0028,9110) > Pixel Spacing (0028,0030), mm.
+  std::optional<std::array<double, 2>> pixel_spacing;
+  // Pixel Value Transformation Sequence (0028,9145) > Rescale Slope (0028,1053) and
+  // Intercept (0028,1052).
+  std::optional<double> rescale_slope;
+  std::optional<double> rescale_intercept;
+};
 
 // The attributes of one DICOM Part 10 file (PS3.10: a 128-byte preamble, "DICM", the file meta
 // group, then the data set) that place its image in a volume. Only the data set's top level is
@@ -42,6 +58,10 @@ struct DicomImage {
   // Empty when the file has no image (a report, a DICOMDIR), or holds one this reader does not
   // decode (then `unsupported` says why).
   std::optional<absl::string_view> pixel_data;
+  // Enhanced multi-frame images: Shared Functional Groups Sequence (5200,9229) and Per-frame
+  // Functional Groups Sequence (5200,9230), one entry per item (at most `frames`).
+  DicomFrameGroups shared_groups;
+  std::vector<DicomFrameGroups> frame_groups;
   // Non-empty for an image in a compressed transfer syntax (JPEG, JPEG-LS, JPEG 2000, RLE):
   // its header was read, its pixels cannot be; the message names the syntax and the fix.
   std::string unsupported;
@@ -56,6 +76,12 @@ bool HasDicomMagic(absl::string_view bytes);
 // `bytes` from a file for a message: printable ASCII kept, every other byte escaped (\x1b),
 // at most 64 bytes, so that a hostile file cannot write terminal escapes through an error.
 std::string Printable(absl::string_view bytes);
+
+// Frame `frame` (0-based) of a multi-frame `image` as a single-frame image: position,
+// orientation, pixel spacing and rescaling from its per-frame functional groups, else the
+// shared ones, else the image's own; no functional groups, no pixel data (`frames` stays the
+// file's). For a single-frame image (frame 0), the image itself without its pixel data.
+DicomImage FrameOf(const DicomImage& image, int64_t frame);
 
 // Parses a DICOM file held in `bytes` (which the result's pixel_data points into): Part 10, or
 // one of the forms without the preamble that HasDicomMagic accepts; without file meta, the

@@ -40,8 +40,9 @@ constexpr double kPositionTolerance = 0.01;
 struct Slice {
   std::string file;
   DicomImage image;        // pixel_data cleared: the file is read again for its pixels
-  size_t pixel_bytes = 0;  // the size of its Pixel Data
+  size_t pixel_bytes = 0;  // the size of its file's Pixel Data
   double along = 0;        // Image Position (Patient) along the slice normal, mm
+  int64_t frame = -1;      // its frame in an enhanced multi-frame file (FrameOf); -1: none
 };
 
 using Vec = std::array<double, 3>;
@@ -54,6 +55,14 @@ double Norm(const Vec& a) { return std::sqrt(Dot(a, a)); }
 
 std::string FileName(const std::string& file) {
   return std::filesystem::path(file).filename().string();
+}
+
+// A slice for messages: its file's name, and its frame in a multi-frame file (1-based, as
+// viewers count them).
+std::string SliceName(const Slice& s) {
+  std::string name = FileName(s.file);
+  if (s.frame >= 0) absl::StrAppend(&name, " frame ", s.frame + 1);
+  return name;
 }
 
 // The directory a file is in ("." for a bare name).
@@ -97,9 +106,11 @@ absl::Status CheckSameShape(const Slice& first, const Slice& s) {
   const DicomImage& a = first.image;
   const DicomImage& b = s.image;
   const auto differ = [&](absl::string_view what, double x, double y) {
-    return FileError(
-        s.file, absl::StrCat("DICOM ", what, " is ", y, " here but ", x, " in ",
-                             FileName(first.file), " of the same series: its slices must agree"));
+    return FileError(s.file, absl::StrCat("DICOM ", what, " is ", y,
+                                          s.frame >= 0 ? absl::StrCat(" in frame ", s.frame + 1)
+                                                       : std::string(" here"),
+                                          " but ", x, " in ", SliceName(first),
+                                          " of the same series: its slices must agree"));
   };
   if (a.rows != b.rows) return differ("Rows (0028,0010)", a.rows, b.rows);
   if (a.columns != b.columns) return differ("Columns (0028,0011)", a.columns, b.columns);
@@ -132,8 +143,12 @@ absl::Status CheckSameShape(const Slice& first, const Slice& s) {
 absl::Status CheckPlaceable(const Slice& s) {
   const DicomImage& im = s.image;
   const auto missing = [&](absl::string_view what) {
-    return FileError(s.file, absl::StrCat("DICOM image has no ", what,
-                                          ": its slices cannot be placed in the world"));
+    return FileError(
+        s.file,
+        absl::StrCat("DICOM ",
+                     s.frame < 0 ? std::string("image") : absl::StrCat("frame ", s.frame + 1),
+                     " has no ", what, s.frame < 0 ? "" : " (nor do the shared functional groups)",
+                     ": its slices cannot be placed in the world"));
   };
   if (!im.position) return missing("Image Position (Patient) (0020,0032)");
   if (!im.orientation) return missing("Image Orientation (Patient) (0020,0037)");
@@ -143,11 +158,14 @@ absl::Status CheckPlaceable(const Slice& s) {
         s.file, absl::StrCat("DICOM Samples per Pixel (0028,0002) is ", im.samples_per_pixel,
                              ": colour images are not read, only scalar ones"));
   }
-  if (im.frames != 1) {
+  if (s.frame < 0 && im.frames != 1) {
     return FileUnsupported(
-        s.file, absl::StrCat("DICOM file holds ", im.frames,
-                             " frames (Number of Frames (0028,0008)): multi-frame (enhanced) "
-                             "images are not read; convert the series to NIfTI with dcm2niix"));
+        s.file,
+        absl::StrCat("DICOM file holds ", im.frames,
+                     " frames (Number of Frames (0028,0008)) but no Per-frame Functional Groups "
+                     "Sequence (5200,9230) with one item per frame: only enhanced multi-frame "
+                     "images, whose frames carry their positions, are read; convert the series "
+                     "to NIfTI with dcm2niix"));
   }
   if (im.rows < 1 || im.columns < 1) {
     return FileError(s.file, absl::StrCat("DICOM image is ", im.columns, " x ", im.rows,
@@ -180,12 +198,16 @@ absl::Status CheckPlaceable(const Slice& s) {
                                             sp, ", not positive"));
     }
   }
-  const uint64_t need = static_cast<uint64_t>(im.rows) * static_cast<uint64_t>(im.columns) *
-                        static_cast<uint64_t>(im.bits_allocated / 8);
+  const uint64_t frame_bytes = static_cast<uint64_t>(im.rows) * static_cast<uint64_t>(im.columns) *
+                               static_cast<uint64_t>(im.bits_allocated / 8);
+  const uint64_t need = frame_bytes * static_cast<uint64_t>(s.frame < 0 ? 1 : s.frame + 1);
   if (s.pixel_bytes < need) {
-    return FileError(s.file, absl::StrCat("DICOM Pixel Data (7FE0,0010) has ", s.pixel_bytes,
-                                          " bytes, the image needs ", need, " (", im.columns, " x ",
-                                          im.rows, " samples of ", im.bits_allocated, " bits)"));
+    return FileError(
+        s.file, absl::StrCat("DICOM Pixel Data (7FE0,0010) has ", s.pixel_bytes, " bytes, ",
+                             s.frame < 0 ? std::string("the image needs ")
+                                         : absl::StrCat("its first ", s.frame + 1, " frames need "),
+                             need, " (", im.columns, " x ", im.rows, " samples of ",
+                             im.bits_allocated, " bits", s.frame < 0 ? "" : " a frame", ")"));
   }
   return absl::OkStatus();
 }
@@ -304,7 +326,21 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
     // The pixels are read again in the second pass, so that no file stays mapped.
     const size_t pixel_bytes = image->pixel_data->size();
     image->pixel_data.reset();
-    series[image->series_uid].push_back(Slice{file, *std::move(image), pixel_bytes, 0.0});
+    std::vector<Slice>& slices = series[image->series_uid];
+    // An enhanced multi-frame file is a stack of slices, one per frame, each placed by its own
+    // functional groups; another multi-frame file (cine, NM) is refused by CheckPlaceable.
+    const int64_t frames = image->frames;
+    if (frames > 1 && static_cast<int64_t>(image->frame_groups.size()) == frames) {
+      if (static_cast<int64_t>(slices.size()) + frames > kMaxVolumeAxis) {
+        return FileError(file, absl::StrCat("DICOM file holds ", frames, " frames, more than ",
+                                            kMaxVolumeAxis, " slices"));
+      }
+      for (int64_t f = 0; f < frames; ++f) {
+        slices.push_back(Slice{file, FrameOf(*image, f), pixel_bytes, 0.0, f});
+      }
+    } else {
+      slices.push_back(Slice{file, FrameOf(*image, 0), pixel_bytes, 0.0});
+    }
   }
   // Said after an error about the series, when files were skipped as unreadable.
   const std::string unreadable_note =
@@ -386,11 +422,10 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   for (size_t k = 1; k < slices.size(); ++k) {
     if (slices[k].along - slices[k - 1].along <= 1e-4 * in_plane) {
       return FileError(
-          path,
-          absl::StrCat("DICOM slices ", FileName(slices[k - 1].file), " and ",
-                       FileName(slices[k].file), " lie at the same position (", slices[k].along,
-                       " mm along the slice normal): the series holds several volumes "
-                       "(time points, echoes or b-values); split it, e.g. with dcm2niix"));
+          path, absl::StrCat("DICOM slices ", SliceName(slices[k - 1]), " and ",
+                             SliceName(slices[k]), " lie at the same position (", slices[k].along,
+                             " mm along the slice normal): the series holds several volumes "
+                             "(time points, echoes or b-values); split it, e.g. with dcm2niix"));
     }
   }
   const size_t n = slices.size();
@@ -411,8 +446,8 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   if (std::abs(gap(worst) - mean_gap) > kPositionTolerance * mean_gap) {
     return series_error(
         path,
-        absl::StrCat("DICOM slice spacing is uneven: ", FileName(slices[worst].file), " and ",
-                     FileName(slices[worst + 1].file), " are ", absl::StrFormat("%.4g", gap(worst)),
+        absl::StrCat("DICOM slice spacing is uneven: ", SliceName(slices[worst]), " and ",
+                     SliceName(slices[worst + 1]), " are ", absl::StrFormat("%.4g", gap(worst)),
                      " mm apart along the slice normal, where the series averages ",
                      absl::StrFormat("%.4g", mean_gap),
                      " mm (a missing slice, or a series of varying spacing; dcm2niix can "
@@ -426,8 +461,8 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
     for (int a = 0; a < 3; ++a) off[a] = p[a] - (p0[a] + static_cast<double>(k) * step[a]);
     if (Norm(off) > kPositionTolerance * step_length) {
       return series_error(
-          path, absl::StrCat("DICOM slice positions do not lie on one line: ",
-                             FileName(slices[k].file), " lies ", absl::StrFormat("%.4g", Norm(off)),
+          path, absl::StrCat("DICOM slice positions do not lie on one line: ", SliceName(slices[k]),
+                             " lies ", absl::StrFormat("%.4g", Norm(off)),
                              " mm off the line through the first and last slices (a varying "
                              "gantry tilt, or a mixed series)"));
     }
@@ -462,36 +497,56 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   const bool to_float64 = !one_scaling || (scaled && first.bits_allocated == 32);
   const VoxelType gathered = to_float64 ? VoxelType::kFloat64 : stored;
   std::vector<std::byte> data(per_slice * n * VoxelSize(gathered));
+  // The frames of a multi-frame file come one after another in position order, mostly: the
+  // file read last is kept open for the next slice.
+  std::optional<FileView> view;
+  std::optional<DicomImage> image;
+  std::string open_file;
   for (size_t k = 0; k < n; ++k) {
     const Slice& s = slices[k];
-    absl::StatusOr<FileView> view = FileView::Open(s.file);
-    if (!view.ok()) return view.status();
-    absl::StatusOr<DicomImage> image = ParseDicomFile(view->bytes(), s.file);
-    if (!image.ok()) return image.status();
-    const Slice again{s.file, *image, image->pixel_data ? image->pixel_data->size() : 0, 0.0};
+    if (!view || open_file != s.file) {
+      image.reset();
+      view.reset();
+      absl::StatusOr<FileView> opened = FileView::Open(s.file);
+      if (!opened.ok()) return opened.status();
+      view = *std::move(opened);
+      absl::StatusOr<DicomImage> parsed = ParseDicomFile(view->bytes(), s.file);
+      if (!parsed.ok()) return parsed.status();
+      image = *std::move(parsed);
+      open_file = s.file;
+    }
+    const Slice again{s.file, FrameOf(*image, std::max<int64_t>(s.frame, 0)),
+                      image->pixel_data ? image->pixel_data->size() : 0, 0.0, s.frame};
     absl::Status same = CheckPlaceable(again);
     if (same.ok()) same = CheckSameShape(slices.front(), again);
+    if (same.ok() && s.frame >= 0 &&
+        static_cast<int64_t>(image->frame_groups.size()) != image->frames) {
+      same = absl::DataLossError("its functional groups changed");
+    }
     if (!same.ok()) {
       return FileError(s.file, absl::StrCat("changed while it was read: ", same.message()));
     }
-    const absl::string_view pixels = *image->pixel_data;
+    const absl::string_view pixels =
+        image->pixel_data->substr(static_cast<size_t>(std::max<int64_t>(s.frame, 0)) * per_slice *
+                                  static_cast<size_t>(first.bits_allocated / 8));
+    const DicomImage& im = again.image;
     std::byte* out = data.data() + k * per_slice * VoxelSize(gathered);
     switch (gathered) {
       case VoxelType::kUint8:
-        GatherSlice<uint8_t>(*image, pixels, per_slice, out);
+        GatherSlice<uint8_t>(im, pixels, per_slice, out);
         break;
       case VoxelType::kInt16:
-        GatherSlice<int16_t>(*image, pixels, per_slice, out);
+        GatherSlice<int16_t>(im, pixels, per_slice, out);
         break;
       case VoxelType::kUint16:
-        GatherSlice<uint16_t>(*image, pixels, per_slice, out);
+        GatherSlice<uint16_t>(im, pixels, per_slice, out);
         break;
       case VoxelType::kInt32:
-        GatherSlice<int32_t>(*image, pixels, per_slice, out);
+        GatherSlice<int32_t>(im, pixels, per_slice, out);
         break;
       default:
         // Per-slice scaling is applied here (float64 holds 32-bit samples exactly).
-        GatherSlice<double>(*image, pixels, per_slice, out, to_float64 && scaled);
+        GatherSlice<double>(im, pixels, per_slice, out, to_float64 && scaled);
         break;
     }
   }

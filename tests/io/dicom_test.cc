@@ -101,7 +101,26 @@ struct SliceSpec {
   bool with_pixels = true;
   std::string pixels;        // raw samples; empty: rows * columns zeros
   std::string before_image;  // elements placed before group 0020 (sequences, private tags)
+  // An enhanced multi-frame file: one frame per position (its Plane Position in the per-frame
+  // functional groups, absent for nullopt), orientation and pixel spacing only in the shared
+  // groups, `pixels` the frames one after another; sequences and items of defined length.
+  std::vector<std::optional<std::array<double, 3>>> frame_positions;
+  int extra_frame_items = 0;  // per-frame items beyond the frames
 };
+
+std::string DefinedItem(const std::string& elements) {
+  return U16(0xFFFE) + U16(0xE000) + U32(static_cast<uint32_t>(elements.size())) + elements;
+}
+
+// A sequence of defined length holding `items` (each the bytes of its elements).
+std::string DefinedSequence(bool explicit_vr, uint16_t group, uint16_t element,
+                            const std::vector<std::string>& items) {
+  std::string body;
+  for (const std::string& item : items) body += DefinedItem(item);
+  std::string out = U16(group) + U16(element);
+  out += explicit_vr ? std::string("SQ") + U16(0) : std::string();
+  return out + U32(static_cast<uint32_t>(body.size())) + body;
+}
 
 std::string SliceFile(const SliceSpec& s) {
   const bool ex = s.explicit_vr;
@@ -120,16 +139,22 @@ std::string SliceFile(const SliceSpec& s) {
   file += Element(ex, 0x0008, 0x0060, "CS", "CT");
   file += s.before_image;
   file += Element(ex, 0x0020, 0x000E, "UI", s.series);
-  if (s.with_position) {
+  const bool enhanced = !s.frame_positions.empty();
+  if (s.with_position && !enhanced) {
     file +=
         Element(ex, 0x0020, 0x0032, "DS", Decimals({s.position[0], s.position[1], s.position[2]}));
   }
-  file += Element(ex, 0x0020, 0x0037, "DS", Decimals({s.orientation.begin(), s.orientation.end()}));
+  const std::string orientation =
+      Element(ex, 0x0020, 0x0037, "DS", Decimals({s.orientation.begin(), s.orientation.end()}));
+  const std::string spacing =
+      Element(ex, 0x0028, 0x0030, "DS", Decimals({s.spacing[0], s.spacing[1]}));
+  if (!enhanced) file += orientation;
   file += Us(ex, 0x0028, 0x0002, static_cast<uint16_t>(s.samples));
-  if (s.frames != 1) file += Element(ex, 0x0028, 0x0008, "IS", absl::StrCat(s.frames));
+  const int frames = enhanced ? static_cast<int>(s.frame_positions.size()) : s.frames;
+  if (frames != 1) file += Element(ex, 0x0028, 0x0008, "IS", absl::StrCat(frames));
   file += Us(ex, 0x0028, 0x0010, static_cast<uint16_t>(s.rows));
   file += Us(ex, 0x0028, 0x0011, static_cast<uint16_t>(s.columns));
-  file += Element(ex, 0x0028, 0x0030, "DS", Decimals({s.spacing[0], s.spacing[1]}));
+  if (!enhanced) file += spacing;
   file += Us(ex, 0x0028, 0x0100, static_cast<uint16_t>(s.bits_allocated));
   file += Us(ex, 0x0028, 0x0101, static_cast<uint16_t>(s.bits_stored));
   file += Us(ex, 0x0028, 0x0103, static_cast<uint16_t>(s.representation));
@@ -137,10 +162,30 @@ std::string SliceFile(const SliceSpec& s) {
     file += Element(ex, 0x0028, 0x1052, "DS", absl::StrCat(s.rescale->second));
     file += Element(ex, 0x0028, 0x1053, "DS", absl::StrCat(s.rescale->first));
   }
+  if (enhanced) {
+    // Shared: orientation, pixel measures; per frame: plane position and a private group.
+    file += DefinedSequence(ex, 0x5200, 0x9229,
+                            {DefinedSequence(ex, 0x0020, 0x9116, {orientation}) +
+                             DefinedSequence(ex, 0x0028, 0x9110, {spacing})});
+    std::vector<std::string> items;
+    for (size_t f = 0; f < s.frame_positions.size() + s.extra_frame_items; ++f) {
+      std::string item =
+          DefinedSequence(ex, 0x0020, 0x9111, {Element(ex, 0x0020, 0x9157, "UL", U32(1))});
+      const auto& p = f < s.frame_positions.size() ? s.frame_positions[f] : std::nullopt;
+      if (p) {
+        item += DefinedSequence(
+            ex, 0x0020, 0x9113,
+            {Element(ex, 0x0020, 0x0032, "DS", Decimals({(*p)[0], (*p)[1], (*p)[2]}))});
+      }
+      items.push_back(item);
+    }
+    file += DefinedSequence(ex, 0x5200, 0x9230, items);
+  }
   if (s.with_pixels) {
     const std::string pixels =
         s.pixels.empty()
-            ? std::string(static_cast<size_t>(s.rows * s.columns * s.bits_allocated / 8), '\0')
+            ? std::string(static_cast<size_t>(s.rows * s.columns * frames * s.bits_allocated / 8),
+                          '\0')
             : s.pixels;
     file += Element(ex, 0x7FE0, 0x0010, s.bits_allocated == 8 ? "OB" : "OW", pixels);
   }
@@ -313,6 +358,56 @@ TEST(IoDicomTest, FilesWithoutPreambleReadTheSame) {
   ASSERT_TRUE(read.ok()) << read.status();
   ASSERT_EQ(read->warnings.size(), 1u);
   EXPECT_NE(read->warnings[0].find("1 file"), std::string::npos) << read->warnings[0];
+}
+
+// An enhanced multi-frame file, built byte by byte with sequences of defined length: its frames
+// are slices placed by their own Plane Positions, in position order whatever the frame order;
+// frames that cannot be a volume are refused naming the frame.
+TEST(IoDicomTest, EnhancedMultiFrameFramesAreSlices) {
+  for (const bool explicit_vr : {true, false}) {
+    SCOPED_TRACE(explicit_vr ? "explicit VR" : "implicit VR");
+    SliceSpec base;
+    base.explicit_vr = explicit_vr;
+    base.orientation = {0, 1, 0, 0, 0, -1};  // sagittal
+    const std::vector<SliceSpec> slices = Series(base, 4, 1.25);
+    // Stored in the frame order 2, 0, 3, 1.
+    const std::array<int, 4> order = {2, 0, 3, 1};
+    SliceSpec file = base;
+    file.pixels.clear();
+    for (int k : order) {
+      file.frame_positions.push_back(slices[k].position);
+      file.pixels += slices[k].pixels;
+    }
+    ScratchDir dir;
+    WriteBytes(dir.File("enhanced.dcm"), SliceFile(file));
+    for (const std::string& path : {dir.File("enhanced.dcm"), dir.path()}) {
+      absl::StatusOr<VolumeFile> read = ReadVolume(path);
+      ASSERT_TRUE(read.ok()) << read.status();
+      EXPECT_EQ(read->volume.grid().dims, (Index3{3, 4, 4}));
+      ExpectSeries(read->volume, slices);
+    }
+
+    const auto refused = [&](SliceSpec bad, const std::string& expected) {
+      ScratchDir bad_dir;
+      WriteBytes(bad_dir.File("bad.dcm"), SliceFile(bad));
+      const absl::StatusOr<VolumeFile> read = ReadVolume(bad_dir.File("bad.dcm"));
+      ASSERT_FALSE(read.ok());
+      EXPECT_NE(read.status().message().find(expected), std::string::npos) << read.status();
+      EXPECT_NE(read.status().message().find("bad.dcm"), std::string::npos) << read.status();
+    };
+    SliceSpec two_stacks = file;  // frames 1 and 3 (1-based) at one position
+    two_stacks.frame_positions[2] = two_stacks.frame_positions[0];
+    refused(two_stacks, "bad.dcm frame 1 and bad.dcm frame 3 lie at the same position");
+    SliceSpec no_position = file;
+    no_position.frame_positions[3].reset();
+    refused(no_position, "DICOM frame 4 has no Image Position (Patient) (0020,0032)");
+    SliceSpec extra = file;
+    extra.extra_frame_items = 1;
+    refused(extra, "(5200,9230) has more items than the image's 4 frames");
+    SliceSpec short_pixels = file;
+    short_pixels.pixels.resize(short_pixels.pixels.size() - 2);
+    refused(short_pixels, "its first 4 frames need 96");
+  }
 }
 
 TEST(IoDicomTest, ObliqueAndTiltedSeriesKeepTheirWorldPositions) {
@@ -500,7 +595,8 @@ TEST(IoDicomTest, BrokenSeriesAreRefusedNamingTheProblem) {
       {"a single slice", [](auto& s) { s.resize(1); }, "single slice"},
       {"JPEG 2000", [](auto& s) { s[1].transfer_syntax = "1.2.840.10008.1.2.4.90"; },
        "1.2.840.10008.1.2.4.90 (JPEG 2000 lossless) is not read"},
-      {"multi-frame", [](auto& s) { s[0].frames = 40; }, "holds 40 frames"},
+      {"multi-frame without functional groups", [](auto& s) { s[0].frames = 40; },
+       "holds 40 frames (Number of Frames (0028,0008)) but no Per-frame Functional Groups"},
       {"colour", [](auto& s) { s[2].samples = 3; }, "colour images are not read"},
       {"no position", [](auto& s) { s[1].with_position = false; },
        "no Image Position (Patient) (0020,0032)"},
@@ -679,6 +775,20 @@ bool HavePydicomAndDcm2niix() {
          testing::RunProcess({kPython, "-c", "import pydicom, numpy"}).exit_code == 0;
 }
 
+// What the pydicom scripts share: a slice's row and column directions and its normal, axial or
+// rotated about two axes.
+constexpr char kPyOrientation[] = R"PY(
+import numpy as np
+def orientation(oblique):
+    r, c = np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
+    if oblique:
+        a, b = 0.3, 0.2
+        R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]]) @ \
+            np.array([[1, 0, 0], [0, np.cos(b), -np.sin(b)], [0, np.sin(b), np.cos(b)]])
+        r, c = R[:, 0], R[:, 1]
+    return r, c, np.cross(r, c)
+)PY";
+
 // Writes a CT-like series with pydicom: int16 samples with a rescale intercept, half the files
 // implicit VR, names and instance numbers in neither position order; `oblique` rotates it.
 constexpr char kWriteSeries[] = R"PY(
@@ -688,13 +798,7 @@ from pydicom.uid import ExplicitVRLittleEndian, ImplicitVRLittleEndian, generate
 out, oblique, bare = sys.argv[1], sys.argv[2] == "1", sys.argv[3] == "1"
 rng = np.random.default_rng(11)
 rows, cols, n = 13, 9, 6
-r, c = np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
-if oblique:
-    a, b = 0.3, 0.2
-    R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]]) @ \
-        np.array([[1, 0, 0], [0, np.cos(b), -np.sin(b)], [0, np.sin(b), np.cos(b)]])
-    r, c = R[:, 0], R[:, 1]
-normal = np.cross(r, c)
+r, c, normal = orientation(oblique)
 series, study, frame = generate_uid(), generate_uid(), generate_uid()
 volume = rng.integers(-1000, 3000, size=(n, rows, cols)).astype(np.int16)
 for k in rng.permutation(n):
@@ -723,45 +827,129 @@ for k in rng.permutation(n):
     ds.save_as(name, write_like_original=bare)
 )PY";
 
+// Runs the pydicom `script` with `dir`/series (created) and `args`, then dcm2niix on that
+// directory into `dir`/converted.nii.gz.
+void WriteWithPydicomAndConvert(const char* script, const ScratchDir& dir,
+                                const std::vector<std::string>& args) {
+  const std::string series = dir.File("series");
+  std::filesystem::create_directories(series);
+  std::vector<std::string> command = {kPython, "-c", std::string(kPyOrientation) + script, series};
+  command.insert(command.end(), args.begin(), args.end());
+  const testing::ProcessResult wrote = testing::RunProcess(command);
+  ASSERT_EQ(wrote.exit_code, 0) << wrote.out << wrote.err;
+  const testing::ProcessResult converted = testing::RunProcess(
+      {"/usr/bin/dcm2niix", "-z", "y", "-f", "converted", "-o", dir.path(), series});
+  ASSERT_EQ(converted.exit_code, 0) << converted.out << converted.err;
+}
+
+// Expects every sample of `d` to equal the sample of `n` at the same world point (which must
+// be a sample point of `n`), and `count` samples in all.
+void ExpectSameVoxelsAtSameWorldPoints(const Volume& d, const Volume& n, int64_t count) {
+  EXPECT_EQ(d.voxel_count(), n.voxel_count());
+  int64_t compared = 0;
+  for (int64_t k = 0; k < d.grid().dims[2]; ++k) {
+    for (int64_t j = 0; j < d.grid().dims[1]; ++j) {
+      for (int64_t i = 0; i < d.grid().dims[0]; ++i) {
+        const Vec3 world = WorldOfIndex(
+            d.grid(), {static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)});
+        const Vec3 u = n.ContinuousIndex(world);
+        std::array<int64_t, 3> m;
+        for (int a = 0; a < 3; ++a) {
+          m[a] = std::llround(u[a]);
+          ASSERT_NEAR(u[a], static_cast<double>(m[a]), 1e-4) << i << " " << j << " " << k;
+        }
+        ASSERT_EQ(d.At(i, j, k), n.At(m[0], m[1], m[2])) << i << " " << j << " " << k;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, count);
+}
+
 TEST(IoDicomTest, SeriesMatchDcm2niixVoxelForVoxel) {
   if (!HavePydicomAndDcm2niix()) GTEST_SKIP() << "python3-pydicom or dcm2niix is not installed";
   for (const auto& [oblique, bare] : {std::pair{false, false}, {true, false}, {false, true}}) {
     SCOPED_TRACE(absl::StrCat(oblique ? "oblique" : "axial", bare ? ", without file meta" : ""));
     ScratchDir dir;
     const std::string series = dir.File("series");
-    std::filesystem::create_directories(series);
-    const testing::ProcessResult wrote = testing::RunProcess(
-        {kPython, "-c", kWriteSeries, series, oblique ? "1" : "0", bare ? "1" : "0"});
-    ASSERT_EQ(wrote.exit_code, 0) << wrote.out << wrote.err;
-    const testing::ProcessResult converted = testing::RunProcess(
-        {"/usr/bin/dcm2niix", "-z", "y", "-f", "converted", "-o", dir.path(), series});
-    ASSERT_EQ(converted.exit_code, 0) << converted.out << converted.err;
+    WriteWithPydicomAndConvert(kWriteSeries, dir, {oblique ? "1" : "0", bare ? "1" : "0"});
+    if (::testing::Test::HasFatalFailure()) return;
     const absl::StatusOr<VolumeFile> dicom = ReadVolume(series);
     ASSERT_TRUE(dicom.ok()) << dicom.status();
     const absl::StatusOr<VolumeFile> nifti = ReadVolume(dir.File("converted.nii.gz"));
     ASSERT_TRUE(nifti.ok()) << nifti.status();
     EXPECT_EQ(dicom->volume.axis_aligned(), !oblique);
-    const Volume& d = dicom->volume;
-    const Volume& n = nifti->volume;
-    EXPECT_EQ(d.voxel_count(), n.voxel_count());
-    int64_t compared = 0;
-    for (int64_t k = 0; k < d.grid().dims[2]; ++k) {
-      for (int64_t j = 0; j < d.grid().dims[1]; ++j) {
-        for (int64_t i = 0; i < d.grid().dims[0]; ++i) {
-          const Vec3 world = WorldOfIndex(
-              d.grid(), {static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)});
-          const Vec3 u = n.ContinuousIndex(world);
-          std::array<int64_t, 3> m;
-          for (int a = 0; a < 3; ++a) {
-            m[a] = std::llround(u[a]);
-            ASSERT_NEAR(u[a], static_cast<double>(m[a]), 1e-4) << i << " " << j << " " << k;
-          }
-          ASSERT_EQ(d.At(i, j, k), n.At(m[0], m[1], m[2])) << i << " " << j << " " << k;
-          ++compared;
-        }
-      }
+    ExpectSameVoxelsAtSameWorldPoints(dicom->volume, nifti->volume, 13 * 9 * 6);
+  }
+}
+
+// Writes an enhanced MR image with pydicom: one file, its frames stored out of position order,
+// each placed by its Plane Position in the per-frame functional groups; orientation, pixel
+// spacing and a rescale in the shared ones; 12 of 16 bits stored.
+constexpr char kWriteEnhanced[] = R"PY(
+import sys, numpy as np
+from pydicom.dataset import Dataset, FileDataset, FileMetaDataset
+from pydicom.sequence import Sequence
+from pydicom.uid import ExplicitVRLittleEndian, ImplicitVRLittleEndian, generate_uid
+out, oblique, implicit = sys.argv[1], sys.argv[2] == "1", sys.argv[3] == "1"
+rng = np.random.default_rng(5)
+rows, cols, n = 11, 7, 5
+r, c, normal = orientation(oblique)
+volume = rng.integers(0, 4000, size=(n, rows, cols)).astype(np.uint16)
+order = rng.permutation(n)
+meta = FileMetaDataset()
+meta.MediaStorageSOPClassUID = "1.2.840.10008.5.1.4.1.1.4.1"
+meta.MediaStorageSOPInstanceUID = sop = generate_uid()
+meta.TransferSyntaxUID = ImplicitVRLittleEndian if implicit else ExplicitVRLittleEndian
+ds = FileDataset(out + "/enhanced.dcm", {}, file_meta=meta, preamble=b"\0" * 128)
+ds.is_little_endian, ds.is_implicit_VR = True, implicit
+ds.SOPClassUID, ds.SOPInstanceUID = meta.MediaStorageSOPClassUID, sop
+ds.StudyInstanceUID, ds.SeriesInstanceUID = generate_uid(), generate_uid()
+ds.FrameOfReferenceUID = generate_uid()
+ds.Modality, ds.PatientName, ds.PatientID, ds.SeriesNumber = "MR", "Phantom", "0", 3
+ds.ImageType, ds.Manufacturer = ["ORIGINAL", "PRIMARY", "M", "NONE"], "Philips"
+ds.Rows, ds.Columns, ds.NumberOfFrames = rows, cols, n
+ds.SamplesPerPixel, ds.PhotometricInterpretation = 1, "MONOCHROME2"
+ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 12, 11, 0
+po, pm, pvt = Dataset(), Dataset(), Dataset()
+po.ImageOrientationPatient = ["%.8f" % x for x in list(r) + list(c)]
+pm.PixelSpacing, pm.SliceThickness, pm.SpacingBetweenSlices = [0.8, 0.6], 3.0, 3.0
+pvt.RescaleIntercept, pvt.RescaleSlope, pvt.RescaleType = -50, 2, "US"
+shared = Dataset()
+shared.PlaneOrientationSequence = Sequence([po])
+shared.PixelMeasuresSequence = Sequence([pm])
+shared.PixelValueTransformationSequence = Sequence([pvt])
+ds.SharedFunctionalGroupsSequence = Sequence([shared])
+frames = []
+for k in order:
+    f, pp, fc = Dataset(), Dataset(), Dataset()
+    pp.ImagePositionPatient = ["%.6f" % x for x in np.array([-20.3, 14.2, 5.5]) + 3.0 * k * normal]
+    fc.InStackPositionNumber, fc.StackID, fc.TemporalPositionIndex = int(k + 1), "1", 1
+    f.PlanePositionSequence, f.FrameContentSequence = Sequence([pp]), Sequence([fc])
+    frames.append(f)
+ds.PerFrameFunctionalGroupsSequence = Sequence(frames)
+ds.PixelData = np.stack([volume[k] for k in order]).tobytes()
+ds.save_as(out + "/enhanced.dcm", write_like_original=False)
+)PY";
+
+TEST(IoDicomTest, EnhancedMultiFrameMatchesDcm2niixVoxelForVoxel) {
+  if (!HavePydicomAndDcm2niix()) GTEST_SKIP() << "python3-pydicom or dcm2niix is not installed";
+  for (const auto& [oblique, implicit] : {std::pair{false, false}, {true, false}, {true, true}}) {
+    SCOPED_TRACE(absl::StrCat(oblique ? "oblique" : "axial", implicit ? ", implicit VR" : ""));
+    ScratchDir dir;
+    const std::string series = dir.File("series");
+    WriteWithPydicomAndConvert(kWriteEnhanced, dir, {oblique ? "1" : "0", implicit ? "1" : "0"});
+    if (::testing::Test::HasFatalFailure()) return;
+    for (const std::string& path : {series, series + "/enhanced.dcm"}) {
+      const absl::StatusOr<VolumeFile> dicom = ReadVolume(path);
+      ASSERT_TRUE(dicom.ok()) << dicom.status();
+      const absl::StatusOr<VolumeFile> nifti = ReadVolume(dir.File("converted.nii.gz"));
+      ASSERT_TRUE(nifti.ok()) << nifti.status();
+      EXPECT_EQ(dicom->volume.grid().dims, (Index3{7, 11, 5}));
+      EXPECT_EQ(dicom->volume.axis_aligned(), !oblique);
+      EXPECT_TRUE(dicom->warnings.empty());
+      ExpectSameVoxelsAtSameWorldPoints(dicom->volume, nifti->volume, 7 * 11 * 5);
     }
-    EXPECT_EQ(compared, 13 * 9 * 6);
   }
 }
 
