@@ -1,5 +1,6 @@
 #include "client/io/dicom_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "absl/strings/str_split.h"
 #include "client/io/io_error.h"
 #include "client/io/number_text.h"
+#include "client/io/volume_file.h"
 
 namespace tetrefine::io {
 namespace {
@@ -338,20 +340,21 @@ Framing FramingOf(absl::string_view bytes) {
 }
 
 // Reads the functional groups sequence `h` ((5200,9229) or (5200,9230)) into `out`, one entry
-// per item, at most `max_items` (more is an error: a hostile file cannot make the reader hold
-// more entries than the frames it declares). Only the first item of each nested sequence
-// counts (each holds one); other groups and attributes are skipped.
+// per item, at most `max_items` (more is an error naming `limit`, what the bound is). Only the
+// first item of each nested sequence counts (each holds one); other groups and attributes are
+// skipped.
 absl::Status ReadFunctionalGroups(const DataSetParser& parser, absl::string_view bytes,
                                   absl::string_view path, const ElementHeader& h, bool explicit_vr,
-                                  int64_t max_items, std::vector<DicomFrameGroups>* out) {
+                                  int64_t max_items, absl::string_view limit,
+                                  std::vector<DicomFrameGroups>* out) {
   const std::string sequence = TagText(h.group, h.element);
   return parser.ForEachItemElement(
       h, explicit_vr, 1,
       [&](int64_t item, const ElementHeader& group, bool items_explicit,
           int depth) -> absl::Status {
         if (item >= max_items) {
-          return FileError(path, absl::StrCat("DICOM functional groups ", sequence, " has more ",
-                                              "items than the image's ", max_items, " frames"));
+          return FileError(path, absl::StrCat("DICOM functional groups ", sequence,
+                                              " has more items than ", limit));
         }
         if (static_cast<int64_t>(out->size()) <= item) out->resize(static_cast<size_t>(item) + 1);
         DicomFrameGroups& frame = (*out)[static_cast<size_t>(item)];
@@ -498,8 +501,17 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
     const uint32_t top_tag = (uint32_t{h->group} << 16) | h->element;
     if (top_tag == 0x52009229 || top_tag == 0x52009230) {
       std::vector<DicomFrameGroups> groups;
-      absl::Status st = ReadFunctionalGroups(parser, bytes, path, *h, explicit_vr,
-                                             top_tag == 0x52009229 ? 1 : image.frames, &groups);
+      // Per frame: one item a frame, and never more than a volume has slices (the bound on
+      // what a hostile Number of Frames makes the reader hold).
+      const bool shared = top_tag == 0x52009229;
+      const int64_t max_items = shared ? 1 : std::min(image.frames, kMaxVolumeAxis);
+      const std::string limit =
+          shared ? std::string("the one a shared group has")
+          : max_items == image.frames
+              ? absl::StrCat("the image's ", image.frames, " frames")
+              : absl::StrCat(kMaxVolumeAxis, ", the most slices a volume has");
+      absl::Status st =
+          ReadFunctionalGroups(parser, bytes, path, *h, explicit_vr, max_items, limit, &groups);
       if (!st.ok()) return st;
       if (top_tag == 0x52009230) {
         image.frame_groups = std::move(groups);
