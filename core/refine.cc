@@ -341,8 +341,9 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
       }
     }
     if (errors.failing == 0 && failing_tets == 0) {
-      result.stop_reason = StopReason::kConverged;
-      certified = options.certify;
+      result.stop_reason =
+          errors.short_kept > 0 ? StopReason::kMinEdgeLength : StopReason::kConverged;
+      certified = options.certify && errors.short_kept == 0;
       break;
     }
     if (iteration > options.max_iterations) {
@@ -448,6 +449,8 @@ std::string_view StopReasonName(StopReason r) {
       return "cancelled";
     case StopReason::kQualityFloor:
       return "quality_floor";
+    case StopReason::kMinEdgeLength:
+      return "min_edge_length";
   }
   return "unknown";
 }

@@ -66,6 +66,10 @@ enum class StopReason : uint8_t {
   kTetBudget,      // the next iteration would have produced more than max_tets tets
   kCancelled,      // should_cancel returned true
   kQualityFloor,   // the next iteration would have made a tet of quality below min_quality
+  // Every edge whose error exceeds epsilon is shorter than min_edge_length, so none is split:
+  // what converged means for the edges the refinement may split, but final_max_error is above
+  // epsilon (a sweep found such runs reported as converged).
+  kMinEdgeLength,
 };
 std::string_view StopReasonName(StopReason r);
 

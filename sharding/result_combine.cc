@@ -35,6 +35,13 @@ int64_t FinalTets(const RefineResult& r) { return r.final_quality.count; }
 
 }  // namespace
 
+StopReason Settled(const std::vector<const RefineResult*>& parts) {
+  const bool short_kept = std::any_of(parts.begin(), parts.end(), [](const RefineResult* r) {
+    return r->stop_reason == StopReason::kMinEdgeLength;
+  });
+  return short_kept ? StopReason::kMinEdgeLength : StopReason::kConverged;
+}
+
 WholeStop CombineStops(const std::vector<const RefineResult*>& parts, int max_iterations,
                        int64_t max_tets) {
   for (int i = 1; i <= max_iterations; ++i) {
@@ -66,13 +73,13 @@ WholeStop CombineStops(const std::vector<const RefineResult*>& parts, int max_it
               .reason = StopReason::kQualityFloor,
               .next_iteration_min_quality = worst};
     }
-    if (!active) return {.iterations = i - 1, .reason = StopReason::kConverged};
+    if (!active) return {.iterations = i - 1, .reason = Settled(parts)};
   }
   const bool edges_left = std::any_of(parts.begin(), parts.end(), [](const RefineResult* r) {
     return r->stop_reason == StopReason::kMaxIterations;
   });
   return {.iterations = max_iterations,
-          .reason = edges_left ? StopReason::kMaxIterations : StopReason::kConverged};
+          .reason = edges_left ? StopReason::kMaxIterations : Settled(parts)};
 }
 
 int64_t CountEdges(const Mesh& mesh) {

@@ -21,9 +21,9 @@ struct WholeStop {
 // Every decision of an iteration is local to an edge or a face, so the whole mesh and its parts
 // refine identically tet by tet: what differs is only when each stops. The whole mesh completes
 // iteration i unless
-//   - every part has converged before i (kConverged),
+//   - every part has converged before i (kConverged, or kMinEdgeLength: Settled),
 //   - i > max_iterations (kMaxIterations if some part still had an edge above epsilon, else
-//     kConverged),
+//     Settled),
 //   - the tets after i, summed over the parts (a converged part keeps its count), exceed
 //     `max_tets` (kTetBudget: the core checks the budget first),
 //   - some part refused i for the quality floor (kQualityFloor; the worst tet of the whole is the
@@ -36,6 +36,11 @@ struct WholeStop {
 // max_iterations = WholeStop::iterations before merging.
 WholeStop CombineStops(const std::vector<const RefineResult*>& parts, int max_iterations,
                        int64_t max_tets);
+
+// Why a whole mesh whose parts have all stopped splitting stopped: kMinEdgeLength when some part
+// keeps an edge above epsilon for its length (the whole mesh holds that edge too), else
+// kConverged.
+StopReason Settled(const std::vector<const RefineResult*>& parts);
 
 // The number of distinct edges of `mesh`.
 int64_t CountEdges(const Mesh& mesh);

@@ -36,6 +36,8 @@ v1::StopReason StopReasonToWire(StopReason r) {
       return v1::STOP_REASON_CANCELLED;
     case StopReason::kQualityFloor:
       return v1::STOP_REASON_QUALITY_FLOOR;
+    case StopReason::kMinEdgeLength:
+      return v1::STOP_REASON_MIN_EDGE_LENGTH;
   }
   return v1::STOP_REASON_UNSPECIFIED;
 }
@@ -52,6 +54,8 @@ absl::StatusOr<StopReason> StopReasonFromWire(int r) {
       return StopReason::kCancelled;
     case v1::STOP_REASON_QUALITY_FLOOR:
       return StopReason::kQualityFloor;
+    case v1::STOP_REASON_MIN_EDGE_LENGTH:
+      return StopReason::kMinEdgeLength;
     default:
       return absl::DataLossError(absl::StrCat("summary.stop_reason: unknown value ", r));
   }

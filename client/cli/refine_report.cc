@@ -88,6 +88,11 @@ std::string DescribeStop(const RefineResult& result) {
                           ", below the quality floor; it was not applied");
     case StopReason::kCancelled:
       return absl::StrCat(name, ": cancelled");
+    case StopReason::kMinEdgeLength:
+      return absl::StrCat(name,
+                          ": every edge that still fails the test is shorter than "
+                          "--min-edge-length, so none was split (largest edge-midpoint error ",
+                          absl::StrFormat("%.6g", result.final_max_error), ")");
   }
   return name;
 }

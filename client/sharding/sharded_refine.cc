@@ -475,7 +475,8 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
   double certified = 0.0;
   for (const auto& reply : replies) {
     results.push_back(&reply->result);
-    converged = converged && reply->result.stop_reason == StopReason::kConverged;
+    converged = converged && (reply->result.stop_reason == StopReason::kConverged ||
+                              reply->result.stop_reason == StopReason::kMinEdgeLength);
     certified = std::max(certified, reply->result.certified_max_error);
     if (reply->result.certified_max_error < 0.0) certified = -1.0;
   }
@@ -488,7 +489,7 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
   result.initial_quality = initial;
   result.final_quality = QualityOf(whole.tet_quality);
   result.stop_reason =
-      stopped.value_or(converged ? StopReason::kConverged : StopReason::kMaxIterations);
+      stopped.value_or(converged ? sharding::Settled(results) : StopReason::kMaxIterations);
   result.certified_max_error =
       options.refine.certify && result.stop_reason == StopReason::kConverged && converged
           ? certified

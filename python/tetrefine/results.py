@@ -120,7 +120,9 @@ class RefineResult:
     certified_max_error: certify=True and converged: the largest lattice error over every tet
                 (<= epsilon); else None.
     iterations: list of IterationStats, one per completed iteration.
-    stop_reason: "converged", "max_iterations", "tet_budget", "cancelled" or "quality_floor".
+    stop_reason: "converged", "max_iterations", "tet_budget", "cancelled", "quality_floor" or
+                "min_edge_length" (every edge above epsilon is shorter than min_edge_length:
+                none was split, and summary.final_max_error is above epsilon).
     lattice:    Record of the error sampled on the barycentric lattice inside the tets (n,
                 tets_sampled, points_sampled, max_error, mean_error, share_above_epsilon, ...).
     summary:    Record of the whole Summary message (norm_coeff, initial_quality, final_quality,

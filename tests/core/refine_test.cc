@@ -232,6 +232,40 @@ TEST(Refine, SharpFeatureConvergesUnderTheLongestEdgeScheme) {
   EXPECT_GE(r.final_quality.mean, 0.8 * r.initial_quality.mean);
 }
 
+// Edges kept whole by min_edge_length: once only they fail, the run stops with kMinEdgeLength
+// (a sweep found such runs reported as converged with the largest midpoint error far above
+// epsilon), and certified mode certifies nothing.
+TEST(Refine, OnlyShortEdgesLeftStopsWithMinEdgeLength) {
+  const GridGeometry g = HeartGrid();
+  const Volume volume = testing::AnalyticVolume(g, BlobField{{20.3, 37.1, 31.7}, 4.0});
+  const Mesh mesh = testing::FiveTetMesh(g.origin, GridMax(g), {6, 6, 3});
+  for (const bool certify : {false, true}) {
+    SCOPED_TRACE(certify ? "certify" : "longest-edge");
+    RefineOptions o;
+    o.epsilon = 0.05;
+    o.max_iterations = 32;
+    o.certify = certify;
+    o.min_edge_length = 2.0 * g.spacing[0];
+    absl::StatusOr<RefineResult> r = Refine(volume, mesh, o);
+    ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_EQ(r->stop_reason, StopReason::kMinEdgeLength);
+    EXPECT_EQ(StopReasonName(r->stop_reason), "min_edge_length");
+    EXPECT_LT(r->certified_max_error, 0.0);
+    ASSERT_FALSE(r->iterations.empty());
+    EXPECT_GT(r->iterations.back().short_edges_kept, 0);
+    // Certified mode judges an edge by its maximum along it, which can exceed epsilon where
+    // its midpoint does not.
+    if (!certify) {
+      EXPECT_GT(r->final_max_error, o.epsilon);
+    }
+    // Without the bound the same run converges.
+    o.min_edge_length = 0.0;
+    r = Refine(volume, mesh, o);
+    ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_EQ(r->stop_reason, StopReason::kConverged);
+  }
+}
+
 TEST_P(RefineEveryScheme, UnstructuredCubeMeshStaysConformal) {
   for (uint64_t seed : testing::Seeds(3)) {
     SCOPED_TRACE(::testing::Message() << "seed " << seed);

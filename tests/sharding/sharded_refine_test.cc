@@ -300,6 +300,28 @@ TEST_F(ShardedRefineTest, QualityFloorStopsWhereTheWholeStops) {
   }
 }
 
+// Only edges shorter than min_edge_length left above epsilon: the sharded run stops with
+// kMinEdgeLength as the whole does, in every scheme (the measuring round and CombineStops).
+TEST_F(ShardedRefineTest, MinEdgeLengthStopsWhereTheWholeStops) {
+  const UnitCubeCase c;
+  for (const RefineScheme scheme : {RefineScheme::kPaper, RefineScheme::kLongestEdge}) {
+    SCOPED_TRACE(RefineSchemeName(scheme));
+    client::RefineRequestOptions options = Options(0.01, 12);
+    options.refine.orientation = OrientationPolicy::kNormalize;
+    options.refine.scheme = scheme;
+    options.refine.min_edge_length = 5.0;
+    const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+    ASSERT_EQ(whole.result.stop_reason, StopReason::kMinEdgeLength)
+        << "pick a min_edge_length the whole run stops at";
+    ASSERT_GE(whole.result.iterations.size(), 1u) << "and one that lets it split edges first";
+    for (int k : {2, 3}) {
+      SCOPED_TRACE(::testing::Message() << "shards = " << k);
+      const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
+      ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+    }
+  }
+}
+
 // Replica 0 is killed while it refines a part (after that part's first iteration); the part
 // moves to the next replica and the result is unchanged.
 TEST_F(ShardedRefineTest, ReplicaKilledMidRunStillGivesTheSameResult) {

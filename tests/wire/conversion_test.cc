@@ -317,7 +317,7 @@ TEST(WireConversion, IterationStatsWithTheWrongConfigurationCountNamesTheField) 
 TEST(WireConversion, SummaryRoundTripsEveryStopReason) {
   for (StopReason reason :
        {StopReason::kConverged, StopReason::kMaxIterations, StopReason::kTetBudget,
-        StopReason::kCancelled, StopReason::kQualityFloor}) {
+        StopReason::kCancelled, StopReason::kQualityFloor, StopReason::kMinEdgeLength}) {
     RefineResult r;
     r.mesh.points.resize(11);
     r.mesh.tets.resize(13);
