@@ -429,9 +429,12 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
 }
 
 int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,
-                        const EdgeTestParams& params, FillLater<uint8_t>& split,
-                        CancelFlag& cancel) {
+                        const EdgeTestParams& params, FillLater<uint8_t>& split, CancelFlag& cancel,
+                        int64_t* kept) {
   const std::vector<Vec3>& points = *state.points;
+  const double min_length2 = params.min_edge_length * params.min_edge_length;
+  std::vector<int64_t> short_kept(
+      static_cast<size_t>(BlockCount(static_cast<int64_t>(state.tets->size()))), 0);
   const std::vector<Tet>& tets = *state.tets;
   const std::vector<double>& values = state.mesh.values;
   const int64_t nt = static_cast<int64_t>(tets.size());
@@ -457,13 +460,21 @@ int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edg
         state.tet_lattice_sum[t] = check.sum_error;
         continue;
       }
+      const int longest = LongestEdge(p);
+      if (min_length2 > 0.0 &&
+          SquaredDistance(p[kTetEdges[longest][0]], p[kTetEdges[longest][1]]) < min_length2) {
+        ++short_kept[b];
+        continue;
+      }
       ++f;
-      MarkSplit(split, edges.tet_edges[t][LongestEdge(p)]);
+      MarkSplit(split, edges.tet_edges[t][longest]);
     }
     failing[b] = f;
   });
   int64_t total = 0;
   for (int64_t f : failing) total += f;
+  *kept = 0;
+  for (int64_t k : short_kept) *kept += k;
   return total;
 }
 

@@ -331,19 +331,20 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
     result.final_max_error = errors.max_error;
     result.final_mean_error = errors.mean_error;
     int64_t failing_tets = 0;
+    int64_t short_tets_kept = 0;
     if (options.certify) {
       add_tet_edges(edges);
-      failing_tets = refine_internal::MarkFailingTets(volume, state, edges, options.lattice_n,
-                                                      params, errors.split, cancel);
+      failing_tets = refine_internal::MarkFailingTets(
+          volume, state, edges, options.lattice_n, params, errors.split, cancel, &short_tets_kept);
       if (cancel.IsSet()) {
         result.stop_reason = StopReason::kCancelled;
         break;
       }
     }
     if (errors.failing == 0 && failing_tets == 0) {
-      result.stop_reason =
-          errors.short_kept > 0 ? StopReason::kMinEdgeLength : StopReason::kConverged;
-      certified = options.certify && errors.short_kept == 0;
+      const bool kept = errors.short_kept > 0 || short_tets_kept > 0;
+      result.stop_reason = kept ? StopReason::kMinEdgeLength : StopReason::kConverged;
+      certified = options.certify && !kept;
       break;
     }
     if (iteration > options.max_iterations) {

@@ -258,6 +258,14 @@ TEST(Refine, OnlyShortEdgesLeftStopsWithMinEdgeLength) {
     if (!certify) {
       EXPECT_GT(r->final_max_error, o.epsilon);
     }
+    // A bound above every edge: nothing is split, in certified mode too (its tet test split
+    // the longest edge of failing tets whatever its length, found by a sweep).
+    o.min_edge_length = 1e3;
+    r = Refine(volume, mesh, o);
+    ASSERT_TRUE(r.ok()) << r.status();
+    EXPECT_EQ(r->stop_reason, StopReason::kMinEdgeLength);
+    EXPECT_TRUE(r->iterations.empty());
+    EXPECT_EQ(r->mesh.tets.size(), mesh.tets.size());
     // Without the bound the same run converges.
     o.min_edge_length = 0.0;
     r = Refine(volume, mesh, o);
