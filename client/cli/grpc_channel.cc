@@ -105,18 +105,27 @@ absl::Status CheckTargetPorts(const std::string& address) {
       list ? absl::StrSplit(rest, ',') : std::vector<absl::string_view>{rest};
   for (absl::string_view host_port : host_ports) {
     absl::string_view port;
+    // A host without a port dialled port 0 ("Connection refused", exit 1) where a sweep expected
+    // a flag error; a bare IPv6 address (two colons or more) cannot say where its port starts.
+    const auto no_port = [&] {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "--server: '", host_port,
+          host_port == address ? std::string() : absl::StrCat("' of '", address),
+          "' has no port: write host:port ([address]:port for IPv6); tetrefine_server listens "
+          "on port 50051 unless told otherwise"));
+    };
     if (absl::StartsWith(host_port, "[")) {
       const size_t close = host_port.find("]:");
-      if (close == absl::string_view::npos) continue;
+      if (close == absl::string_view::npos) return no_port();
       port = host_port.substr(close + 2);
     } else {
       const size_t colon = host_port.find(':');
-      // No colon: gRPC's default port; two or more: a bare IPv6 address.
       if (colon == absl::string_view::npos || host_port.find(':', colon + 1) != host_port.npos) {
-        continue;
+        return no_port();
       }
       port = host_port.substr(colon + 1);
     }
+    if (port.empty()) return no_port();
     if (port.empty() || !std::all_of(port.begin(), port.end(), absl::ascii_isdigit)) continue;
     int number = 0;
     if (port.size() > 5 || !absl::SimpleAtoi(port, &number) || number < 1 || number > 65535) {

@@ -38,8 +38,9 @@ absl::StatusOr<std::string> TokenFromArgs(const ParsedArgs& args);
 
 // Checks the numeric port of each host:port in a gRPC target ("host:port", "[::1]:port",
 // "dns:///host:port", "ipv4:a:p,b:p"): 1-65535. gRPC itself takes 70000 modulo 65536 and
-// connects to port 4464, somebody else's. Targets without a numeric port (unix:/path, a bare
-// IPv6 address, a named port) pass. The error names the target and the port.
+// connects to port 4464, somebody else's. A host without a port (gRPC would dial port 0 or 443)
+// is refused too; unix:/path and the like, and named ports, pass. The error names the target
+// and the port.
 absl::Status CheckTargetPorts(const std::string& address);
 
 // A channel to `address` (host:port, or any gRPC target such as unix:/path), plain or TLS.

@@ -1,13 +1,27 @@
 // tetrefine: the command line. Everything but argument hand-over lives in tetrefine_cli.
 
+#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "client/cli/commands.h"
+#include "grpc/support/log.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
 
+namespace {
+
+// gRPC core's own lines ("E1127 ... Handshake failed" before the CLI's one-line error, even under
+// --quiet, in a sweep) say again what the CLI's message says: they go to spdlog's debug level.
+// GRPC_VERBOSITY set in the environment keeps gRPC's logging as it is, for debugging.
+void GrpcCoreLogToDebug(gpr_log_func_args* args) {
+  spdlog::debug("grpc {}:{}: {}", args->file, args->line, args->message);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  if (std::getenv("GRPC_VERBOSITY") == nullptr) gpr_set_log_function(GrpcCoreLogToDebug);
   // The embedded service logs through spdlog: keep its lines off stdout (which carries the
   // report) and drop the per-call access line it writes at info level.
   spdlog::set_default_logger(spdlog::stderr_color_mt("tetrefine"));

@@ -96,34 +96,53 @@ class ShardedBackend : public RefineBackend {
   absl::StatusOr<client::ClientResult> Refine(const Volume& volume, const Mesh& mesh,
                                               const client::RefineRequestOptions& options,
                                               const client::RefineCallbacks& callbacks) override {
-    absl::StatusOr<size_t> chunk = AskServers(callbacks);
-    if (!chunk.ok()) return chunk.status();
-    call_.chunk_bytes = *chunk;
-    return sharding::RefineSharded(channels_, volume, mesh, options, shards_, callbacks, call_,
-                                   addresses_);
+    absl::StatusOr<LiveServers> live = AskServers(callbacks);
+    if (!live.ok()) return live.status();
+    call_.chunk_bytes = live->chunk_bytes;
+    return sharding::RefineSharded(live->channels, volume, mesh, options, shards_, callbacks, call_,
+                                   live->addresses);
   }
 
   absl::StatusOr<sharding::ShardedResult> RefineInPieces(
       const Volume& volume, const Mesh& mesh, const client::RefineRequestOptions& options,
       const client::RefineCallbacks& callbacks) override {
-    absl::StatusOr<size_t> chunk = AskServers(callbacks);
-    if (!chunk.ok()) return chunk.status();
-    call_.chunk_bytes = *chunk;
-    return sharding::RefineShardedInPieces(channels_, volume, mesh, options, shards_, callbacks,
-                                           call_, addresses_);
+    absl::StatusOr<LiveServers> live = AskServers(callbacks);
+    if (!live.ok()) return live.status();
+    call_.chunk_bytes = live->chunk_bytes;
+    return sharding::RefineShardedInPieces(live->channels, volume, mesh, options, shards_,
+                                           callbacks, call_, live->addresses);
   }
 
  private:
-  // The chunk size every server takes. A replica that is down does not stop the run (its parts
-  // go to the others), but the operator is told which.
-  absl::StatusOr<size_t> AskServers(const client::RefineCallbacks& callbacks) {
-    return ChunkBytesForServers(
+  struct LiveServers {
+    size_t chunk_bytes = 0;
+    std::vector<std::shared_ptr<grpc::Channel>> channels;
+    std::vector<std::string> addresses;
+  };
+
+  // The servers that answer, and the chunk size every one of them takes. A replica that is down
+  // does not stop the run: the operator is told once, and it is left out of this run (it was
+  // tried again, and warned about, in every iteration; the mesh does not depend on which
+  // servers refine it).
+  absl::StatusOr<LiveServers> AskServers(const client::RefineCallbacks& callbacks) {
+    std::vector<bool> down(channels_.size(), false);
+    absl::StatusOr<size_t> chunk = ChunkBytesForServers(
         channels_, call_.bearer_token, [&](size_t i, const absl::Status& status) {
+          down[i] = true;
           if (!callbacks.on_warning) return;
           callbacks.on_warning(absl::StrCat(addresses_[i], " is unreachable (",
                                             absl::StatusCodeToString(status.code()), ": ",
                                             status.message(), "); its parts go to the others"));
         });
+    if (!chunk.ok()) return chunk.status();
+    LiveServers live;
+    live.chunk_bytes = *chunk;
+    for (size_t i = 0; i < channels_.size(); ++i) {
+      if (down[i]) continue;
+      live.channels.push_back(channels_[i]);
+      live.addresses.push_back(addresses_[i]);
+    }
+    return live;
   }
 
   std::string name_;

@@ -544,7 +544,11 @@ int RunRefinement(const RefineSettings& s) {
   progress.Line(s.shards > 0 ? absl::StrCat("cutting the mesh into ", s.shards,
                                             " parts and sending each to its server ...")
                              : std::string("sending the input ..."));
+  // Whether the server took the whole input: a connection failure after that is not the TLS
+  // mismatch WithTlsHint suggests (a server killed mid-call was blamed on TLS in a sweep).
+  bool input_taken = false;
   callbacks.on_input_sent = [&](int64_t bytes) {
+    input_taken = true;
     progress.Line(absl::StrCat("sent ", FormatBytes(bytes), ", ",
                                FormatSeconds(SecondsSince(phase_start)),
                                "; the service validates the input and refines"));
@@ -622,7 +626,7 @@ int RunRefinement(const RefineSettings& s) {
           absl::StrCat(volume_error ? s.volume_path : s.mesh_path, ": ", reply.status().message()),
           kExitUsage);
     }
-    const absl::Status failed = WithTlsHint(reply.status(), s.tls);
+    const absl::Status failed = input_taken ? reply.status() : WithTlsHint(reply.status(), s.tls);
     return Fail(absl::StrCat((*backend)->Name(), ": ", absl::StatusCodeToString(failed.code()),
                              ": ", failed.message()),
                 kExitFailed);

@@ -41,6 +41,37 @@ absl::Status Prefixed(int part, const absl::Status& status) {
   return absl::Status(status.code(), absl::StrCat("part ", part, ": ", status.message()));
 }
 
+// Which targets have been found gone (UNAVAILABLE) or stalled (DEADLINE_EXCEEDED) during a run:
+// later parts, in this round and the next ones, go to the others while any is left. Without it
+// a dead server was tried, and warned about, again in every iteration (a sweep counted 8-9
+// warnings over 5 iterations), and two paused ones cost a connect timeout per part and round.
+class TargetHealth {
+ public:
+  explicit TargetHealth(size_t targets) : down_(targets) {}
+
+  // The target for a part's `attempt`-th try: the round-robin one, or the next one still up.
+  int Pick(int part, int attempt) const {
+    const int n = static_cast<int>(down_.size());
+    for (int k = 0; k < n; ++k) {
+      const int t = (part + attempt + k) % n;
+      if (!down_[t].load()) return t;
+    }
+    return (part + attempt) % n;  // all down: try them in turn anyway
+  }
+
+  // Marks `target` down after a failure with `code` that says it is gone or stalled; true the
+  // first time (the time to say so).
+  bool MarkDown(int target, absl::StatusCode code) {
+    if (code != absl::StatusCode::kUnavailable && code != absl::StatusCode::kDeadlineExceeded) {
+      return true;  // busy or aborted: said every time, and it stays in use
+    }
+    return !down_[target].exchange(true);
+  }
+
+ private:
+  std::vector<std::atomic<bool>> down_;
+};
+
 // What splitting itself relies on; the servers check everything else.
 absl::Status CheckInput(const std::vector<std::shared_ptr<grpc::Channel>>& targets,
                         const Volume& volume, const Mesh& mesh,
@@ -118,10 +149,11 @@ constexpr std::ptrdiff_t kMaxOpenCallsPerTarget = 8;
 // Sends parts to the targets, one thread per part, retrying on the next target.
 class PartRunner {
  public:
-  PartRunner(const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
-             const std::vector<MeshPart>& parts, bool clamp, const ShardOptions& shard,
-             const ShardCallbacks& callbacks)
+  PartRunner(const std::vector<std::shared_ptr<grpc::Channel>>& targets, TargetHealth& health,
+             const Volume& volume, const std::vector<MeshPart>& parts, bool clamp,
+             const ShardOptions& shard, const ShardCallbacks& callbacks)
       : targets_(targets),
+        health_(health),
         volume_(volume),
         parts_(parts),
         clamp_(clamp),
@@ -192,10 +224,9 @@ class PartRunner {
     report.slab_hi = box.hi;
     report.volume_bytes = static_cast<int64_t>(slab->data().size());
 
-    const int n = static_cast<int>(targets_.size());
     for (int attempt = 0; attempt < max_attempts_; ++attempt) {
       if (Stopped()) return;
-      const int target = (p + attempt) % n;
+      const int target = health_.Pick(p, attempt);
       client::RefineCallbacks calls;
       if (callbacks_.on_part_iteration) {
         calls.on_iteration = [this, p, target](const IterationStats& stats) {
@@ -218,10 +249,13 @@ class PartRunner {
       }
       if (abort_.load()) return;  // cancelled because the run stops: not this part's error
       if (!Retryable(reply.status().code()) || attempt + 1 == max_attempts_) {
-        return Fail(Prefixed(p, reply.status()));
+        return Fail(Prefixed(
+            p, absl::Status(reply.status().code(), absl::StrCat("on ", TargetName(target), ": ",
+                                                                reply.status().message()))));
       }
-      const int next = (p + attempt + 1) % n;
-      if (callbacks_.on_retry) {
+      const bool first = health_.MarkDown(target, reply.status().code());
+      const int next = health_.Pick(p, attempt + 1);
+      if (first && callbacks_.on_retry) {
         std::lock_guard<std::mutex> lock(callback_mu_);
         callbacks_.on_retry(p, target, reply.status(), next);
       }
@@ -229,7 +263,14 @@ class PartRunner {
     }
   }
 
+  std::string TargetName(int target) const {
+    return static_cast<size_t>(target) < shard_.target_names.size()
+               ? shard_.target_names[target]
+               : absl::StrCat("server ", target + 1, " of ", targets_.size());
+  }
+
   const std::vector<std::shared_ptr<grpc::Channel>>& targets_;
+  TargetHealth& health_;
   std::vector<std::unique_ptr<std::counting_semaphore<kMaxOpenCallsPerTarget>>> open_calls_;
   const Volume& volume_;
   const std::vector<MeshPart>& parts_;
@@ -300,6 +341,7 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
     const ShardOptions& shard_options, const ShardCallbacks& callbacks) {
   const Clock::time_point start = Clock::now();
   const bool clamp = options.refine.outside == OutsidePolicy::kClamp;
+  TargetHealth health(targets.size());
   ShardedResult out;
   RefineResult& result = out.reply.result;
   result.norm_coeff = options.refine.norm_coeff.value_or(WholeRange(volume));
@@ -373,7 +415,7 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
     out.parts_per_iteration.push_back(static_cast<int>(parts.size()));
     std::vector<MeshPart> meshes;
     for (const HaloPart& h : parts) meshes.push_back(h.part);
-    PartRunner runner(targets, volume, meshes, clamp, shard_options, callbacks);
+    PartRunner runner(targets, health, volume, meshes, clamp, shard_options, callbacks);
     std::vector<std::optional<client::ClientResult>> replies(parts.size());
     reports.assign(parts.size(), ShardReport{});
     std::vector<int> all(parts.size());
@@ -464,7 +506,7 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
   measure.send_max_tets = false;
   measure.stream_every_iteration = false;
   measure.skip_final_mesh = true;
-  PartRunner runner(targets, volume, parts, clamp, shard_options, callbacks);
+  PartRunner runner(targets, health, volume, parts, clamp, shard_options, callbacks);
   std::vector<std::optional<client::ClientResult>> replies(parts.size());
   std::vector<ShardReport> measured(parts.size());
   std::vector<int> all(parts.size());
@@ -554,7 +596,8 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   const double split_seconds = SecondsSince(start);
   const int num_parts = static_cast<int>(parts.size());
   const bool clamp = options.refine.outside == OutsidePolicy::kClamp;
-  PartRunner runner(targets, volume, parts, clamp, shard_options, callbacks);
+  TargetHealth health(targets.size());
+  PartRunner runner(targets, health, volume, parts, clamp, shard_options, callbacks);
   std::vector<std::optional<client::ClientResult>> replies(parts.size());
   std::vector<ShardReport> reports(parts.size());
   std::vector<int> all(parts.size());
@@ -658,6 +701,7 @@ absl::StatusOr<ShardedResult> RefineShardedFor(
   shard.shards = shards;
   shard.call = call;
   shard.keep_pieces = keep_pieces;
+  shard.target_names = target_names;
   ShardCallbacks sharded;
   sharded.should_cancel = callbacks.should_cancel;
   sharded.on_iteration = callbacks.on_iteration;

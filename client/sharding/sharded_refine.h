@@ -55,6 +55,8 @@ struct ShardOptions {
   // paper's scheme no merge happens at all; the halo schemes hold the whole mesh between their
   // rounds anyway, and the pieces are then the measuring round's parts.
   bool keep_pieces = false;
+  // The targets' names for messages ("server host:port"); empty: "server 2 of 3".
+  std::vector<std::string> target_names;
 };
 
 struct ShardCallbacks {

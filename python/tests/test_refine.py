@@ -368,9 +368,13 @@ def test_client_misuse_is_a_tetrefine_error(server):
         with pytest.raises(tetrefine.TetrefineError,
                            match=rf"target: port {port} of .* is out of range \(1-65535\)"):
             tetrefine.Client(target)
-    for target in ("127.0.0.1:65535", "dns://8.8.8.8/refiner:443", "[::1]:1", "::1",
-                   "unix:/tmp/socket:99999", "refiner.local", "host:http"):
+    for target in ("127.0.0.1:65535", "dns://8.8.8.8/refiner:443", "[::1]:1",
+                   "unix:/tmp/socket:99999", "host:http"):
         tetrefine.Client(target).close()
+    for target in ("127.0.0.1", "refiner.local", "::1", "[::1]", "host:", "dns:///refiner.local",
+                   "ipv4:10.0.0.1:1,10.0.0.2"):
+        with pytest.raises(tetrefine.TetrefineError, match=r"target: .* has no port: write"):
+            tetrefine.Client(target)
     closed = tetrefine.Client(server.target)
     closed.close()
     with pytest.raises(tetrefine.TetrefineError) as error:

@@ -78,8 +78,9 @@ def _timeout(value):
 def _check_target_ports(target):
     """Refuses a numeric port outside 1-65535 in a host:port target (also "[v6]:port",
     "dns:///host:port", "ipv4:a:p,b:p"): gRPC takes 70000 modulo 65536 and connects to port
-    4464, somebody else's. Targets without a numeric port (unix:/path, a bare IPv6 address, a
-    named port) pass. The same rule as the CLI's --server (client/cli/grpc_channel.cc)."""
+    4464, somebody else's; and a host without a port, which gRPC dials at port 0 or 443.
+    unix:/path and the like, and named ports, pass. The same rule as the CLI's --server
+    (client/cli/grpc_channel.cc)."""
     rest, is_list = target, False
     if rest.startswith("dns:"):
         rest = rest[4:]
@@ -94,9 +95,14 @@ def _check_target_ports(target):
             port = host_port.partition("]:")[2]
         elif host_port.count(":") == 1:
             port = host_port.partition(":")[2]
-        else:  # no port (gRPC's default), or a bare IPv6 address
-            continue
-        if port and port.isascii() and port.isdigit() and not 1 <= int(port) <= 65535:
+        else:  # no port, or a bare IPv6 address that cannot say where its port starts
+            port = ""
+        if not port:
+            where = repr(target) if host_port == target else f"{host_port!r} of {target!r}"
+            raise invalid("target", f"{where} has no port: write host:port "
+                          "([address]:port for IPv6); tetrefine_server listens on port 50051 "
+                          "unless told otherwise")
+        if port.isascii() and port.isascii() and port.isdigit() and not 1 <= int(port) <= 65535:
             raise invalid("target", f"port {port} of {target!r} is out of range (1-65535)")
 
 

@@ -89,6 +89,17 @@ TEST_F(CliTls, HealthOverTlsAndMutualTls) {
     EXPECT_TRUE(absl::StrContains(system_roots.err, "certificate verify failed") ||
                 absl::StrContains(system_roots.err, "Ssl handshake failed"))
         << system_roots.err;
+    // One line: gRPC core's own "Handshake failed" log line went to stderr before it.
+    EXPECT_EQ(SplitLines(system_roots.err).size(), 1u) << system_roots.err;
+  }
+  {
+    // A TLS client against a plaintext server: one line too.
+    absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start({});
+    ASSERT_TRUE(started.ok()) << started.status();
+    const ProcessResult tls_to_plain =
+        RunTetrefine({"health", "--server", (*started)->target(), "--tls-ca", dir_.File("ca.pem")});
+    EXPECT_EQ(tls_to_plain.exit_code, 1) << tls_to_plain.err;
+    EXPECT_EQ(SplitLines(tls_to_plain.err).size(), 1u) << tls_to_plain.err;
   }
   absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
       {"--tls_cert=" + dir_.File("server.pem"), "--tls_key=" + dir_.File("server.key"),

@@ -120,10 +120,25 @@ TEST(CliArgParser, Numbers) {
 TEST(CliGrpcChannel, PortsOutsideOneTo65535AreRefusedNamingTheTarget) {
   for (const std::string target :
        {"127.0.0.1:50051", "localhost:1", "host:65535", "dns:///refiner.local:50051",
-        "dns://8.8.8.8/refiner:443", "ipv4:10.0.0.1:1,10.0.0.2:2", "[::1]:50051", "::1",
-        "ipv6:[::1]:8080", "unix:/tmp/socket:99999", "unix-abstract:x", "vsock:3:70000",
-        "refiner.local", "host:http"}) {
+        "dns://8.8.8.8/refiner:443", "ipv4:10.0.0.1:1,10.0.0.2:2", "[::1]:50051", "ipv6:[::1]:8080",
+        "unix:/tmp/socket:99999", "unix-abstract:x", "vsock:3:70000", "host:http"}) {
     EXPECT_TRUE(cli::CheckTargetPorts(target).ok()) << target;
+  }
+  // Without a port gRPC dialled port 0 or 443, never a tetrefine_server: a flag error.
+  for (const auto& [target, host] :
+       std::vector<std::pair<std::string, std::string>>{{"127.0.0.1", "127.0.0.1"},
+                                                        {"refiner.local", "refiner.local"},
+                                                        {"::1", "::1"},
+                                                        {"[::1]", "[::1]"},
+                                                        {"host:", "host:"},
+                                                        {"dns:///refiner.local", "refiner.local"},
+                                                        {"ipv4:10.0.0.1:1,10.0.0.2", "10.0.0.2"}}) {
+    const absl::Status status = cli::CheckTargetPorts(target);
+    EXPECT_TRUE(absl::IsInvalidArgument(status)) << target;
+    const std::string of = host == target ? "" : "' of '" + target;
+    EXPECT_TRUE(absl::StartsWith(status.message(),
+                                 "--server: '" + host + of + "' has no port: write host:port"))
+        << status;
   }
   for (const auto& [target, port] :
        std::vector<std::pair<std::string, std::string>>{{"127.0.0.1:70000", "70000"},

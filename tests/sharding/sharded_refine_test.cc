@@ -360,6 +360,29 @@ TEST_F(ShardedRefineTest, DeadReplicaBeforeTheRun) {
   for (const sharding::ShardReport& s : sharded.shards) EXPECT_NE(s.target, 2);
 }
 
+// Under a halo scheme every iteration is a round of calls: a replica found gone is left out of
+// the later ones, and said once (a sweep counted a warning per iteration for one dead server).
+TEST_F(ShardedRefineTest, AReplicaFoundGoneIsToldOnceAndNotTriedAgain) {
+  const UnitCubeCase c;
+  client::RefineRequestOptions options = Options(0.01, 6);
+  options.refine.orientation = OrientationPolicy::kNormalize;
+  options.refine.scheme = RefineScheme::kLongestEdge;
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+  ASSERT_GE(whole.result.iterations.size(), 3u);
+  servers_[2]->Kill();
+  std::atomic<int> retries{0};
+  sharding::ShardCallbacks callbacks;
+  callbacks.on_retry = [&](int, int target, const absl::Status& status, int next) {
+    EXPECT_EQ(target, 2) << status;
+    EXPECT_NE(next, 2);
+    ++retries;
+  };
+  const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, 4, callbacks);
+  EXPECT_EQ(retries.load(), 1);
+  for (const sharding::ShardReport& s : sharded.shards) EXPECT_NE(s.target, 2);
+  ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+}
+
 // The RefineViaService-shaped entry point, with every part on one target (as with a single
 // dns:/// target that balances per call).
 TEST_F(ShardedRefineTest, RefineShardedOverOneTarget) {
