@@ -14,6 +14,7 @@
 #include <tuple>
 #include <vector>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "client/io/mesh_io.h"
 #include "client/io/read_volume.h"
@@ -416,6 +417,13 @@ TEST_F(ShardedRefineTest, ServerErrorNamesThePart) {
   ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << r.status();
   EXPECT_NE(r.status().message().find("part "), absl::string_view::npos) << r.status();
   EXPECT_NE(r.status().message().find("epsilon"), absl::string_view::npos) << r.status();
+  // And the server that said so (a token refusal did not say which server refused).
+  EXPECT_TRUE(absl::StrContains(r.status().message(), " of 3: ")) << r.status();
+  sharding::ShardOptions named = Shards(2);
+  named.target_names = {"server alpha", "server beta", "server gamma"};
+  r = sharding::ShardedRefine(channels_, c.volume, c.mesh, options, named);
+  ASSERT_FALSE(r.ok());
+  EXPECT_TRUE(absl::StrContains(r.status().message(), ": on server ")) << r.status();
 }
 
 TEST_F(ShardedRefineTest, VertexOutsideTheVolumeIsRefusedBeforeSending) {
