@@ -158,8 +158,8 @@ void CombineSummary(const std::vector<const RefineResult*>& parts,
                     const std::vector<double>& part_volumes, RefineResult* out) {
   QualitySum initial, final;
   LatticeStats lattice;
-  double error_sum = 0.0, above_sum = 0.0, sampled_volume = 0.0, volume_error_sum = 0.0,
-         volume_above_sum = 0.0, final_error_sum = 0.0;
+  double error_sum = 0.0, above_sum = 0.0, represented_points = 0.0, sampled_volume = 0.0,
+         volume_error_sum = 0.0, volume_above_sum = 0.0, final_error_sum = 0.0;
   int64_t final_tets = 0;
   out->final_max_error = 0.0;
   out->tets_reoriented = 0;
@@ -172,12 +172,18 @@ void CombineSummary(const std::vector<const RefineResult*>& parts,
     lattice.tets_sampled += l.tets_sampled;
     lattice.points_sampled += l.points_sampled;
     lattice.max_error = std::max(lattice.max_error, l.max_error);
-    const double points = static_cast<double>(l.points_sampled);
+    // Each part's sample stands for the whole part: its means weigh by the part's points and
+    // volume, not by what was sampled. Parts sample lattice_max_tets / K tets each whatever
+    // their size (SplitLatticeSample), so weighing by the sample would overweight small parts.
+    // With every tet sampled the two are the same.
+    const double tets = static_cast<double>(FinalTets(r));
+    const double points = l.tets_sampled > 0 ? static_cast<double>(l.points_sampled) * tets /
+                                                   static_cast<double>(l.tets_sampled)
+                                             : 0.0;
+    represented_points += points;
     error_sum += l.mean_error * points;
     above_sum += l.share_above_epsilon * points;
-    const double tets = static_cast<double>(FinalTets(r));
-    const double volume =
-        tets > 0 ? part_volumes[p] * static_cast<double>(l.tets_sampled) / tets : 0.0;
+    const double volume = l.tets_sampled > 0 ? part_volumes[p] : 0.0;
     sampled_volume += volume;
     volume_error_sum += l.volume_mean_error * volume;
     volume_above_sum += l.volume_share_above_epsilon * volume;
@@ -186,10 +192,9 @@ void CombineSummary(const std::vector<const RefineResult*>& parts,
     final_tets += FinalTets(r);
     out->tets_reoriented += r.tets_reoriented;
   }
-  if (lattice.points_sampled > 0) {
-    const double points = static_cast<double>(lattice.points_sampled);
-    lattice.mean_error = error_sum / points;
-    lattice.share_above_epsilon = above_sum / points;
+  if (represented_points > 0.0) {
+    lattice.mean_error = error_sum / represented_points;
+    lattice.share_above_epsilon = above_sum / represented_points;
   }
   if (sampled_volume > 0.0) {
     lattice.volume_mean_error = volume_error_sum / sampled_volume;

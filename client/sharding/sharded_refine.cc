@@ -41,6 +41,17 @@ absl::Status Prefixed(int part, const absl::Status& status) {
   return absl::Status(status.code(), absl::StrCat("part ", part, ": ", status.message()));
 }
 
+// The lattice sample of each of `parts` parts: the caller's lattice_max_tets in all, split
+// evenly (parts are cut to equal tet counts). Each part sampled the whole budget, so a sharded
+// run sampled K times the tets of the unsharded one, past the user's bound on that work (found by
+// a sweep). 0, every tet, stays. Beyond the budget the sample is another one than the unsharded
+// run's (its tets are numbered part by part), so its statistics differ a little; within it
+// every tet is sampled either way, and they agree.
+void SplitLatticeSample(RefineOptions& o, size_t parts) {
+  const auto k = static_cast<int64_t>(parts);
+  if (o.lattice_max_tets > 0 && k > 1) o.lattice_max_tets = (o.lattice_max_tets + k - 1) / k;
+}
+
 // Which targets have been found gone (UNAVAILABLE) or stalled (DEADLINE_EXCEEDED) during a run:
 // later parts, in this round and the next ones, go to the others while any is left. Without it
 // a dead server was tried, and warned about, again in every iteration (a sweep counted 8-9
@@ -503,6 +514,7 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
   measure.refine.orientation = OrientationPolicy::kReject;
   measure.refine.max_iterations = 0;
   measure.refine.track_parents = false;
+  SplitLatticeSample(measure.refine, parts.size());
   measure.send_max_tets = false;
   measure.stream_every_iteration = false;
   measure.skip_final_mesh = true;
@@ -593,6 +605,7 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   sent.skip_final_mesh = false;  // the parts' meshes are the result
 
   const std::vector<MeshPart> parts = ExtractParts(mesh, PartitionTets(mesh, shard_options.shards));
+  SplitLatticeSample(sent.refine, parts.size());
   const double split_seconds = SecondsSince(start);
   const int num_parts = static_cast<int>(parts.size());
   const bool clamp = options.refine.outside == OutsidePolicy::kClamp;

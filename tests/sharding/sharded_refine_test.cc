@@ -323,6 +323,34 @@ TEST_F(ShardedRefineTest, MinEdgeLengthStopsWhereTheWholeStops) {
   }
 }
 
+// A lattice sample smaller than the result: the sharded run samples lattice_max_tets tets in all
+// (each part sampled that many, K times the unsharded run's work, found by a sweep), and its
+// statistics, from another sample, stay near the unsharded run's.
+TEST_F(ShardedRefineTest, TheLatticeSampleIsTheCallersInAll) {
+  const UnitCubeCase c;
+  for (const RefineScheme scheme : {RefineScheme::kPaper, RefineScheme::kLongestEdge}) {
+    SCOPED_TRACE(RefineSchemeName(scheme));
+    client::RefineRequestOptions options = Options(0.01, 4);
+    options.refine.orientation = OrientationPolicy::kNormalize;
+    options.refine.scheme = scheme;
+    options.refine.lattice_max_tets = 3000;
+    const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+    ASSERT_GT(whole.result.final_quality.count, 4 * options.refine.lattice_max_tets);
+    ASSERT_EQ(whole.result.lattice.tets_sampled, 3000);
+    for (int k : {2, 3}) {
+      SCOPED_TRACE(::testing::Message() << "shards = " << k);
+      const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
+      const LatticeStats& l = sharded.reply.result.lattice;
+      EXPECT_LE(l.tets_sampled, 3000 + k);
+      EXPECT_GE(l.tets_sampled, 2900);
+      EXPECT_NEAR(l.mean_error, whole.result.lattice.mean_error,
+                  0.15 * whole.result.lattice.mean_error);
+      EXPECT_NEAR(l.share_above_epsilon, whole.result.lattice.share_above_epsilon,
+                  0.15 * whole.result.lattice.share_above_epsilon + 1e-3);
+    }
+  }
+}
+
 // Replica 0 is killed while it refines a part (after that part's first iteration); the part
 // moves to the next replica and the result is unchanged.
 TEST_F(ShardedRefineTest, ReplicaKilledMidRunStillGivesTheSameResult) {
