@@ -130,6 +130,30 @@ void CompressAll(std::vector<OutArray>& arrays, const VtuWriteOptions& options) 
                     });
 }
 
+// meshio (5.0, Debian 12's; the code is unchanged in later releases) reads a compressed
+// appended .vtu by decoding the arrays in file order and renumbering each one's offset to where
+// it lands in the base64 text it builds, looking each next array up by its original offset.
+// When a renumbered offset (a base64 length, a multiple of 4) equals a later array's original
+// offset, it takes the wrong array: a sweep found 1 of 885 refined meshes unreadable ("cannot
+// reshape array of size 30 into shape (90,3)"); two arrays of one size would be swapped
+// silently. A zlib stream may hold empty stored blocks (the 5 bytes Z_SYNC_FLUSH writes; every
+// inflater skips them): one goes after the zlib header of an array's first block wherever the
+// next array's offset would be a multiple of 4, so that no offset but the first is. The data
+// decoded is the same.
+void KeepOffsetsOffMultiplesOfFour(std::vector<OutArray>& arrays) {
+  static constexpr char kEmptyStoredBlock[] = {0x00, 0x00, 0x00, static_cast<char>(0xFF),
+                                               static_cast<char>(0xFF)};
+  uint64_t offset = 0;
+  for (size_t k = 0; k + 1 < arrays.size(); ++k) {
+    OutArray& a = arrays[k];
+    offset += a.EncodedSize(/*compressed=*/true);
+    // A zlib stream starts with a 2-byte header (libdeflate sets no preset dictionary).
+    if (offset % 4 != 0 || a.blocks.empty() || a.blocks.front().size() < 2) continue;
+    a.blocks.front().insert(2, kEmptyStoredBlock, sizeof(kEmptyStoredBlock));
+    offset += sizeof(kEmptyStoredBlock);
+  }
+}
+
 // Appends an array's header and data as stored in the file.
 void AppendEncoded(std::string& out, const OutArray& a, bool compressed, size_t block) {
   if (!compressed) {
@@ -271,6 +295,10 @@ std::string FormatVtu(const MeshFile& file, const VtuWriteOptions& options) {
     a.raw = a.owned;
   }
   if (compressed) CompressAll(arrays, options);
+  if (compressed && options.layout == Layout::kAppendedRaw &&
+      options.compressor == VtkCompressor::kZlib) {
+    KeepOffsetsOffMultiplesOfFour(arrays);
+  }
 
   std::string out =
       "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
