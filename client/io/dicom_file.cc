@@ -410,12 +410,11 @@ bool HasDicomMagic(absl::string_view bytes) { return FramingOf(bytes) != Framing
 DicomImage FrameOf(const DicomImage& image, int64_t frame) {
   DicomImage out = image;
   out.pixel_data.reset();
-  out.frame_groups.clear();
+  out.frame_groups.reset();
   out.shared_groups = DicomFrameGroups{};
-  const DicomFrameGroups* own =
-      frame >= 0 && frame < static_cast<int64_t>(image.frame_groups.size())
-          ? &image.frame_groups[static_cast<size_t>(frame)]
-          : nullptr;
+  const DicomFrameGroups* own = frame >= 0 && frame < image.frame_group_count()
+                                    ? &(*image.frame_groups)[static_cast<size_t>(frame)]
+                                    : nullptr;
   const DicomFrameGroups& shared = image.shared_groups;
   const auto pick = [&](auto member, auto& target) {
     if (own != nullptr && (own->*member).has_value()) {
@@ -514,7 +513,8 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
           ReadFunctionalGroups(parser, bytes, path, *h, explicit_vr, max_items, limit, &groups);
       if (!st.ok()) return st;
       if (top_tag == 0x52009230) {
-        image.frame_groups = std::move(groups);
+        image.frame_groups =
+            std::make_shared<const std::vector<DicomFrameGroups>>(std::move(groups));
       } else if (!groups.empty()) {
         image.shared_groups = groups.front();
       }

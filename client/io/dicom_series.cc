@@ -150,6 +150,21 @@ absl::Status CheckPlaceable(const Slice& s) {
                      " has no ", what, s.frame < 0 ? "" : " (nor do the shared functional groups)",
                      ": its slices cannot be placed in the world"));
   };
+  if (s.frame < 0 && im.frames != 1) {
+    if (im.frame_group_count() > 0) {
+      return FileError(s.file,
+                       absl::StrCat("DICOM file holds ", im.frames,
+                                    " frames (Number of Frames (0028,0008)) but its Per-frame "
+                                    "Functional Groups Sequence (5200,9230) has ",
+                                    im.frame_group_count(), " items: one per frame is needed"));
+    }
+    return FileUnsupported(
+        s.file,
+        absl::StrCat("DICOM file holds ", im.frames,
+                     " frames (Number of Frames (0028,0008)) but no Per-frame Functional Groups "
+                     "Sequence (5200,9230): only enhanced multi-frame images, whose frames carry "
+                     "their positions, are read; convert the series to NIfTI with dcm2niix"));
+  }
   if (!im.position) return missing("Image Position (Patient) (0020,0032)");
   if (!im.orientation) return missing("Image Orientation (Patient) (0020,0037)");
   if (!im.pixel_spacing) return missing("Pixel Spacing (0028,0030)");
@@ -157,15 +172,6 @@ absl::Status CheckPlaceable(const Slice& s) {
     return FileUnsupported(
         s.file, absl::StrCat("DICOM Samples per Pixel (0028,0002) is ", im.samples_per_pixel,
                              ": colour images are not read, only scalar ones"));
-  }
-  if (s.frame < 0 && im.frames != 1) {
-    return FileUnsupported(
-        s.file,
-        absl::StrCat("DICOM file holds ", im.frames,
-                     " frames (Number of Frames (0028,0008)) but no Per-frame Functional Groups "
-                     "Sequence (5200,9230) with one item per frame: only enhanced multi-frame "
-                     "images, whose frames carry their positions, are read; convert the series "
-                     "to NIfTI with dcm2niix"));
   }
   if (im.rows < 1 || im.columns < 1) {
     return FileError(s.file, absl::StrCat("DICOM image is ", im.columns, " x ", im.rows,
@@ -330,7 +336,7 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
     // An enhanced multi-frame file is a stack of slices, one per frame, each placed by its own
     // functional groups; another multi-frame file (cine, NM) is refused by CheckPlaceable.
     const int64_t frames = image->frames;
-    if (frames > 1 && static_cast<int64_t>(image->frame_groups.size()) == frames) {
+    if (frames > 1 && image->frame_group_count() == frames) {
       if (static_cast<int64_t>(slices.size()) + frames > kMaxVolumeAxis) {
         return FileError(file, absl::StrCat("DICOM file holds ", frames, " frames, more than ",
                                             kMaxVolumeAxis, " slices"));
@@ -338,6 +344,9 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
       for (int64_t f = 0; f < frames; ++f) {
         slices.push_back(Slice{file, FrameOf(*image, f), pixel_bytes, 0.0, f});
       }
+    } else if (frames > 1) {
+      // Refused by CheckPlaceable if it is in the series read, which names what is missing.
+      slices.push_back(Slice{file, *std::move(image), pixel_bytes, 0.0});
     } else {
       slices.push_back(Slice{file, FrameOf(*image, 0), pixel_bytes, 0.0});
     }
@@ -418,9 +427,13 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   // geometry alone.
   std::stable_sort(slices.begin(), slices.end(),
                    [](const Slice& a, const Slice& b) { return a.along < b.along; });
-  const double in_plane = std::min((*first.pixel_spacing)[0], (*first.pixel_spacing)[1]);
+  // Two slices at one position are closer than a thousandth of the mean step. (A thousandth of
+  // the in-plane spacing called frames 1.5 mm apart one position when the pixels were 1e5 mm,
+  // found by a sweep.) All at one position: a mean step of 0, every gap 0.
+  const double mean_step =
+      (slices.back().along - slices.front().along) / static_cast<double>(slices.size() - 1);
   for (size_t k = 1; k < slices.size(); ++k) {
-    if (slices[k].along - slices[k - 1].along <= 1e-4 * in_plane) {
+    if (slices[k].along - slices[k - 1].along <= 1e-3 * mean_step) {
       return FileError(
           path, absl::StrCat("DICOM slices ", SliceName(slices[k - 1]), " and ",
                              SliceName(slices[k]), " lie at the same position (", slices[k].along,
@@ -519,8 +532,7 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
                       image->pixel_data ? image->pixel_data->size() : 0, 0.0, s.frame};
     absl::Status same = CheckPlaceable(again);
     if (same.ok()) same = CheckSameShape(slices.front(), again);
-    if (same.ok() && s.frame >= 0 &&
-        static_cast<int64_t>(image->frame_groups.size()) != image->frames) {
+    if (same.ok() && s.frame >= 0 && image->frame_group_count() != image->frames) {
       same = absl::DataLossError("its functional groups changed");
     }
     if (!same.ok()) {

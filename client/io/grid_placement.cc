@@ -97,6 +97,34 @@ absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& aff
                              " mm per voxel, outside [", kMinVoxelMm, ", ", kMaxVoxelMm, "] mm"));
     }
   }
+  // The world coordinates must resolve the voxels: a DICOM series whose Image Position said
+  // 1e17 mm was read with a world box [-1e17, -1e17] along x, every sample at one point, and a
+  // mesh of it had zero volume (a sweep). Along each world axis, a corner farther from the world
+  // origin than kMaxVoxelsFromOrigin of the voxels that step along that axis is refused.
+  for (int row = 0; row < 3; ++row) {
+    double voxel = kMaxVoxelMm;
+    for (int column = 0; column < 3; ++column) {
+      const double length = ColumnLength(affine, column);
+      if (std::abs(affine[row][column]) > kObliqueTolerance * length) {
+        voxel = std::min(voxel, length);
+      }
+    }
+    for (int corner = 0; corner < 8; ++corner) {
+      double x = affine[row][3];
+      for (int column = 0; column < 3; ++column) {
+        if ((corner >> column) & 1) {
+          x += affine[row][column] * static_cast<double>(std::max<int64_t>(dims[column] - 1, 0));
+        }
+      }
+      if (!(std::abs(x) <= kMaxVoxelsFromOrigin * voxel)) {
+        return FileError(
+            path, absl::StrCat("index-to-world transform puts a corner of the grid at ", x,
+                               " mm along world axis ", row, ", more than 2^44 of its ", voxel,
+                               " mm voxels from the world origin: float64 cannot place the "
+                               "samples (check the origin or Image Position)"));
+      }
+    }
+  }
   VolumeFile result;
   result.affine = affine;
   GridGeometry grid;

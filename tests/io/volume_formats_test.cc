@@ -243,6 +243,31 @@ TEST(IoNrrdTest, AbsurdVoxelSizesAreRefusedNamingTheAxis) {
   EXPECT_TRUE(ReadVolume(path).ok()) << ReadVolume(path).status();
 }
 
+// A grid so far from the world origin that float64 cannot tell its samples apart (a DICOM
+// series at 1e17 mm read as one point, found by a sweep) is refused; 1e12 voxels away is read.
+TEST(IoNrrdTest, AGridBeyondFloat64sReachIsRefused) {
+  ScratchDir dir;
+  const std::string path = dir.File("far.nrrd");
+  auto write = [&](const std::string& origin) {
+    WriteBytes(path,
+               absl::StrCat("NRRD0004\ntype: short\ndimension: 3\nsizes: ", kNx, " ", kNy, " ", kNz,
+                            "\nspace: left-posterior-superior\n",
+                            "space directions: (0.5,0,0) (0,1,0) (0,0,2)\n",
+                            "space origin: ", origin, "\nkinds: domain domain domain\n",
+                            "endian: little\nencoding: raw\n\n", Int16Samples(Ramp(), false)));
+  };
+  for (const char* origin : {"(1e17,0,0)", "(0,-3e13,0)", "(0,0,1e300)"}) {
+    SCOPED_TRACE(origin);
+    write(origin);
+    const absl::Status status = ReadVolume(path).status();
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << status;
+    EXPECT_THAT(std::string(status.message()), HasSubstr(path));
+    EXPECT_THAT(std::string(status.message()), HasSubstr("float64 cannot place the samples"));
+  }
+  write("(5e11,-1e12,1e12)");
+  EXPECT_TRUE(ReadVolume(path).ok()) << ReadVolume(path).status();
+}
+
 TEST(IoMetaImageTest, ObliqueTransformMatrixBecomesTheDirection) {
   ScratchDir dir;
   const std::string header = absl::StrCat(
