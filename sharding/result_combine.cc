@@ -158,7 +158,7 @@ void CombineSummary(const std::vector<const RefineResult*>& parts,
                     const std::vector<double>& part_volumes, RefineResult* out) {
   QualitySum initial, final;
   LatticeStats lattice;
-  double error_sum = 0.0, above_sum = 0.0, represented_points = 0.0, sampled_volume = 0.0,
+  double error_sum = 0.0, above_sum = 0.0, represented_points = 0.0, represented_volume = 0.0,
          volume_error_sum = 0.0, volume_above_sum = 0.0, final_error_sum = 0.0;
   int64_t final_tets = 0;
   out->final_max_error = 0.0;
@@ -184,7 +184,7 @@ void CombineSummary(const std::vector<const RefineResult*>& parts,
     error_sum += l.mean_error * points;
     above_sum += l.share_above_epsilon * points;
     const double volume = l.tets_sampled > 0 ? part_volumes[p] : 0.0;
-    sampled_volume += volume;
+    represented_volume += volume;
     volume_error_sum += l.volume_mean_error * volume;
     volume_above_sum += l.volume_share_above_epsilon * volume;
     out->final_max_error = std::max(out->final_max_error, r.final_max_error);
@@ -196,9 +196,9 @@ void CombineSummary(const std::vector<const RefineResult*>& parts,
     lattice.mean_error = error_sum / represented_points;
     lattice.share_above_epsilon = above_sum / represented_points;
   }
-  if (sampled_volume > 0.0) {
-    lattice.volume_mean_error = volume_error_sum / sampled_volume;
-    lattice.volume_share_above_epsilon = volume_above_sum / sampled_volume;
+  if (represented_volume > 0.0) {
+    lattice.volume_mean_error = volume_error_sum / represented_volume;
+    lattice.volume_share_above_epsilon = volume_above_sum / represented_volume;
   }
   out->initial_quality = initial.Get();
   out->final_quality = final.Get();

@@ -88,6 +88,18 @@ absl::Status AsFlagError(const absl::Status& status) {
   return status;
 }
 
+// Sets *out from `--flag NUMBER` when the flag is given; a number that is not finite is an error
+// naming the flag.
+template <typename Target>
+absl::Status SetFiniteDouble(const ParsedArgs& args, std::string_view flag, Target* out) {
+  if (std::optional<std::string> text = args.Get(flag)) {
+    absl::StatusOr<double> x = ParseFiniteDouble(flag, *text);
+    if (!x.ok()) return x.status();
+    *out = *x;
+  }
+  return absl::OkStatus();
+}
+
 absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
   s->volume_path = *args.Get("volume");
   s->mesh_path = *args.Get("mesh");
@@ -108,33 +120,21 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, RefineSettings* s) {
     if (!n.ok()) return n.status();
     s->options.SetMaxTets(*n);
   }
-  if (auto text = args.Get("norm-coeff")) {
-    absl::StatusOr<double> x = ParseFiniteDouble("norm-coeff", *text);
-    if (!x.ok()) return x.status();
-    s->options.refine.norm_coeff = *x;
+  RefineOptions& refine = s->options.refine;
+  for (absl::Status st :
+       {SetFiniteDouble(args, "norm-coeff", &refine.norm_coeff),
+        SetFiniteDouble(args, "quality-reference", &refine.quality_reference),
+        // These two and --lattice-seed: request fields Python and the wire had and the command
+        // line did not (a sweep could not reproduce such a Python run).
+        SetFiniteDouble(args, "min-edge-length", &refine.min_edge_length),
+        SetFiniteDouble(args, "min-quality", &refine.min_quality)}) {
+    if (!st.ok()) return st;
   }
-  if (auto text = args.Get("quality-reference")) {
-    absl::StatusOr<double> x = ParseFiniteDouble("quality-reference", *text);
-    if (!x.ok()) return x.status();
-    s->options.refine.quality_reference = *x;
-  }
-  // The request's other fields, which Python and the wire had and the command line did not (a
-  // sweep could not reproduce such a Python run from the CLI).
   if (auto text = args.Get("lattice-seed")) {
     absl::StatusOr<int64_t> n =
         ParseInteger("lattice-seed", *text, 0, std::numeric_limits<int64_t>::max());
     if (!n.ok()) return n.status();
-    s->options.refine.lattice_seed = static_cast<uint64_t>(*n);
-  }
-  if (auto text = args.Get("min-edge-length")) {
-    absl::StatusOr<double> x = ParseFiniteDouble("min-edge-length", *text);
-    if (!x.ok()) return x.status();
-    s->options.refine.min_edge_length = *x;
-  }
-  if (auto text = args.Get("min-quality")) {
-    absl::StatusOr<double> x = ParseFiniteDouble("min-quality", *text);
-    if (!x.ok()) return x.status();
-    s->options.refine.min_quality = *x;
+    refine.lattice_seed = static_cast<uint64_t>(*n);
   }
   if (auto text = args.Get("threads")) {
     absl::StatusOr<int64_t> n = ParseInteger("threads", *text, 0, 4096);

@@ -173,21 +173,24 @@ class DataSetParser {
 
   // Calls visit(item, header, items_explicit_vr, depth) for every element at the top level of
   // every item of sequence `h` (item counting from 0), in order; the walk skips each element
-  // after its visit. An explicit-VR sequence that is not SQ or UN is not walked (nothing is
-  // visited). Errors name where the structure breaks; never reads outside the bytes.
+  // after its visit. An explicit-VR element that is not SQ or UN is not walked (nothing is
+  // visited). Returns the offset past `h`'s value, as Skip does. Errors name where the structure
+  // breaks; never reads outside the bytes.
   template <typename Visit>
-  absl::Status ForEachItemElement(const ElementHeader& h, bool explicit_vr, int depth,
-                                  Visit&& visit) const {
+  absl::StatusOr<uint64_t> ForEachItemElement(const ElementHeader& h, bool explicit_vr, int depth,
+                                              Visit&& visit) const {
     const bool un = h.vr[0] == 'U' && h.vr[1] == 'N';
     const bool sq = h.vr[0] == 'S' && h.vr[1] == 'Q';
-    if (explicit_vr && !un && !sq) return absl::OkStatus();
+    if (explicit_vr && !un && !sq) return Skip(h, explicit_vr, depth);
     if (depth > kMaxSequenceDepth) return TooDeep(h.value);
     const bool defined = h.length != kUndefinedLength;
     if (defined && h.value + h.length > bytes_.size()) return Truncated(h.value, "a sequence");
     // PS3.5 7.5.1: the items of a UN element of undefined length are implicit VR.
-    return WalkItems(h.value, defined ? h.value + h.length : bytes_.size(), !defined,
-                     explicit_vr && !un, depth, /*into_defined_items=*/true, visit)
-        .status();
+    absl::StatusOr<uint64_t> end =
+        WalkItems(h.value, defined ? h.value + h.length : bytes_.size(), !defined,
+                  explicit_vr && !un, depth, /*into_defined_items=*/true, visit);
+    if (!end.ok() || !defined) return end;
+    return h.value + h.length;
   }
 
   absl::Status Truncated(uint64_t at, absl::string_view what) const {
@@ -342,11 +345,12 @@ Framing FramingOf(absl::string_view bytes) {
 // Reads the functional groups sequence `h` ((5200,9229) or (5200,9230)) into `out`, one entry
 // per item, at most `max_items` (more is an error naming `limit`, what the bound is). Only the
 // first item of each nested sequence counts (each holds one); other groups and attributes are
-// skipped.
-absl::Status ReadFunctionalGroups(const DataSetParser& parser, absl::string_view bytes,
-                                  absl::string_view path, const ElementHeader& h, bool explicit_vr,
-                                  int64_t max_items, absl::string_view limit,
-                                  std::vector<DicomFrameGroups>* out) {
+// skipped. Returns the offset past the sequence.
+absl::StatusOr<uint64_t> ReadFunctionalGroups(const DataSetParser& parser, absl::string_view bytes,
+                                              absl::string_view path, const ElementHeader& h,
+                                              bool explicit_vr, int64_t max_items,
+                                              absl::string_view limit,
+                                              std::vector<DicomFrameGroups>* out) {
   const std::string sequence = TagText(h.group, h.element);
   return parser.ForEachItemElement(
       h, explicit_vr, 1,
@@ -363,43 +367,49 @@ absl::Status ReadFunctionalGroups(const DataSetParser& parser, absl::string_view
             group_tag != 0x00289145) {
           return absl::OkStatus();
         }
-        return parser.ForEachItemElement(
-            group, items_explicit, depth,
-            [&](int64_t inner, const ElementHeader& e, bool, int) -> absl::Status {
-              if (inner != 0 || e.length == kUndefinedLength || e.value + e.length > bytes.size()) {
-                return absl::OkStatus();  // the walk itself reports a broken length
-              }
-              const absl::string_view value = bytes.substr(e.value, e.length);
-              if (Trimmed(value).empty()) return absl::OkStatus();
-              const std::string where = absl::StrCat(" in ", sequence, " item ", item + 1, " ",
-                                                     TagText(group.group, group.element));
-              const uint32_t tag = (uint32_t{e.group} << 16) | e.element;
-              if (group_tag == 0x00209113 && tag == 0x00200032) {
-                auto v = Decimals<3>(
-                    value, absl::StrCat("Image Position (Patient) (0020,0032)", where), path);
-                if (!v.ok()) return v.status();
-                frame.position = *v;
-              } else if (group_tag == 0x00209116 && tag == 0x00200037) {
-                auto v = Decimals<6>(
-                    value, absl::StrCat("Image Orientation (Patient) (0020,0037)", where), path);
-                if (!v.ok()) return v.status();
-                frame.orientation = *v;
-              } else if (group_tag == 0x00289110 && tag == 0x00280030) {
-                auto v = Decimals<2>(value, absl::StrCat("Pixel Spacing (0028,0030)", where), path);
-                if (!v.ok()) return v.status();
-                frame.pixel_spacing = *v;
-              } else if (group_tag == 0x00289145 && tag == 0x00281053) {
-                auto v = Decimals<1>(value, absl::StrCat("Rescale Slope (0028,1053)", where), path);
-                if (!v.ok()) return v.status();
-                frame.rescale_slope = (*v)[0];
-              } else if (group_tag == 0x00289145 && tag == 0x00281052) {
-                auto v =
-                    Decimals<1>(value, absl::StrCat("Rescale Intercept (0028,1052)", where), path);
-                if (!v.ok()) return v.status();
-                frame.rescale_intercept = (*v)[0];
-              }
-              return absl::OkStatus();
-            });
+        return parser
+            .ForEachItemElement(
+                group, items_explicit, depth,
+                [&](int64_t inner, const ElementHeader& e, bool, int) -> absl::Status {
+                  if (inner != 0 || e.length == kUndefinedLength ||
+                      e.value + e.length > bytes.size()) {
+                    return absl::OkStatus();  // the walk itself reports a broken length
+                  }
+                  const absl::string_view value = bytes.substr(e.value, e.length);
+                  if (Trimmed(value).empty()) return absl::OkStatus();
+                  const std::string where = absl::StrCat(" in ", sequence, " item ", item + 1, " ",
+                                                         TagText(group.group, group.element));
+                  const uint32_t tag = (uint32_t{e.group} << 16) | e.element;
+                  if (group_tag == 0x00209113 && tag == 0x00200032) {
+                    auto v = Decimals<3>(
+                        value, absl::StrCat("Image Position (Patient) (0020,0032)", where), path);
+                    if (!v.ok()) return v.status();
+                    frame.position = *v;
+                  } else if (group_tag == 0x00209116 && tag == 0x00200037) {
+                    auto v = Decimals<6>(
+                        value, absl::StrCat("Image Orientation (Patient) (0020,0037)", where),
+                        path);
+                    if (!v.ok()) return v.status();
+                    frame.orientation = *v;
+                  } else if (group_tag == 0x00289110 && tag == 0x00280030) {
+                    auto v =
+                        Decimals<2>(value, absl::StrCat("Pixel Spacing (0028,0030)", where), path);
+                    if (!v.ok()) return v.status();
+                    frame.pixel_spacing = *v;
+                  } else if (group_tag == 0x00289145 && tag == 0x00281053) {
+                    auto v =
+                        Decimals<1>(value, absl::StrCat("Rescale Slope (0028,1053)", where), path);
+                    if (!v.ok()) return v.status();
+                    frame.rescale_slope = (*v)[0];
+                  } else if (group_tag == 0x00289145 && tag == 0x00281052) {
+                    auto v = Decimals<1>(
+                        value, absl::StrCat("Rescale Intercept (0028,1052)", where), path);
+                    if (!v.ok()) return v.status();
+                    frame.rescale_intercept = (*v)[0];
+                  }
+                  return absl::OkStatus();
+                })
+            .status();
       });
 }
 
@@ -497,6 +507,7 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
       image.pixel_data = bytes.substr(h->value, h->length);
       break;  // what follows the pixels (padding, signatures) places nothing
     }
+    absl::StatusOr<uint64_t> next;
     const uint32_t top_tag = (uint32_t{h->group} << 16) | h->element;
     if (top_tag == 0x52009229 || top_tag == 0x52009230) {
       std::vector<DicomFrameGroups> groups;
@@ -509,18 +520,19 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
           : max_items == image.frames
               ? absl::StrCat("the image's ", image.frames, " frames")
               : absl::StrCat(kMaxVolumeAxis, ", the most slices a volume has");
-      absl::Status st =
-          ReadFunctionalGroups(parser, bytes, path, *h, explicit_vr, max_items, limit, &groups);
-      if (!st.ok()) return st;
+      // The walk that reads the groups is the one that skips them.
+      next = ReadFunctionalGroups(parser, bytes, path, *h, explicit_vr, max_items, limit, &groups);
+      if (!next.ok()) return next.status();
       if (top_tag == 0x52009230) {
         image.frame_groups =
             std::make_shared<const std::vector<DicomFrameGroups>>(std::move(groups));
       } else if (!groups.empty()) {
         image.shared_groups = groups.front();
       }
+    } else {
+      next = parser.Skip(*h, explicit_vr, 0);
+      if (!next.ok()) return next.status();
     }
-    absl::StatusOr<uint64_t> next = parser.Skip(*h, explicit_vr, 0);
-    if (!next.ok()) return next.status();
     // An empty value (length zero, or only padding in a text value) is an attribute left empty,
     // as anonymisers leave Rescale Slope and Intercept: absent, as dcm2niix takes it, rather than
     // a malformed number. (Binary values such as Rows are never trimmed: 32 is a space.)

@@ -1,5 +1,6 @@
 #include "client/io/grid_placement.h"
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <utility>
@@ -81,8 +82,9 @@ absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& aff
       }
     }
   }
+  std::array<double, 3> lengths;
   for (int column = 0; column < 3; ++column) {
-    const double length = ColumnLength(affine, column);
+    const double length = lengths[column] = ColumnLength(affine, column);
     if (!(length > 0.0)) {
       return FileError(path, absl::StrCat("index-to-world transform is singular: axis ", column,
                                           " has zero length"));
@@ -104,9 +106,8 @@ absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& aff
   for (int row = 0; row < 3; ++row) {
     double voxel = kMaxVoxelMm;
     for (int column = 0; column < 3; ++column) {
-      const double length = ColumnLength(affine, column);
-      if (std::abs(affine[row][column]) > kObliqueTolerance * length) {
-        voxel = std::min(voxel, length);
+      if (std::abs(affine[row][column]) > kObliqueTolerance * lengths[column]) {
+        voxel = std::min(voxel, lengths[column]);
       }
     }
     for (int corner = 0; corner < 8; ++corner) {

@@ -52,10 +52,11 @@ void SplitLatticeSample(RefineOptions& o, size_t parts) {
   if (o.lattice_max_tets > 0 && k > 1) o.lattice_max_tets = (o.lattice_max_tets + k - 1) / k;
 }
 
-// Which targets have been found gone (UNAVAILABLE) or stalled (DEADLINE_EXCEEDED) during a run:
-// later parts, in this round and the next ones, go to the others while any is left. Without it
-// a dead server was tried, and warned about, again in every iteration (a sweep counted 8-9
-// warnings over 5 iterations), and two paused ones cost a connect timeout per part and round.
+// Which targets have been found gone (UNAVAILABLE: refused, dead, or a connect timeout) during a
+// run: later parts, in this round and the next ones, go to the others while any is left.
+// Without it a dead server was tried, and warned about, again in every iteration (a sweep
+// counted 8-9 warnings over 5 iterations), and two paused ones cost a connect timeout per part
+// and round.
 class TargetHealth {
  public:
   explicit TargetHealth(size_t targets) : down_(targets) {}
@@ -70,10 +71,10 @@ class TargetHealth {
     return (part + attempt) % n;  // all down: try them in turn anyway
   }
 
-  // Marks `target` down after a failure with `code` that says it is gone or stalled; true the
-  // first time (the time to say so).
+  // After a retryable failure with `code`: marks `target` down if the code says it is gone;
+  // true the first time (the time to say so).
   bool MarkDown(int target, absl::StatusCode code) {
-    if (code != absl::StatusCode::kUnavailable && code != absl::StatusCode::kDeadlineExceeded) {
+    if (code != absl::StatusCode::kUnavailable) {
       return true;  // busy or aborted: said every time, and it stays in use
     }
     return !down_[target].exchange(true);
