@@ -371,6 +371,31 @@ TEST(TetOverlap, GradedBoundariesStillFindOverlaps) {
   }
 }
 
+// Most tets are passed over from their corners' cells of the face grid (FaceCellGrid::MayMeet):
+// a lone tet anywhere inside a mesh, of any size from a hundredth of a cell to a few cells,
+// deep inside or by the boundary, is still found through the tets around it.
+TEST(TetOverlap, ALoneTetAnywhereInsideIsFound) {
+  std::mt19937_64 rng(29);
+  const Mesh outer = OverlapCube(rng, 9, {0, 0, 0}, 9.0);
+  ASSERT_TRUE(CheckConformity(outer.points, outer.tets).ok());
+  std::uniform_real_distribution<double> where(0.05, 8.95);
+  std::uniform_real_distribution<double> log_size(-2.0, 0.5);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec3 at = {where(rng), where(rng), where(rng)};
+    const double size =
+        std::min(std::pow(10.0, log_size(rng)), 8.99 - std::max({at[0], at[1], at[2]}));
+    SCOPED_TRACE(::testing::Message()
+                 << "at " << at[0] << " " << at[1] << " " << at[2] << ", size " << size);
+    Mesh m = outer;
+    const auto base = static_cast<uint32_t>(m.points.size());
+    for (const Vec3& p : kUnitTet) {
+      m.points.push_back({at[0] + size * p[0], at[1] + size * p[1], at[2] + size * p[2]});
+    }
+    m.tets.push_back({base, base + 1, base + 2, base + 3});
+    ExpectOverlap(CheckConformity(m.points, m.tets));
+  }
+}
+
 TEST(TetOverlap, SameMessageForAnyThreadCount) {
   std::mt19937_64 rng(11);
   const Mesh a = OverlapCube(rng, 8, {0, 0, 0}, 1.0);
