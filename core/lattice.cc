@@ -89,10 +89,15 @@ LatticeStats SampleLattice(const Volume& volume, const Mesh& mesh, int n, int64_
   const int64_t poll_every = std::max<int64_t>(1, 16384 / points_per_tet);
   ForEachBlock(count, [&](int64_t block, int64_t begin, int64_t end) {
     Partial acc;
+    TetLattice r;
     for (int64_t i = begin; i < end; ++i) {
       if (should_stop && (i - begin) % poll_every == 0 && should_stop()) break;
       const int64_t t = sample ? chosen[i] : i;
-      const TetLattice r = KnownOrSampled(volume, mesh, t, points, norm_coeff, epsilon, known);
+      // The sample is drawn with replacement and sorted: a tet drawn again (about one draw in
+      // 12 for 200 000 of 1.15 M tets) counts again with the statistics it just had.
+      if (i == begin || t != (sample ? chosen[i - 1] : i - 1)) {
+        r = KnownOrSampled(volume, mesh, t, points, norm_coeff, epsilon, known);
+      }
       acc.sums.max_error = std::max(acc.sums.max_error, r.max_error);
       acc.sums.sum_error += r.sum_error;
       acc.sums.points += r.points;

@@ -291,6 +291,31 @@ TEST(LatticeKernel, SampleLatticeAgreesWithThePointByPointScan) {
       EXPECT_EQ(all.points_sampled, points);
       EXPECT_EQ(Bits(all.share_above_epsilon),
                 Bits(static_cast<double>(above) / static_cast<double>(points)));
+      // A sample of 30 draws from the 40 tets, with replacement as SampleLattice draws it: a
+      // tet drawn twice counts twice.
+      const int64_t draws = 30;
+      const LatticeStats sampled = SampleLattice(volume, mesh, 8, draws, seed, norm, epsilon, true);
+      std::mt19937_64 draw(seed);
+      std::uniform_int_distribution<int64_t> pick(0, static_cast<int64_t>(mesh.tets.size()) - 1);
+      max_error = 0.0;
+      points = above = 0;
+      int repeats = 0;
+      std::vector<int64_t> seen;
+      for (int64_t d = 0; d < draws; ++d) {
+        const int64_t t = pick(draw);
+        repeats += std::count(seen.begin(), seen.end(), t) > 0;
+        seen.push_back(t);
+        const TetLattice r = ReferenceTetLattice(volume, mesh, t, 8, norm, epsilon, true);
+        max_error = std::max(max_error, r.max_error);
+        points += r.points;
+        above += r.above_epsilon;
+      }
+      EXPECT_GT(repeats, 0);
+      EXPECT_EQ(sampled.tets_sampled, draws);
+      EXPECT_EQ(Bits(sampled.max_error), Bits(max_error));
+      EXPECT_EQ(sampled.points_sampled, points);
+      EXPECT_EQ(Bits(sampled.share_above_epsilon),
+                Bits(static_cast<double>(above) / static_cast<double>(points)));
     });
   });
 }
