@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <type_traits>
@@ -810,20 +811,38 @@ std::string FormatVtkLegacy(const MeshFile& file, const VtkLegacyWriteOptions& o
     absl::StrAppend(&out, "POINT_DATA ", v, "\nSCALARS value double 1\nLOOKUP_TABLE default\n");
     AppendValues(out, mesh.values.data(), v, binary);
   }
-  if (!file.tet_iteration.empty() || !file.tet_quality.empty() || !file.mesh.labels.empty()) {
-    absl::StrAppend(&out, "CELL_DATA ", t, "\n");
-    if (!file.tet_iteration.empty()) {
-      out += "SCALARS iteration int 1\nLOOKUP_TABLE default\n";
-      AppendValues(out, file.tet_iteration.data(), t, binary);
-    }
-    if (!file.tet_quality.empty()) {
-      out += "SCALARS quality float 1\nLOOKUP_TABLE default\n";
-      AppendValues(out, file.tet_quality.data(), t, binary);
-    }
-    if (!file.mesh.labels.empty()) {
-      absl::StrAppend(&out, "SCALARS ", Escape(LabelArrayName(file)),
-                      " int 1\nLOOKUP_TABLE default\n");
-      AppendValues(out, file.mesh.labels.data(), t, binary);
+  // The first cell array as the section's SCALARS, the others in a FIELD, as
+  // vtkUnstructuredGridWriter stores arrays beyond the active ones: VTK's legacy readers load
+  // only the first SCALARS of a section unless told to read them all (ReadAllScalarsOn), so a
+  // second SCALARS block was lost to them, and with it the region labels.
+  struct CellArray {
+    std::string name;
+    const char* type;
+    std::function<void()> append;
+  };
+  std::vector<CellArray> cell_arrays;
+  if (!file.tet_iteration.empty()) {
+    cell_arrays.push_back(
+        {"iteration", "int", [&] { AppendValues(out, file.tet_iteration.data(), t, binary); }});
+  }
+  if (!file.tet_quality.empty()) {
+    cell_arrays.push_back(
+        {"quality", "float", [&] { AppendValues(out, file.tet_quality.data(), t, binary); }});
+  }
+  if (!file.mesh.labels.empty()) {
+    cell_arrays.push_back({Escape(LabelArrayName(file)), "int",
+                           [&] { AppendValues(out, file.mesh.labels.data(), t, binary); }});
+  }
+  if (!cell_arrays.empty()) {
+    absl::StrAppend(&out, "CELL_DATA ", t, "\nSCALARS ", cell_arrays[0].name, " ",
+                    cell_arrays[0].type, " 1\nLOOKUP_TABLE default\n");
+    cell_arrays[0].append();
+    if (cell_arrays.size() > 1) {
+      absl::StrAppend(&out, "FIELD FieldData ", cell_arrays.size() - 1, "\n");
+      for (size_t a = 1; a < cell_arrays.size(); ++a) {
+        absl::StrAppend(&out, cell_arrays[a].name, " 1 ", t, " ", cell_arrays[a].type, "\n");
+        cell_arrays[a].append();
+      }
     }
   }
   return out;

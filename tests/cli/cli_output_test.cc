@@ -105,8 +105,7 @@ else:
     import vtk
     from vtk.util.numpy_support import vtk_to_numpy
     r = vtk.vtkXMLUnstructuredGridReader() if path.endswith(".vtu") else vtk.vtkUnstructuredGridReader()
-    if not path.endswith(".vtu"):
-        r.ReadAllScalarsOn()
+    # VTK's defaults, as a user's script has them: no ReadAllScalarsOn.
     r.SetFileName(path)
     r.Update()
     g = r.GetOutput()

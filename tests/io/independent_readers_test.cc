@@ -124,9 +124,8 @@ path, key = sys.argv[1], sys.argv[2]
 if path.endswith(".vtu"):
     r = vtk.vtkXMLUnstructuredGridReader()
 else:
+    # VTK's defaults, as a user's script has them: no ReadAllScalarsOn or ReadAllFieldsOn.
     r = vtk.vtkUnstructuredGridReader()
-    r.ReadAllScalarsOn()
-    r.ReadAllFieldsOn()
 r.SetFileName(path)
 r.Update()
 g = r.GetOutput()
