@@ -1,6 +1,8 @@
 """nibabel and meshio in, meshio out: equal to what the CLI reads from the same files."""
 
+import re
 import subprocess
+from pathlib import Path
 
 import grpc
 import meshio
@@ -261,3 +263,35 @@ def test_a_masked_volume_is_refused_not_unmasked(server):
             client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.1)
     assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
     assert "volume: a masked array" in error.value.details
+
+
+def test_label_names_are_the_clis(cli_binary, tmp_path):
+    """mesh_from_meshio takes the labels the CLI's readers take from the same file: the same
+    names, in the same order of preference, without case. TetGen's .ele labels, which meshio
+    calls tetgen:ref, were dropped until 2026-11-28."""
+    source = (Path(__file__).resolve().parents[2] / "client" / "io" /
+              "label_names.cc").read_text()
+    listed = re.findall(r'"([^"]+)"', source.split("kNames[] = {")[1].split("};")[0])
+    assert tuple(listed) == tetrefine.adapters.LABEL_NAMES
+
+    points, tets = box_mesh((0, 0, 0), (2, 2, 2), (1, 1, 1))
+    labels = np.arange(len(tets)) % 3 + 4
+    with open(tmp_path / "m.node", "w") as f:
+        f.write(f"{len(points)} 3 0 0\n")
+        f.writelines(f"{i} {p[0]} {p[1]} {p[2]}\n" for i, p in enumerate(points))
+    with open(tmp_path / "m.ele", "w") as f:
+        f.write(f"{len(tets)} 4 1\n")
+        f.writelines(f"{i} {t[0]} {t[1]} {t[2]} {t[3]} {labels[i]}\n" for i, t in enumerate(tets))
+    mesh = meshio.read(tmp_path / "m.ele")
+    assert "tetgen:ref" in mesh.cell_data
+    np.testing.assert_array_equal(tetrefine.mesh_from_meshio(mesh).labels, labels)
+    info = run_cli(cli_binary, "info", str(tmp_path / "m.ele")).stdout
+    assert "regions               3: 4 (2 tets), 5 (2 tets), 6 (1 tet)" in info
+
+    # Two candidate arrays, one in another case: both readers prefer the same one.
+    both = meshio.Mesh(points, [("tetra", tets)],
+                       cell_data={"Region": [labels], "MATERIALIDS": [labels * 10]})
+    both.write(tmp_path / "both.vtu")
+    np.testing.assert_array_equal(tetrefine.mesh_from_meshio(both).labels, labels)
+    info = run_cli(cli_binary, "info", str(tmp_path / "both.vtu")).stdout
+    assert "Region (region label per tet)" in info

@@ -219,7 +219,11 @@ class TetMesh:
 
 
 # Cell data names that carry region labels, in the order they are looked for.
-LABEL_NAMES = ("gmsh:physical", "medit:ref", "region", "labels", "label", "CellEntityIds")
+# The cell-data names taken as region labels, the first found winning, compared without case:
+# the CLI's list (client/io/label_names.cc), so that a file gives the same labels through
+# meshio as through `tetrefine refine` (tests/test_adapters.py checks the two agree).
+LABEL_NAMES = ("gmsh:physical", "medit:ref", "tetgen:ref", "CellEntityIds", "region", "regions",
+               "labels", "label", "MaterialIds", "material", "materials", "subdomain")
 
 
 # meshio's volume cell types other than "tetra" (tetra10, hexahedron, hexahedron27, wedge,
@@ -261,7 +265,13 @@ def mesh_from_meshio(mesh, label_name=None):
         if data.dtype.kind not in "iuf":
             raise invalid("mesh", f"tetra block {i} has dtype {data.dtype}, expected integers")
     tets = np.concatenate([np.asarray(mesh.cells[i].data, dtype=np.int64) for i in blocks])
-    names = [label_name] if label_name is not None else list(LABEL_NAMES)
+    if label_name is not None:
+        names = [label_name]
+    else:
+        by_lower = {}
+        for key in mesh.cell_data:
+            by_lower.setdefault(key.lower(), key)
+        names = [by_lower[n.lower()] for n in LABEL_NAMES if n.lower() in by_lower]
     labels = None
     for name in names:
         arrays = mesh.cell_data.get(name)
