@@ -40,7 +40,8 @@ const CommandSpec& HealthSpec() {
         .description =
             "Prints the serving status. --service \"\" (the default) asks about the server as a\n"
             "whole; tetrefine.v1.Refiner about the refiner. A server that is draining after\n"
-            "SIGTERM answers NOT_SERVING.\n"
+            "SIGTERM answers NOT_SERVING for tetrefine.v1.Refiner (a readiness probe) and stays\n"
+            "SERVING for \"\" (a liveness probe must not kill it mid-drain).\n"
             "Exit: 0 SERVING, 1 anything else (not serving, unreachable, timed out), 2 bad flags.",
         .flags =
             {

@@ -787,7 +787,8 @@ const CommandSpec& RefineSpec() {
                  "ParaView's parallel reader; also chosen by an --output ending in .pvtu"},
                 {"every-iteration", "",
                  "also write each iteration's mesh as <output stem>.iterNN.<ext>; with a .vtu "
-                 "output, also <output stem>.pvd, the series for ParaView"},
+                 "output, also <output stem>.pvd, the series for ParaView; not with --shards or "
+                 "several --server addresses"},
                 {"stats-json", "FILE", "write the statistics as JSON"},
                 {"server", "HOST:PORT[,...]",
                  "use this tetrefine_server instead of the embedded service; several "

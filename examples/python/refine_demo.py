@@ -6,6 +6,7 @@ mesh = tetrefine.mesh_from_meshio(meshio.read(examples / "unit_cube_1782tets.mes
 points = tetrefine.fit_to_volume(mesh.points, volume)  # as refine --fit-mesh-to-volume does
 with tetrefine.Client(sys.argv[1]) as client:
     result = client.refine(volume.data, volume.spacing, volume.origin, points, mesh.tets, 0.1,
+                           labels=mesh.labels,  # the cube's Medit refs: two regions
                            on_iteration=lambda s: print(s.iteration, s.final_tets, s.max_error))
 print(result.stop_reason, result.points.shape, result.tets.shape, result.lattice.max_error)
-result.to_meshio().write(sys.argv[2])  # point data value; cell data iteration, quality
+result.to_meshio(label_name="medit:ref").write(sys.argv[2])  # + value, iteration, quality

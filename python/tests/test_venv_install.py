@@ -56,6 +56,6 @@ def test_pip_install_and_the_ten_line_script_match_the_cli(server, cli_binary, t
     np.testing.assert_array_equal(ours.cells_dict["tetra"], cli.cells_dict["tetra"])
     for name in ("value",):
         np.testing.assert_array_equal(ours.point_data[name], cli.point_data[name])
-    for name in ("iteration", "quality"):
+    for name in ("iteration", "quality", "medit:ref"):
         np.testing.assert_array_equal(ours.cell_data[name][0], cli.cell_data[name][0])
     assert len(cli.cells_dict["tetra"]) > 1782
