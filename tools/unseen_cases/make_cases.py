@@ -104,6 +104,21 @@ def blur(a, s):
         a = np.apply_along_axis(lambda v: np.convolve(np.pad(v, len(k)//2, mode='edge'), g, 'valid'), ax, a)
     return a
 
+def shepp_logan(N):
+    """The 3-D Kak-Slaney Shepp-Logan phantom (10 ellipsoids: value, semi-axes, centre, angle
+    about z in degrees) sampled on N^3 points of [-1, 1]^3, indexed [x, y, z]."""
+    x = np.linspace(-1, 1, N); X, Y, Z = np.meshgrid(x, x, x, indexing='ij')
+    E = [(2, .69, .92, .9, 0, 0, 0, 0), (-.8, .6624, .874, .88, 0, 0, 0, 0),
+         (-.2, .41, .16, .21, -.22, 0, -.25, 108), (-.2, .31, .11, .22, .22, 0, -.25, 72),
+         (.2, .21, .25, .5, 0, .35, -.25, 0), (.2, .046, .046, .046, 0, .1, -.25, 0),
+         (.1, .046, .023, .02, -.08, -.65, -.25, 0), (.1, .046, .023, .02, .06, -.65, -.25, 90),
+         (.2, .056, .04, .1, .06, -.105, .625, 90), (-.2, .056, .056, .1, 0, .1, .625, 0)]
+    v = np.zeros_like(X)
+    for A, a, b, c, x0, y0, z0, ph in E:
+        th = np.deg2rad(ph); xr = (X-x0)*np.cos(th) + (Y-y0)*np.sin(th); yr = -(X-x0)*np.sin(th) + (Y-y0)*np.cos(th)
+        v[(xr/a)**2 + (yr/b)**2 + ((Z-z0)/c)**2 <= 1] += A
+    return v
+
 def want(n): return not cases_asked or n in cases_asked
 
 # A t1crop: T1 canonical, crop, gmsh box
@@ -142,16 +157,7 @@ if want('D_t1mask'):
 # E shepp3d: 3-D Shepp-Logan (Kak-Slaney ellipsoids, step edges), 64^3, 1 mm, float32, gmsh box
 if want('E_shepp'):
     d = f'{ROOT}/E_shepp'; N = 64
-    x = np.linspace(-1, 1, N); X, Y, Z = np.meshgrid(x, x, x, indexing='ij')
-    E = [(2, .69, .92, .9, 0, 0, 0, 0), (-.8, .6624, .874, .88, 0, 0, 0, 0),
-         (-.2, .41, .16, .21, -.22, 0, -.25, 108), (-.2, .31, .11, .22, .22, 0, -.25, 72),
-         (.2, .21, .25, .5, 0, .35, -.25, 0), (.2, .046, .046, .046, 0, .1, -.25, 0),
-         (.1, .046, .023, .02, -.08, -.65, -.25, 0), (.1, .046, .023, .02, .06, -.65, -.25, 90),
-         (.2, .056, .04, .1, .06, -.105, .625, 90), (-.2, .056, .056, .1, 0, .1, .625, 0)]
-    v = np.zeros_like(X)
-    for A, a, b, c, x0, y0, z0, ph in E:
-        th = np.deg2rad(ph); xr = (X-x0)*np.cos(th) + (Y-y0)*np.sin(th); yr = -(X-x0)*np.sin(th) + (Y-y0)*np.cos(th)
-        v[(xr/a)**2 + (yr/b)**2 + ((Z-z0)/c)**2 <= 1] += A
+    v = shepp_logan(N)
     sp = (1.0, 1.0, 1.0); lo, hi = save_volume(d, v, sp, (0, 0, 0), np.float32)
     print('E range', v.min(), v.max())
     p, t = gmsh_box(d, *box_inset(lo, hi, sp), 4.0); write_mesh(d, p, t)
@@ -219,15 +225,6 @@ if want('J_anatcrop'):
 # K shepp32: the same Shepp-Logan ellipsoids sampled on 32^3 at 2 mm, float32, gmsh box size 6
 if want('K_shepp32'):
     d = f'{ROOT}/K_shepp32'; N = 32
-    x = np.linspace(-1, 1, N); X, Y, Z = np.meshgrid(x, x, x, indexing='ij')
-    E = [(2, .69, .92, .9, 0, 0, 0, 0), (-.8, .6624, .874, .88, 0, 0, 0, 0),
-         (-.2, .41, .16, .21, -.22, 0, -.25, 108), (-.2, .31, .11, .22, .22, 0, -.25, 72),
-         (.2, .21, .25, .5, 0, .35, -.25, 0), (.2, .046, .046, .046, 0, .1, -.25, 0),
-         (.1, .046, .023, .02, -.08, -.65, -.25, 0), (.1, .046, .023, .02, .06, -.65, -.25, 90),
-         (.2, .056, .04, .1, .06, -.105, .625, 90), (-.2, .056, .056, .1, 0, .1, .625, 0)]
-    v = np.zeros_like(X)
-    for A, a, b, c, x0, y0, z0, ph in E:
-        th = np.deg2rad(ph); xr = (X-x0)*np.cos(th) + (Y-y0)*np.sin(th); yr = -(X-x0)*np.sin(th) + (Y-y0)*np.cos(th)
-        v[(xr/a)**2 + (yr/b)**2 + ((Z-z0)/c)**2 <= 1] += A
+    v = shepp_logan(N)
     sp = (2.0, 2.0, 2.0); lo, hi = save_volume(d, v, sp, (0, 0, 0), np.float32)
     p, t = gmsh_box(d, *box_inset(lo, hi, sp), 6.0); write_mesh(d, p, t)
