@@ -265,6 +265,27 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
   return absl::InternalError("face check disagreed with itself");
 }
 
+absl::Status CheckCoordinates(const std::vector<Vec3>& points) {
+  // Finite is not enough: a tet's 6V multiplies three coordinate differences and its quality
+  // squares that, so coordinates near 1e150 (found by the refine fuzzer) gave NaN volumes that
+  // passed every check, and near 1e80 the overlap check's face grid, sized from NaN face boxes,
+  // asked for more cells than memory holds (`tetrefine verify` aborted; found by a sweep,
+  // 2026-11-28). Within +-1e30 (a parsec is 3e19 mm) every such product stays finite.
+  constexpr double kMaxCoordinate = 1e30;
+  const int64_t num_points = static_cast<int64_t>(points.size());
+  const int64_t bad_point = FirstIndexWhere(num_points, [&](int64_t i) {
+    const Vec3& p = points[i];
+    return !(std::abs(p[0]) <= kMaxCoordinate && std::abs(p[1]) <= kMaxCoordinate &&
+             std::abs(p[2]) <= kMaxCoordinate);
+  });
+  if (bad_point == num_points) return absl::OkStatus();
+  const Vec3& p = points[bad_point];
+  const bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+  return absl::InvalidArgumentError(absl::StrCat(
+      "mesh.points[", bad_point, "] = ", Point(p),
+      finite ? " is too large: coordinates must lie within +-1e30" : " is not finite"));
+}
+
 absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy outside,
                           OrientationPolicy orientation, std::vector<Tet>* tets,
                           int64_t* reoriented) {
@@ -274,22 +295,7 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
     return absl::InvalidArgumentError(
         absl::StrCat("mesh.points has ", num_points, " vertices; at most 2^31 are supported"));
   }
-  // Finite is not enough: a tet's 6V multiplies three coordinate differences and its quality
-  // squares that, so coordinates near 1e150 (found by the refine fuzzer) gave NaN volumes that
-  // passed every check. Within +-1e30 (a parsec is 3e19 mm) every such product stays finite.
-  constexpr double kMaxCoordinate = 1e30;
-  const int64_t bad_point = FirstIndexWhere(num_points, [&](int64_t i) {
-    const Vec3& p = mesh.points[i];
-    return !(std::abs(p[0]) <= kMaxCoordinate && std::abs(p[1]) <= kMaxCoordinate &&
-             std::abs(p[2]) <= kMaxCoordinate);
-  });
-  if (bad_point < num_points) {
-    const Vec3& p = mesh.points[bad_point];
-    const bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
-    return absl::InvalidArgumentError(absl::StrCat(
-        "mesh.points[", bad_point, "] = ", Point(p),
-        finite ? " is too large: coordinates must lie within +-1e30" : " is not finite"));
-  }
+  if (absl::Status s = CheckCoordinates(mesh.points); !s.ok()) return s;
   const int64_t num_tets = static_cast<int64_t>(mesh.tets.size());
   const bool reject_inverted = orientation == OrientationPolicy::kReject;
   const int64_t bad_tet = FirstIndexWhere(num_tets, [&](int64_t t) {
@@ -351,6 +357,7 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
 }
 
 absl::Status CheckConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets) {
+  if (absl::Status s = CheckCoordinates(points); !s.ok()) return s;
   std::vector<BoundaryFace> boundary;
   if (absl::Status s = CheckFaces(points, tets, &boundary); !s.ok()) return s;
   return CheckBoundaryConformity(points, tets, boundary);

@@ -25,6 +25,11 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
                           OrientationPolicy orientation, std::vector<Tet>* tets,
                           int64_t* reoriented);
 
+// Every coordinate finite and within +-1e30, beyond which a tet's 6V, its quality and the
+// overlap check's face boxes overflow. InvalidArgument naming the first point that is not
+// ("mesh.points[i] = (x, y, z) is too large ..." or "... is not finite").
+absl::Status CheckCoordinates(const std::vector<Vec3>& points);
+
 // The face check alone (no face in more than two tets, no overlap across a shared face). The
 // tets must be positively oriented: which side of a face a tet lies on is read from the parity
 // of its vertex order, not computed. When it passes and `boundary` is not null, *boundary
@@ -33,8 +38,9 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
                         std::vector<BoundaryFace>* boundary = nullptr);
 
 // The mesh checks that need no volume and hold for every valid input and every refinement
-// output: CheckFaces, then CheckBoundaryConformity on its boundary faces. Same preconditions
-// (positively oriented, non-degenerate tets with indices in range, finite points).
+// output: CheckCoordinates, CheckFaces, then CheckBoundaryConformity on its boundary faces. Same
+// preconditions as CheckFaces (positively oriented, non-degenerate tets with indices in range);
+// points beyond +-1e30 are refused by CheckCoordinates rather than overflowing.
 absl::Status CheckConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets);
 
 }  // namespace tetrefine

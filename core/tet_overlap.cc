@@ -812,11 +812,15 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
   if (first == nullptr) return absl::OkStatus();
   const OwnedFace& owner = faces[first->face];
   const BoundaryFace& f = owner.face;
+  // The depth divides by face normals' lengths, whose squares underflow for tets below about
+  // 1e-77 across: the overlap stands, the number does not (a sweep saw "inf deep", 2026-11-28).
+  const std::string depth = std::isfinite(first->depth)
+                                ? absl::StrFormat(", %.3g deep at the least", first->depth)
+                                : std::string();
   return absl::InvalidArgumentError(absl::StrCat(
       "mesh is not conformal: mesh.tets[", first->first, "] and mesh.tets[", first->second,
-      "] overlap (their interiors intersect, ", absl::StrFormat("%.3g", first->depth),
-      " deep at the least); mesh.tets[", owner.tet, "] has boundary face (", f[0], ", ", f[1], ", ",
-      f[2],
+      "] overlap (their interiors intersect", depth, "); mesh.tets[", owner.tet,
+      "] has boundary face (", f[0], ", ", f[1], ", ", f[2],
       "), so two parts of the mesh cover the same space (a region triangulated differently on "
       "its two sides, a mesh inside another, or a boundary folded into the mesh)"));
 }

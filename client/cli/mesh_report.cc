@@ -127,8 +127,12 @@ MeshReport AnalyzeMesh(const Mesh& mesh) {
   CountDuplicates(mesh, used, &report);
   // With degenerate tets left out their neighbours' faces would look like boundary, and the
   // conformity check would report what is really the degenerate tets, already reported.
-  report.faces = report.degenerate_tets > 0 ? CheckFaces(mesh.points, oriented)
-                                            : CheckConformity(mesh.points, oriented);
+  // Coordinates beyond +-1e30 overflow the face checks' geometry: they are the finding.
+  report.faces = CheckCoordinates(mesh.points);
+  if (report.faces.ok()) {
+    report.faces = report.degenerate_tets > 0 ? CheckFaces(mesh.points, oriented)
+                                              : CheckConformity(mesh.points, oriented);
+  }
   MeasureBoundary(mesh, &report);
   return report;
 }

@@ -175,6 +175,22 @@ TEST_F(CliMeshVerify, VerticesOutsideNeedClamp) {
   EXPECT_EQ(Verify(dir_.File("shifted.vtu"), {"--clamp"}).exit_code, 0);
 }
 
+// A valid mesh scaled by 1e80 made verify abort (std::length_error in the overlap check, found by
+// a sweep, 2026-11-28): it is an invalid mesh, said so as refine says it.
+TEST_F(CliMeshVerify, HugeCoordinatesAreNamedNotACrash) {
+  io::MeshFile mesh = MakeMesh("grid.vtu", {"--block", "3"});
+  for (Vec3& p : mesh.mesh.points) {
+    for (double& x : p) x *= 1e80;
+  }
+  ASSERT_TRUE(io::WriteMesh(dir_.File("huge.vtu"), mesh).ok());
+  const ProcessResult run = Verify(dir_.File("huge.vtu"), {"--clamp"});
+  EXPECT_EQ(run.exit_code, 1) << run.out << run.err;
+  EXPECT_TRUE(absl::StrContains(run.out + run.err, "is too large: coordinates must lie within"))
+      << run.out << run.err;
+  const ProcessResult info = RunTetrefine({"info", dir_.File("huge.vtu")});
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+}
+
 TEST_F(CliMeshVerify, InfoOnAVolume) {
   const ProcessResult run = RunTetrefine({"info", volume_});
   ASSERT_EQ(run.exit_code, 0) << run.err;

@@ -396,6 +396,40 @@ TEST(TetOverlap, ALoneTetAnywhereInsideIsFound) {
   }
 }
 
+// Found by a sweep (2026-11-28): a valid mesh scaled by 1e80 made `tetrefine verify` abort
+// (std::length_error from the overlap check's face grid, sized from face boxes that had
+// overflowed to NaN), and an overlap scaled by 1e-90 was reported "inf deep".
+TEST(TetOverlap, MeshesAtExtremeScalesGetAnAnswerNotACrash) {
+  for (double scale : {1e31, 1e80, 1e100, 1e300}) {
+    SCOPED_TRACE(::testing::Message() << "scale " << scale);
+    Mesh m = testing::FiveTetMesh({0, 0, 0}, {5, 5, 5}, {5, 5, 5});
+    for (Vec3& p : m.points) {
+      for (double& x : p) x *= scale;
+    }
+    const absl::Status s = CheckConformity(m.points, m.tets);
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << s;
+    EXPECT_NE(s.message().find("is too large: coordinates must lie within +-1e30"),
+              std::string::npos)
+        << s;
+  }
+  for (double scale : {1e-80, 1e-90, 1e-100}) {
+    SCOPED_TRACE(::testing::Message() << "scale " << scale);
+    Mesh m = testing::FiveTetMesh({0, 0, 0}, {3, 3, 3}, {3, 3, 3});
+    const auto base = static_cast<uint32_t>(m.points.size());
+    for (const Vec3& p : kUnitTet) {
+      m.points.push_back({1.3 + 0.2 * p[0], 1.4 + 0.2 * p[1], 1.5 + 0.2 * p[2]});
+    }
+    m.tets.push_back({base, base + 1, base + 2, base + 3});
+    for (Vec3& p : m.points) {
+      for (double& x : p) x *= scale;
+    }
+    const absl::Status s = CheckConformity(m.points, m.tets);
+    ExpectOverlap(s);
+    EXPECT_EQ(s.message().find("inf"), std::string::npos) << s;
+    EXPECT_EQ(s.message().find("nan"), std::string::npos) << s;
+  }
+}
+
 TEST(TetOverlap, SameMessageForAnyThreadCount) {
   std::mt19937_64 rng(11);
   const Mesh a = OverlapCube(rng, 8, {0, 0, 0}, 1.0);
