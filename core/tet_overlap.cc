@@ -712,6 +712,26 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
   if (faces.empty()) return absl::OkStatus();
   const int64_t num_faces = static_cast<int64_t>(faces.size());
   const int64_t num_tets = static_cast<int64_t>(tets.size());
+  // A face's plane divides by its normal's length, whose square underflows for faces below
+  // about 1e-77 across: NaN boxes then reached the grid's float-to-int casts (undefined; seen
+  // by UBSan on a mesh scaled by 1e-80, 2026-11-28). 1e-30 world units is far below any mesh
+  // of a scan (millimetres or metres) and far above that.
+  constexpr double kMinFaceSize = 1e-30;
+  if (const int64_t tiny = FirstIndexWhere(
+          num_faces,
+          [&](int64_t f) {
+            const BoundaryFace& face = faces[f].face;
+            const Vec3 &a = points[face[0]], &b = points[face[1]], &c = points[face[2]];
+            return !(std::max({Norm2(Sub(b, a)), Norm2(Sub(c, a)), Norm2(Sub(c, b))}) >=
+                     kMinFaceSize * kMinFaceSize);
+          });
+      tiny < num_faces) {
+    const BoundaryFace& f = faces[tiny].face;
+    return absl::InvalidArgumentError(absl::StrCat(
+        "mesh.tets[", faces[tiny].tet, "] has boundary face (", f[0], ", ", f[1], ", ", f[2],
+        ") whose edges are all shorter than 1e-30: too small for tetrefine's geometry to measure "
+        "(scale the mesh to millimetres or metres)"));
+  }
   std::vector<Box> boxes(faces.size());
   std::vector<FacePlane> planes(faces.size());
   ForEachBlock(num_faces, [&](int64_t, int64_t begin, int64_t end) {
