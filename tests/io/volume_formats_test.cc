@@ -56,6 +56,16 @@ std::string NrrdHeader(const std::string& type, const std::string& encoding,
                       "\nencoding: ", encoding, "\nunits:=mm\n", extra);
 }
 
+// A raw little-endian int16 NRRD of Ramp() in LPS with the given "space directions" and
+// "space origin" values, header and samples.
+std::string Int16Nrrd(const std::string& directions, const std::string& origin) {
+  return absl::StrCat("NRRD0004\ntype: short\ndimension: 3\nsizes: ", kNx, " ", kNy, " ", kNz,
+                      "\nspace: left-posterior-superior\nspace directions: ", directions,
+                      "\nspace origin: ", origin,
+                      "\nkinds: domain domain domain\nendian: little\nencoding: raw\n\n",
+                      Int16Samples(Ramp(), false));
+}
+
 TEST(IoNrrdTest, RawLittleEndianLpsIsRas) {
   ScratchDir dir;
   const std::string path = dir.File("v.nrrd");
@@ -176,12 +186,7 @@ void ExpectObliqueLpsVoxelsAtRasPoints(const VolumeFile& file, const Vec3& lps_o
 TEST(IoNrrdTest, ObliqueSpaceDirectionsBecomeTheDirection) {
   ScratchDir dir;
   const std::string path = dir.File("oblique.nrrd");
-  const std::string header = absl::StrCat(
-      "NRRD0004\ntype: short\ndimension: 3\nsizes: ", kNx, " ", kNy, " ", kNz,
-      "\nspace: left-posterior-superior\n", "space directions: (1.2,1.6,0) (-2.4,1.8,0) (0,0,4)\n",
-      "space origin: (10,-20,30)\nkinds: domain domain domain\nendian: little\n",
-      "encoding: raw\n\n");
-  WriteBytes(path, header + Int16Samples(Ramp(), false));
+  WriteBytes(path, Int16Nrrd("(1.2,1.6,0) (-2.4,1.8,0) (0,0,4)", "(10,-20,30)"));
   absl::StatusOr<VolumeFile> file = ReadVolume(path);
   ASSERT_TRUE(file.ok()) << file.status();
   ExpectObliqueLpsVoxelsAtRasPoints(*file, {10, -20, 30});
@@ -220,11 +225,7 @@ TEST(IoNrrdTest, AbsurdVoxelSizesAreRefusedNamingTheAxis) {
   ScratchDir dir;
   const std::string path = dir.File("scale.nrrd");
   auto write = [&](const std::string& directions) {
-    WriteBytes(path,
-               absl::StrCat("NRRD0004\ntype: short\ndimension: 3\nsizes: ", kNx, " ", kNy, " ", kNz,
-                            "\nspace: left-posterior-superior\n", "space directions: ", directions,
-                            "\n", "space origin: (10,-20,30)\nkinds: domain domain domain\n",
-                            "endian: little\nencoding: raw\n\n", Int16Samples(Ramp(), false)));
+    WriteBytes(path, Int16Nrrd(directions, "(10,-20,30)"));
   };
   for (const auto& [directions, axis] : std::vector<std::pair<std::string, std::string>>{
            {"(1e-10,0,0) (0,1,0) (0,0,1)", "axis 0"},
@@ -249,12 +250,7 @@ TEST(IoNrrdTest, AGridBeyondFloat64sReachIsRefused) {
   ScratchDir dir;
   const std::string path = dir.File("far.nrrd");
   auto write = [&](const std::string& origin) {
-    WriteBytes(path,
-               absl::StrCat("NRRD0004\ntype: short\ndimension: 3\nsizes: ", kNx, " ", kNy, " ", kNz,
-                            "\nspace: left-posterior-superior\n",
-                            "space directions: (0.5,0,0) (0,1,0) (0,0,2)\n",
-                            "space origin: ", origin, "\nkinds: domain domain domain\n",
-                            "endian: little\nencoding: raw\n\n", Int16Samples(Ramp(), false)));
+    WriteBytes(path, Int16Nrrd("(0.5,0,0) (0,1,0) (0,0,2)", origin));
   };
   for (const char* origin : {"(1e17,0,0)", "(0,-3e13,0)", "(0,0,1e300)"}) {
     SCOPED_TRACE(origin);
