@@ -286,6 +286,18 @@ absl::Status CheckCoordinates(const std::vector<Vec3>& points) {
       finite ? " is too large: coordinates must lie within +-1e30" : " is not finite"));
 }
 
+namespace {
+
+// CheckConformity after CheckCoordinates has passed.
+absl::Status ConformityOfCheckedPoints(const std::vector<Vec3>& points,
+                                       const std::vector<Tet>& tets) {
+  std::vector<BoundaryFace> boundary;
+  if (absl::Status s = CheckFaces(points, tets, &boundary); !s.ok()) return s;
+  return CheckBoundaryConformity(points, tets, boundary);
+}
+
+}  // namespace
+
 absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy outside,
                           OrientationPolicy orientation, std::vector<Tet>* tets,
                           int64_t* reoriented) {
@@ -353,14 +365,13 @@ absl::Status ValidateMesh(const Mesh& mesh, const Volume& volume, OutsidePolicy 
                        " lies outside the volume's sampled box ", box, where));
     }
   }
-  return CheckConformity(mesh.points, tets->empty() ? mesh.tets : *tets);
+  // The coordinates were checked first thing.
+  return ConformityOfCheckedPoints(mesh.points, tets->empty() ? mesh.tets : *tets);
 }
 
 absl::Status CheckConformity(const std::vector<Vec3>& points, const std::vector<Tet>& tets) {
   if (absl::Status s = CheckCoordinates(points); !s.ok()) return s;
-  std::vector<BoundaryFace> boundary;
-  if (absl::Status s = CheckFaces(points, tets, &boundary); !s.ok()) return s;
-  return CheckBoundaryConformity(points, tets, boundary);
+  return ConformityOfCheckedPoints(points, tets);
 }
 
 }  // namespace tetrefine

@@ -127,11 +127,13 @@ MeshReport AnalyzeMesh(const Mesh& mesh) {
   CountDuplicates(mesh, used, &report);
   // With degenerate tets left out their neighbours' faces would look like boundary, and the
   // conformity check would report what is really the degenerate tets, already reported.
-  // Coordinates beyond +-1e30 overflow the face checks' geometry: they are the finding.
-  report.faces = CheckCoordinates(mesh.points);
-  if (report.faces.ok()) {
-    report.faces = report.degenerate_tets > 0 ? CheckFaces(mesh.points, oriented)
-                                              : CheckConformity(mesh.points, oriented);
+  // Coordinates beyond +-1e30 overflow the face checks' geometry: they are the finding
+  // (CheckConformity checks them itself).
+  if (report.degenerate_tets > 0) {
+    report.faces = CheckCoordinates(mesh.points);
+    if (report.faces.ok()) report.faces = CheckFaces(mesh.points, oriented);
+  } else {
+    report.faces = CheckConformity(mesh.points, oriented);
   }
   MeasureBoundary(mesh, &report);
   return report;
