@@ -218,7 +218,6 @@ class TetMesh:
         self.values = values
 
 
-# Cell data names that carry region labels, in the order they are looked for.
 # The cell-data names taken as region labels, the first found winning, compared without case:
 # the CLI's list (client/io/label_names.cc), so that a file gives the same labels through
 # meshio as through `tetrefine refine` (tests/test_adapters.py checks the two agree).
