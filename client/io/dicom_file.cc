@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include "absl/strings/ascii.h"
@@ -413,9 +414,62 @@ absl::StatusOr<uint64_t> ReadFunctionalGroups(const DataSetParser& parser, absl:
       });
 }
 
+// Reads the Detector Information Sequence (0054,0022) `h`: Image Position (Patient) and Image
+// Orientation (Patient) of its first item into `image`, and the number of items. Returns the
+// offset past the sequence.
+absl::StatusOr<uint64_t> ReadDetectorInformation(const DataSetParser& parser,
+                                                 absl::string_view bytes, absl::string_view path,
+                                                 const ElementHeader& h, bool explicit_vr,
+                                                 DicomImage* image) {
+  return parser.ForEachItemElement(
+      h, explicit_vr, 1, [&](int64_t item, const ElementHeader& e, bool, int) -> absl::Status {
+        image->detector_items = std::max(image->detector_items, item + 1);
+        if (item != 0 || e.length == kUndefinedLength || e.value + e.length > bytes.size()) {
+          return absl::OkStatus();  // the walk itself reports a broken length
+        }
+        const absl::string_view value = bytes.substr(e.value, e.length);
+        if (Trimmed(value).empty()) return absl::OkStatus();
+        const std::string where = " in Detector Information Sequence (0054,0022) item 1";
+        const uint32_t tag = (uint32_t{e.group} << 16) | e.element;
+        if (tag == 0x00200032) {
+          auto v =
+              Decimals<3>(value, absl::StrCat("Image Position (Patient) (0020,0032)", where), path);
+          if (!v.ok()) return v.status();
+          image->detector_position = *v;
+        } else if (tag == 0x00200037) {
+          auto v = Decimals<6>(
+              value, absl::StrCat("Image Orientation (Patient) (0020,0037)", where), path);
+          if (!v.ok()) return v.status();
+          image->detector_orientation = *v;
+        }
+        return absl::OkStatus();
+      });
+}
+
 }  // namespace
 
 bool HasDicomMagic(absl::string_view bytes) { return FramingOf(bytes) != Framing::kNone; }
+
+FrameStack FrameStackOf(const DicomImage& image) {
+  if (image.frames < 2) return FrameStack::kNone;
+  if (image.frame_group_count() == image.frames) return FrameStack::kEnhanced;
+  if (image.frame_group_count() == 0 && image.frame_increment_pointer.size() == 1 &&
+      image.frame_increment_pointer[0] == kSliceVectorTag) {
+    return FrameStack::kNmSlices;
+  }
+  return FrameStack::kNone;
+}
+
+NmStacking NmStackingOf(const DicomImage& image) {
+  NmStacking out;
+  if (image.spacing_between_slices && *image.spacing_between_slices != 0.0) {
+    out.spacing = image.spacing_between_slices;
+  } else if (image.slice_thickness && *image.slice_thickness > 0.0) {
+    out.spacing = image.slice_thickness;
+    out.from_thickness = true;
+  }
+  return out;
+}
 
 DicomImage FrameOf(const DicomImage& image, int64_t frame) {
   DicomImage out = image;
@@ -438,6 +492,26 @@ DicomImage FrameOf(const DicomImage& image, int64_t frame) {
   pick(&DicomFrameGroups::pixel_spacing, out.pixel_spacing);
   pick(&DicomFrameGroups::rescale_slope, out.rescale_slope);
   pick(&DicomFrameGroups::rescale_intercept, out.rescale_intercept);
+  if (FrameStackOf(image) == FrameStack::kNmSlices) {
+    if (image.detector_position) out.position = image.detector_position;
+    if (image.detector_orientation) out.orientation = image.detector_orientation;
+    const NmStacking stacking = NmStackingOf(image);
+    if (out.position && out.orientation && stacking.spacing) {
+      // C.8.4.15: the slices stack along the cross product of the first row's and the first
+      // column's directions, behind the first for a positive spacing.
+      const std::array<double, 6>& o = *out.orientation;
+      const std::array<double, 3> normal = {o[1] * o[5] - o[2] * o[4], o[2] * o[3] - o[0] * o[5],
+                                            o[0] * o[4] - o[1] * o[3]};
+      int64_t slice = frame;
+      if (image.slice_vector && frame >= 0 &&
+          frame < static_cast<int64_t>(image.slice_vector->size())) {
+        slice = int64_t{(*image.slice_vector)[static_cast<size_t>(frame)]} - 1;
+      }
+      for (int a = 0; a < 3; ++a) {
+        (*out.position)[a] += static_cast<double>(slice) * *stacking.spacing * normal[a];
+      }
+    }
+  }
   return out;
 }
 
@@ -529,6 +603,9 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
       } else if (!groups.empty()) {
         image.shared_groups = groups.front();
       }
+    } else if (top_tag == 0x00540022) {
+      next = ReadDetectorInformation(parser, bytes, path, *h, explicit_vr, &image);
+      if (!next.ok()) return next.status();
     } else {
       next = parser.Skip(*h, explicit_vr, 0);
       if (!next.ok()) return next.status();
@@ -592,6 +669,47 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
                                                 ", not a positive count"));
           }
           image.frames = static_cast<int64_t>((*v)[0]);
+          break;
+        }
+        case 0x00280009: {
+          // AT: (group, element) pairs of 16-bit words. Only multi-frame images need it (Number
+          // of Frames (0028,0008) comes before it): a single frame is read whatever it says.
+          if (image.frames < 2) break;
+          if (value.size() % 4 != 0) {
+            return FileError(
+                path, absl::StrCat("DICOM Frame Increment Pointer (0028,0009) has ", value.size(),
+                                   " bytes, not a whole number of 4-byte tags"));
+          }
+          image.frame_increment_pointer.clear();
+          for (size_t at = 0; at < value.size(); at += 4) {
+            image.frame_increment_pointer.push_back((uint32_t{U16(value, at)} << 16) |
+                                                    U16(value, at + 2));
+          }
+          break;
+        }
+        case 0x00540080: {
+          if (image.frames < 2) break;
+          if (value.size() % 2 != 0) {
+            return FileError(path, absl::StrCat("DICOM Slice Vector (0054,0080) has ", value.size(),
+                                                " bytes, not 2-byte values"));
+          }
+          auto slices = std::make_shared<std::vector<uint16_t>>(value.size() / 2);
+          for (size_t k = 0; k < slices->size(); ++k) (*slices)[k] = U16(value, 2 * k);
+          image.slice_vector = std::move(slices);
+          break;
+        }
+        // Only NM frames are stacked by these; elsewhere they place nothing, so a value that is
+        // not one number (a CT series with "2.5\\2.5") is left absent rather than refused.
+        case 0x00180088: {
+          if (blank) break;
+          auto v = Decimals<1>(value, "", path);
+          if (v.ok()) image.spacing_between_slices = (*v)[0];
+          break;
+        }
+        case 0x00180050: {
+          if (blank) break;
+          auto v = Decimals<1>(value, "", path);
+          if (v.ok()) image.slice_thickness = (*v)[0];
           break;
         }
         case 0x00280010:

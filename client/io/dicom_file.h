@@ -55,6 +55,22 @@ struct DicomImage {
   std::optional<std::array<double, 2>> pixel_spacing;
   double rescale_slope = 1.0;      // (0028,1053)
   double rescale_intercept = 0.0;  // (0028,1052)
+  // What a multi-frame image without functional groups (NM, PS3.3 C.8.4) says of its frames.
+  // (0028,0009) Frame Increment Pointer: the tags of the vectors that index the frames, as
+  // (group << 16) | element; NM reconstructed tomography names Slice Vector (0054,0080) alone.
+  std::vector<uint32_t> frame_increment_pointer;
+  // (0054,0080) Slice Vector: the slice (from 1) of each frame. Shared, as frame_groups is:
+  // every frame's copy (FrameOf) would otherwise copy it.
+  std::shared_ptr<const std::vector<uint16_t>> slice_vector;
+  // (0018,0088) Spacing Between Slices, mm, signed for NM (C.8.4.15: negative stacks the
+  // slices in front of the first, against the normal); (0018,0050) Slice Thickness, mm.
+  std::optional<double> spacing_between_slices;
+  std::optional<double> slice_thickness;
+  // (0054,0022) Detector Information Sequence: where NM images keep Image Position (Patient)
+  // and Image Orientation (Patient) (those of its first item), and how many items it has.
+  std::optional<std::array<double, 3>> detector_position;
+  std::optional<std::array<double, 6>> detector_orientation;
+  int64_t detector_items = 0;
   // (7FE0,0010) Pixel Data: the stored samples, little-endian, a view into the parsed bytes.
   // Empty when the file has no image (a report, a DICOMDIR), or holds one this reader does not
   // decode (then `unsupported` says why).
@@ -85,10 +101,32 @@ bool HasDicomMagic(absl::string_view bytes);
 // at most 64 bytes, so that a hostile file cannot write terminal escapes through an error.
 std::string Printable(absl::string_view bytes);
 
+// Tag of Slice Vector (0054,0080), as frame_increment_pointer holds it.
+inline constexpr uint32_t kSliceVectorTag = 0x00540080;
+
+// How the frames of a multi-frame image are placed.
+enum class FrameStack {
+  kNone,      // a single frame, or frames that are not the slices of one volume
+  kEnhanced,  // one Per-frame Functional Groups item a frame (enhanced CT, MR, PET)
+  kNmSlices,  // Frame Increment Pointer names Slice Vector alone (NM reconstructed tomography)
+};
+FrameStack FrameStackOf(const DicomImage& image);
+
+// Where the frames of a kNmSlices image go: the slice spacing that stacks them (Spacing Between
+// Slices, else Slice Thickness, which dcm2niix also falls back to), and which of the two it is.
+struct NmStacking {
+  std::optional<double> spacing;  // mm along the normal (row x column); absent: neither given
+  bool from_thickness = false;
+};
+NmStacking NmStackingOf(const DicomImage& image);
+
 // Frame `frame` (0-based) of a multi-frame `image` as a single-frame image: position,
 // orientation, pixel spacing and rescaling from its per-frame functional groups, else the
 // shared ones, else the image's own; no functional groups, no pixel data (`frames` stays the
-// file's). For a single-frame image (frame 0), the image itself without its pixel data.
+// file's). For a kNmSlices image, its Detector Information Sequence's position and orientation
+// (else the image's own), the position moved along the normal to the frame's slice (its Slice
+// Vector value, else its frame order) by NmStackingOf's spacing. For a single-frame image
+// (frame 0), the image itself without its pixel data.
 DicomImage FrameOf(const DicomImage& image, int64_t frame);
 
 // Parses a DICOM file held in `bytes` (which the result's pixel_data points into): Part 10, or

@@ -139,6 +139,55 @@ absl::Status CheckSameShape(const Slice& first, const Slice& s) {
   return absl::OkStatus();
 }
 
+// What a tag of a Frame Increment Pointer (0028,0009) is called (PS3.3 C.8.4.8, C.7.6.6).
+std::string FrameVectorName(uint32_t tag) {
+  struct Known {
+    uint32_t tag;
+    absl::string_view name;
+  };
+  static constexpr Known kKnown[] = {
+      {0x00540010, "Energy Window Vector"}, {0x00540020, "Detector Vector"},
+      {0x00540030, "Phase Vector"},         {0x00540050, "Rotation Vector"},
+      {0x00540060, "R-R Interval Vector"},  {0x00540070, "Time Slot Vector"},
+      {0x00540080, "Slice Vector"},         {0x00540090, "Angular View Vector"},
+      {0x00540100, "Time Slice Vector"},    {0x00181063, "Frame Time"},
+      {0x00181065, "Frame Time Vector"},
+  };
+  const std::string tag_text = absl::StrFormat("(%04X,%04X)", tag >> 16, tag & 0xFFFF);
+  for (const Known& k : kKnown) {
+    if (k.tag == tag) return absl::StrCat(k.name, " ", tag_text);
+  }
+  return tag_text;
+}
+
+// Checks what a frame of an NM reconstruction (FrameStack::kNmSlices) needs beyond a slice's:
+// a spacing that stacks the frames, and a Slice Vector, when given, with one slice per frame.
+absl::Status CheckNmFrames(const Slice& s) {
+  const DicomImage& im = s.image;
+  if (!NmStackingOf(im).spacing) {
+    return FileError(s.file,
+                     absl::StrCat("DICOM file holds ", im.frames,
+                                  " NM slices (Frame Increment Pointer (0028,0009) is Slice "
+                                  "Vector (0054,0080)) but neither a non-zero Spacing Between "
+                                  "Slices (0018,0088) nor a positive Slice Thickness (0018,0050) "
+                                  "that would stack them"));
+  }
+  if (!im.slice_vector) return absl::OkStatus();
+  const std::vector<uint16_t>& slices = *im.slice_vector;
+  if (static_cast<int64_t>(slices.size()) != im.frames) {
+    return FileError(s.file, absl::StrCat("DICOM Slice Vector (0054,0080) has ", slices.size(),
+                                          " values for ", im.frames,
+                                          " frames (Number of Frames (0028,0008)): one a frame "
+                                          "is needed"));
+  }
+  const uint16_t slice = slices[static_cast<size_t>(s.frame)];
+  if (slice < 1 || slice > im.frames) {
+    return FileError(s.file, absl::StrCat("DICOM Slice Vector (0054,0080) value ", s.frame + 1,
+                                          " is ", slice, ", not a slice from 1 to ", im.frames));
+  }
+  return absl::OkStatus();
+}
+
 // Checks what a slice must have to be placed and decoded.
 absl::Status CheckPlaceable(const Slice& s) {
   const DicomImage& im = s.image;
@@ -147,10 +196,27 @@ absl::Status CheckPlaceable(const Slice& s) {
         s.file,
         absl::StrCat("DICOM ",
                      s.frame < 0 ? std::string("image") : absl::StrCat("frame ", s.frame + 1),
-                     " has no ", what, s.frame < 0 ? "" : " (nor do the shared functional groups)",
+                     " has no ", what,
+                     s.frame < 0 ? ""
+                     : FrameStackOf(im) == FrameStack::kNmSlices
+                         ? " (nor does its Detector Information Sequence (0054,0022))"
+                         : " (nor do the shared functional groups)",
                      ": its slices cannot be placed in the world"));
   };
   if (s.frame < 0 && im.frames != 1) {
+    if (!im.frame_increment_pointer.empty() && im.frame_group_count() == 0) {
+      std::vector<std::string> vectors;
+      for (const uint32_t tag : im.frame_increment_pointer) vectors.push_back(FrameVectorName(tag));
+      return FileUnsupported(
+          s.file,
+          absl::StrCat("DICOM file holds ", im.frames, " frames indexed by ",
+                       absl::StrJoin(vectors, ", "),
+                       " (Frame Increment Pointer (0028,0009)): not the slices of one volume. "
+                       "Frames are read as slices when Slice Vector (0054,0080) alone indexes "
+                       "them (a reconstructed NM tomography, Image Type RECON TOMO); gated, "
+                       "dynamic, planar and projection frames are not; split or reconstruct "
+                       "them first"));
+    }
     if (im.frame_group_count() > 0) {
       return FileError(s.file,
                        absl::StrCat("DICOM file holds ", im.frames,
@@ -162,8 +228,13 @@ absl::Status CheckPlaceable(const Slice& s) {
         s.file,
         absl::StrCat("DICOM file holds ", im.frames,
                      " frames (Number of Frames (0028,0008)) but no Per-frame Functional Groups "
-                     "Sequence (5200,9230): only enhanced multi-frame images, whose frames carry "
-                     "their positions, are read; convert the series to NIfTI with dcm2niix"));
+                     "Sequence (5200,9230) nor Frame Increment Pointer (0028,0009): only "
+                     "enhanced multi-frame images, whose frames carry their positions, and NM "
+                     "reconstructions, whose Frame Increment Pointer is Slice Vector (0054,0080), "
+                     "are read; convert the series to NIfTI with dcm2niix"));
+  }
+  if (s.frame >= 0 && FrameStackOf(im) == FrameStack::kNmSlices) {
+    if (absl::Status st = CheckNmFrames(s); !st.ok()) return st;
   }
   if (!im.position) return missing("Image Position (Patient) (0020,0032)");
   if (!im.orientation) return missing("Image Orientation (Patient) (0020,0037)");
@@ -299,7 +370,8 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   int64_t not_dicom = 0, no_image = 0, duplicates = 0;
   std::map<std::string, std::string> compressed;  // series -> why one of its images is refused
   int64_t unreadable = 0;
-  std::string first_unreadable;  // "file: why" of the first"
+  std::string first_unreadable;      // "file: why" of the first"
+  std::string stacked_by_thickness;  // an NM file whose frames Slice Thickness stacked
   for (const std::string& file : *files) {
     absl::StatusOr<FileView> view = FileView::Open(file);
     if (!view.ok()) return view.status();
@@ -334,9 +406,14 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
     image->pixel_data.reset();
     std::vector<Slice>& slices = series[image->series_uid];
     // An enhanced multi-frame file is a stack of slices, one per frame, each placed by its own
-    // functional groups; another multi-frame file (cine, NM) is refused by CheckPlaceable.
+    // functional groups, and so is an NM reconstruction, its frames stacked along the normal
+    // (FrameOf); another multi-frame file (cine, gated or planar NM) is refused by
+    // CheckPlaceable.
     const int64_t frames = image->frames;
-    if (frames > 1 && image->frame_group_count() == frames) {
+    if (FrameStackOf(*image) != FrameStack::kNone) {
+      if (FrameStackOf(*image) == FrameStack::kNmSlices && NmStackingOf(*image).from_thickness) {
+        stacked_by_thickness = file;
+      }
       if (static_cast<int64_t>(slices.size()) + frames > kMaxVolumeAxis) {
         return FileError(file, absl::StrCat("DICOM file holds ", frames, " frames, more than ",
                                             kMaxVolumeAxis, " slices"));
@@ -532,8 +609,8 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
                       image->pixel_data ? image->pixel_data->size() : 0, 0.0, s.frame};
     absl::Status same = CheckPlaceable(again);
     if (same.ok()) same = CheckSameShape(slices.front(), again);
-    if (same.ok() && s.frame >= 0 && image->frame_group_count() != image->frames) {
-      same = absl::DataLossError("its functional groups changed");
+    if (same.ok() && s.frame >= 0 && FrameStackOf(*image) == FrameStack::kNone) {
+      same = absl::DataLossError("its frames are no longer slices");
     }
     if (!same.ok()) {
       return FileError(s.file, absl::StrCat("changed while it was read: ", same.message()));
@@ -589,6 +666,12 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   }
   if (!skipped.empty()) {
     volume->warnings.push_back(absl::StrCat(directory, ": skipped ", absl::StrJoin(skipped, ", ")));
+  }
+  if (!stacked_by_thickness.empty()) {
+    volume->warnings.push_back(absl::StrCat(
+        stacked_by_thickness,
+        ": no Spacing Between Slices (0018,0088); the NM slices are stacked by Slice Thickness "
+        "(0018,0050), as contiguous slices"));
   }
   return volume;
 }
