@@ -22,6 +22,7 @@
 #include "client/io/dicom_series.h"
 #include "client/io/mesh_io.h"
 #include "client/io/vtk_legacy_format.h"
+#include "core/mesh_validation.h"
 
 namespace tetrefine::cli {
 namespace {
@@ -125,14 +126,22 @@ int MeshInfo(const std::string& path) {
                                                 : "")},
       {"tets", absl::StrCat(r.tets)},
       {"bounding box", FormatBox(r.bounding_box)},
-      {"volume", absl::StrFormat("%.9g", r.volume)},
-      {"boundary area", absl::StrFormat("%.9g (%d faces)", r.boundary_area, r.boundary_faces)},
-      {"quality (mean ratio)",
-       absl::StrFormat("min %.6f, mean %.6f", r.quality_min, r.quality_mean)},
-      {"inverted tets", absl::StrCat(r.inverted_tets)},
-      {"degenerate tets", absl::StrCat(r.degenerate_tets)},
-      {"arrays", array_text.empty() ? "none" : array_text},
   };
+  // Beyond +-1e30 a tet's volume and quality overflow (a sweep saw "volume inf", "mean -nan"):
+  // the figures are left out and the row says why, as refine and verify refuse such a mesh.
+  if (const absl::Status coordinates = CheckCoordinates(file->mesh.points); !coordinates.ok()) {
+    rows.push_back({"geometry", absl::StrCat("not measured: ", coordinates.message())});
+  } else {
+    rows.insert(
+        rows.end(),
+        {{"volume", absl::StrFormat("%.9g", r.volume)},
+         {"boundary area", absl::StrFormat("%.9g (%d faces)", r.boundary_area, r.boundary_faces)},
+         {"quality (mean ratio)",
+          absl::StrFormat("min %.6f, mean %.6f", r.quality_min, r.quality_mean)},
+         {"inverted tets", absl::StrCat(r.inverted_tets)},
+         {"degenerate tets", absl::StrCat(r.degenerate_tets)}});
+  }
+  rows.push_back({"arrays", array_text.empty() ? "none" : array_text});
   if (!file->mesh.labels.empty()) rows.push_back({"regions", RegionSummary(file->mesh.labels)});
   if (!file->dropped_arrays.empty()) {
     rows.push_back({"not read", absl::StrJoin(file->dropped_arrays, ", ")});

@@ -187,8 +187,14 @@ TEST_F(CliMeshVerify, HugeCoordinatesAreNamedNotACrash) {
   EXPECT_EQ(run.exit_code, 1) << run.out << run.err;
   EXPECT_TRUE(absl::StrContains(run.out + run.err, "is too large: coordinates must lie within"))
       << run.out << run.err;
+  // info describes the file without overflowing figures ("volume inf", "mean -nan" before).
   const ProcessResult info = RunTetrefine({"info", dir_.File("huge.vtu")});
   EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_TRUE(absl::StrContains(info.out, "not measured: mesh.points[")) << info.out;
+  EXPECT_TRUE(absl::StrContains(info.out, "is too large: coordinates must lie within")) << info.out;
+  for (const char* overflow : {"inf", "nan", "volume"}) {
+    EXPECT_FALSE(absl::StrContains(info.out, overflow)) << overflow << " in\n" << info.out;
+  }
 }
 
 TEST_F(CliMeshVerify, InfoOnAVolume) {
