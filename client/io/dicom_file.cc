@@ -731,7 +731,8 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
           s = us("Bits Allocated", image.bits_allocated);
           break;
         case 0x00280101:
-          s = us("Bits Stored", image.bits_stored);
+          s = us("Bits Stored", us_value);
+          image.bits_stored = us_value;
           break;
         case 0x00280103:
           s = us("Pixel Representation", image.pixel_representation);

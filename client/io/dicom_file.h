@@ -43,7 +43,7 @@ struct DicomImage {
   int samples_per_pixel = 1;       // (0028,0002)
   int64_t frames = 1;              // (0028,0008)
   int bits_allocated = 0;          // (0028,0100)
-  int bits_stored = 0;             // (0028,0101); 0 when absent (then bits_allocated)
+  std::optional<int> bits_stored;  // (0028,0101); absent: bits_allocated (StoredBits)
   int pixel_representation = 0;    // (0028,0103): 0 unsigned, 1 two's complement
   // (0020,0032) Image Position (Patient): the world position of the first sample, LPS mm.
   std::optional<std::array<double, 3>> position;
@@ -90,6 +90,11 @@ struct DicomImage {
   // its header was read, its pixels cannot be; the message names the syntax and the fix.
   std::string unsupported;
 };
+
+// The bits of a sample that hold its value: Bits Stored, or Bits Allocated without it.
+inline int StoredBits(const DicomImage& image) {
+  return image.bits_stored.value_or(image.bits_allocated);
+}
 
 // True when `bytes` (a file's first 132 bytes suffice) start like a DICOM file: a Part 10
 // file (a 128-byte preamble, then "DICM"), its file meta group without the preamble, or a data

@@ -117,8 +117,8 @@ absl::Status CheckSameShape(const Slice& first, const Slice& s) {
   if (a.bits_allocated != b.bits_allocated) {
     return differ("Bits Allocated (0028,0100)", a.bits_allocated, b.bits_allocated);
   }
-  if (a.bits_stored != b.bits_stored) {
-    return differ("Bits Stored (0028,0101)", a.bits_stored, b.bits_stored);
+  if (StoredBits(a) != StoredBits(b)) {
+    return differ("Bits Stored (0028,0101)", StoredBits(a), StoredBits(b));
   }
   if (a.pixel_representation != b.pixel_representation) {
     return differ("Pixel Representation (0028,0103)", a.pixel_representation,
@@ -252,9 +252,12 @@ absl::Status CheckPlaceable(const Slice& s) {
     return FileUnsupported(s.file, absl::StrCat("DICOM Bits Allocated (0028,0100) is ",
                                                 im.bits_allocated, ": only 8, 16 and 32 are read"));
   }
-  if (im.bits_stored < 0 || im.bits_stored > im.bits_allocated) {
-    return FileError(s.file, absl::StrCat("DICOM Bits Stored (0028,0101) is ", im.bits_stored,
-                                          ", more than Bits Allocated (", im.bits_allocated, ")"));
+  // PS3.3 C.7.6.3.1.1: from 1 to Bits Allocated. A file saying 0 was read as if it had no Bits
+  // Stored (all the allocated bits), a guess at a malformed value (found by a sweep).
+  if (StoredBits(im) < 1 || StoredBits(im) > im.bits_allocated) {
+    return FileError(s.file, absl::StrCat("DICOM Bits Stored (0028,0101) is ", StoredBits(im),
+                                          ": a sample stores from 1 to Bits Allocated (",
+                                          im.bits_allocated, ") bits"));
   }
   if (im.pixel_representation != 0 && im.pixel_representation != 1) {
     return FileError(s.file, absl::StrCat("DICOM Pixel Representation (0028,0103) is ",
@@ -308,7 +311,7 @@ int64_t StoredSample(const DicomImage& im, absl::string_view pixels, size_t n) {
   const int bytes = im.bits_allocated / 8;
   uint64_t raw = 0;
   std::memcpy(&raw, pixels.data() + n * bytes, bytes);  // little endian host (byte_order.h)
-  const int bits = im.bits_stored > 0 ? im.bits_stored : im.bits_allocated;
+  const int bits = StoredBits(im);
   const uint64_t mask = bits >= 64 ? ~uint64_t{0} : (uint64_t{1} << bits) - 1;
   raw &= mask;
   if (im.pixel_representation == 1 && (raw >> (bits - 1)) != 0) raw |= ~mask;

@@ -800,6 +800,16 @@ TEST(IoDicomTest, BrokenSeriesAreRefusedNamingTheProblem) {
          for (auto& x : s) x.bits_allocated = 12;
        },
        "only 8, 16 and 32 are read"},
+      {"no bits stored",
+       [](auto& s) {
+         for (auto& x : s) x.bits_stored = 0;
+       },
+       "Bits Stored (0028,0101) is 0: a sample stores from 1 to Bits Allocated (16) bits"},
+      {"more bits stored than allocated",
+       [](auto& s) {
+         for (auto& x : s) x.bits_stored = 17;
+       },
+       "Bits Stored (0028,0101) is 17: a sample stores from 1 to Bits Allocated (16) bits"},
       {"slope 0",
        [](auto& s) {
          s[0].rescale = {{0.0, 1.0}};
