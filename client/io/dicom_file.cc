@@ -414,6 +414,20 @@ absl::StatusOr<uint64_t> ReadFunctionalGroups(const DataSetParser& parser, absl:
       });
 }
 
+// Keeps the first malformed NM attribute's description (DicomImage::nm_problem).
+void NoteNmProblem(DicomImage& image, std::string problem) {
+  if (image.nm_problem.empty()) image.nm_problem = std::move(problem);
+}
+
+// A parse error's message without the "PATH: DICOM " that FileError put before it.
+std::string StatusText(const absl::Status& status, absl::string_view path) {
+  absl::string_view text = status.message();
+  absl::ConsumePrefix(&text, path);
+  absl::ConsumePrefix(&text, ": ");
+  absl::ConsumePrefix(&text, "DICOM ");
+  return std::string(text);
+}
+
 // Reads the Detector Information Sequence (0054,0022) `h`: Image Position (Patient) and Image
 // Orientation (Patient) of its first item into `image`, and the number of items. Returns the
 // offset past the sequence.
@@ -431,16 +445,17 @@ absl::StatusOr<uint64_t> ReadDetectorInformation(const DataSetParser& parser,
         if (Trimmed(value).empty()) return absl::OkStatus();
         const std::string where = " in Detector Information Sequence (0054,0022) item 1";
         const uint32_t tag = (uint32_t{e.group} << 16) | e.element;
+        // A malformed value is recorded, not refused: only the NM stacking reads these.
         if (tag == 0x00200032) {
           auto v =
               Decimals<3>(value, absl::StrCat("Image Position (Patient) (0020,0032)", where), path);
-          if (!v.ok()) return v.status();
-          image->detector_position = *v;
+          if (v.ok()) image->detector_position = *v;
+          if (!v.ok()) NoteNmProblem(*image, StatusText(v.status(), path));
         } else if (tag == 0x00200037) {
           auto v = Decimals<6>(
               value, absl::StrCat("Image Orientation (Patient) (0020,0037)", where), path);
-          if (!v.ok()) return v.status();
-          image->detector_orientation = *v;
+          if (v.ok()) image->detector_orientation = *v;
+          if (!v.ok()) NoteNmProblem(*image, StatusText(v.status(), path));
         }
         return absl::OkStatus();
       });
@@ -674,11 +689,14 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
         case 0x00280009: {
           // AT: (group, element) pairs of 16-bit words. Only multi-frame images need it (Number
           // of Frames (0028,0008) comes before it): a single frame is read whatever it says.
+          // Only the NM stacking reads it: a malformed one is recorded, not refused, so that an
+          // enhanced file that carries one reads as before (found by a review).
           if (image.frames < 2) break;
           if (value.size() % 4 != 0) {
-            return FileError(
-                path, absl::StrCat("DICOM Frame Increment Pointer (0028,0009) has ", value.size(),
-                                   " bytes, not a whole number of 4-byte tags"));
+            NoteNmProblem(image,
+                          absl::StrCat("Frame Increment Pointer (0028,0009) has ", value.size(),
+                                       " bytes, not a whole number of 4-byte tags"));
+            break;
           }
           image.frame_increment_pointer.clear();
           for (size_t at = 0; at < value.size(); at += 4) {
@@ -690,8 +708,9 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
         case 0x00540080: {
           if (image.frames < 2) break;
           if (value.size() % 2 != 0) {
-            return FileError(path, absl::StrCat("DICOM Slice Vector (0054,0080) has ", value.size(),
-                                                " bytes, not 2-byte values"));
+            NoteNmProblem(image, absl::StrCat("Slice Vector (0054,0080) has ", value.size(),
+                                              " bytes, not 2-byte values"));
+            break;
           }
           auto slices = std::make_shared<std::vector<uint16_t>>(value.size() / 2);
           for (size_t k = 0; k < slices->size(); ++k) (*slices)[k] = U16(value, 2 * k);

@@ -71,6 +71,11 @@ struct DicomImage {
   std::optional<std::array<double, 3>> detector_position;
   std::optional<std::array<double, 6>> detector_orientation;
   int64_t detector_items = 0;
+  // The first of those NM attributes found malformed (a Frame Increment Pointer or Slice Vector
+  // of the wrong length, a position that is not three numbers), without the file's name; empty
+  // when none is. Refused only where the NM stacking reads them, so that other files carrying
+  // them read as before.
+  std::string nm_problem;
   // (7FE0,0010) Pixel Data: the stored samples, little-endian, a view into the parsed bytes.
   // Empty when the file has no image (a report, a DICOMDIR), or holds one this reader does not
   // decode (then `unsupported` says why).

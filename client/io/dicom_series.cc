@@ -42,7 +42,10 @@ struct Slice {
   DicomImage image;        // pixel_data cleared: the file is read again for its pixels
   size_t pixel_bytes = 0;  // the size of its file's Pixel Data
   double along = 0;        // Image Position (Patient) along the slice normal, mm
-  int64_t frame = -1;      // its frame in an enhanced multi-frame file (FrameOf); -1: none
+  int64_t frame = -1;      // its frame in a multi-frame file (FrameOf); -1: none
+  // Why its file cannot be a stack of slices (CheckNmFile), found before its frames were
+  // expanded; CheckPlaceable returns it if the slice is of the series read.
+  absl::Status problem;
 };
 
 using Vec = std::array<double, 3>;
@@ -160,36 +163,95 @@ std::string FrameVectorName(uint32_t tag) {
   return tag_text;
 }
 
-// Checks what a frame of an NM reconstruction (FrameStack::kNmSlices) needs beyond a slice's:
-// a spacing that stacks the frames, and a Slice Vector, when given, with one slice per frame.
-absl::Status CheckNmFrames(const Slice& s) {
-  const DicomImage& im = s.image;
+// Checks, before its frames become slices, what an NM reconstruction (FrameStack::kNmSlices)
+// needs beyond each slice's own attributes: well-formed NM attributes, a spacing that stacks the
+// frames, a Slice Vector (when given) naming each slice once, and the pixels of every frame.
+// Checked first because each frame becomes a slice record: a 932-byte file claiming a million
+// frames of 1 x 1 samples took 1.1 GB before its missing pixels were seen (found by a review).
+absl::Status CheckNmFile(const std::string& file, const DicomImage& im, size_t pixel_bytes) {
+  if (!im.nm_problem.empty()) return FileError(file, absl::StrCat("DICOM ", im.nm_problem));
   if (!NmStackingOf(im).spacing) {
-    return FileError(s.file,
-                     absl::StrCat("DICOM file holds ", im.frames,
-                                  " NM slices (Frame Increment Pointer (0028,0009) is Slice "
-                                  "Vector (0054,0080)) but neither a non-zero Spacing Between "
-                                  "Slices (0018,0088) nor a positive Slice Thickness (0018,0050) "
-                                  "that would stack them"));
+    return FileError(file, absl::StrCat("DICOM file holds ", im.frames,
+                                        " NM slices (Frame Increment Pointer (0028,0009) is Slice "
+                                        "Vector (0054,0080)) but neither a usable Spacing Between "
+                                        "Slices (0018,0088) (one non-zero number) nor a positive "
+                                        "Slice Thickness (0018,0050) that would stack them"));
+  }
+  const uint64_t frame_bytes = static_cast<uint64_t>(std::max<int64_t>(im.rows, 0)) *
+                               static_cast<uint64_t>(std::max<int64_t>(im.columns, 0)) *
+                               static_cast<uint64_t>(std::max(im.bits_allocated, 0) / 8);
+  if (frame_bytes == 0) {
+    return FileError(
+        file, absl::StrCat("DICOM image is ", im.columns, " x ", im.rows, " (Columns x Rows) of ",
+                           im.bits_allocated, " bits allocated: its frames are empty"));
+  }
+  const uint64_t need = frame_bytes * static_cast<uint64_t>(im.frames);
+  if (pixel_bytes < need) {
+    return FileError(
+        file, absl::StrCat("DICOM Pixel Data (7FE0,0010) has ", pixel_bytes, " bytes, its ",
+                           im.frames, " frames need ", need, " (", im.columns, " x ", im.rows,
+                           " samples of ", im.bits_allocated, " bits a frame)"));
   }
   if (!im.slice_vector) return absl::OkStatus();
   const std::vector<uint16_t>& slices = *im.slice_vector;
   if (static_cast<int64_t>(slices.size()) != im.frames) {
-    return FileError(s.file, absl::StrCat("DICOM Slice Vector (0054,0080) has ", slices.size(),
-                                          " values for ", im.frames,
-                                          " frames (Number of Frames (0028,0008)): one a frame "
-                                          "is needed"));
+    return FileError(file, absl::StrCat("DICOM Slice Vector (0054,0080) has ", slices.size(),
+                                        " values for ", im.frames,
+                                        " frames (Number of Frames (0028,0008)): one a frame "
+                                        "is needed"));
   }
-  const uint16_t slice = slices[static_cast<size_t>(s.frame)];
-  if (slice < 1 || slice > im.frames) {
-    return FileError(s.file, absl::StrCat("DICOM Slice Vector (0054,0080) value ", s.frame + 1,
-                                          " is ", slice, ", not a slice from 1 to ", im.frames));
+  std::vector<int64_t> frame_of(static_cast<size_t>(im.frames) + 1, -1);
+  for (size_t f = 0; f < slices.size(); ++f) {
+    const uint16_t slice = slices[f];
+    if (slice < 1 || slice > im.frames) {
+      return FileError(file, absl::StrCat("DICOM Slice Vector (0054,0080) value ", f + 1, " is ",
+                                          slice, ", not a slice from 1 to ", im.frames));
+    }
+    if (frame_of[slice] >= 0) {
+      return FileError(file, absl::StrCat("DICOM Slice Vector (0054,0080) names slice ", slice,
+                                          " for frames ", frame_of[slice] + 1, " and ", f + 1,
+                                          ": each slice must be one frame's"));
+    }
+    frame_of[slice] = static_cast<int64_t>(f);
   }
   return absl::OkStatus();
 }
 
+// What a reader of an NM reconstruction should know of how it was placed: position or
+// orientation given twice and differing (this reader follows the Detector Information Sequence,
+// where the NM modules put them; dcm2niix takes the top level), or several detector items.
+void NoteNmPlacement(const std::string& file, const DicomImage& im,
+                     std::vector<std::string>* warnings) {
+  const auto differs = [](const auto& a, const auto& b, double tolerance) {
+    if (!a || !b) return false;
+    for (size_t c = 0; c < a->size(); ++c) {
+      if (std::abs((*a)[c] - (*b)[c]) > tolerance) return true;
+    }
+    return false;
+  };
+  if (differs(im.position, im.detector_position, 1e-3) ||
+      differs(im.orientation, im.detector_orientation, kOrientationTolerance)) {
+    warnings->push_back(absl::StrCat(
+        file,
+        ": the top level's Image Position or Orientation (Patient) differs from the Detector "
+        "Information Sequence's (0054,0022); the sequence's places the NM slices, as the NM "
+        "modules put them there (dcm2niix takes the top level's)"));
+  }
+  if (im.detector_items > 1) {
+    warnings->push_back(absl::StrCat(file, ": the Detector Information Sequence (0054,0022) has ",
+                                     im.detector_items, " items; the first places the NM slices"));
+  }
+  if (NmStackingOf(im).from_thickness) {
+    warnings->push_back(absl::StrCat(
+        file,
+        ": no usable Spacing Between Slices (0018,0088) (absent, zero or not one number); the NM "
+        "slices are stacked by Slice Thickness (0018,0050), as contiguous slices"));
+  }
+}
+
 // Checks what a slice must have to be placed and decoded.
 absl::Status CheckPlaceable(const Slice& s) {
+  if (!s.problem.ok()) return s.problem;
   const DicomImage& im = s.image;
   const auto missing = [&](absl::string_view what) {
     return FileError(
@@ -204,6 +266,9 @@ absl::Status CheckPlaceable(const Slice& s) {
                      ": its slices cannot be placed in the world"));
   };
   if (s.frame < 0 && im.frames != 1) {
+    if (!im.nm_problem.empty() && im.frame_group_count() == 0) {
+      return FileError(s.file, absl::StrCat("DICOM ", im.nm_problem));
+    }
     if (!im.frame_increment_pointer.empty() && im.frame_group_count() == 0) {
       std::vector<std::string> vectors;
       for (const uint32_t tag : im.frame_increment_pointer) vectors.push_back(FrameVectorName(tag));
@@ -212,10 +277,10 @@ absl::Status CheckPlaceable(const Slice& s) {
           absl::StrCat("DICOM file holds ", im.frames, " frames indexed by ",
                        absl::StrJoin(vectors, ", "),
                        " (Frame Increment Pointer (0028,0009)): not the slices of one volume. "
-                       "Frames are read as slices when Slice Vector (0054,0080) alone indexes "
-                       "them (a reconstructed NM tomography, Image Type RECON TOMO); gated, "
-                       "dynamic, planar and projection frames are not; split or reconstruct "
-                       "them first"));
+                       "Frames are read as slices in an enhanced multi-frame file and when Slice "
+                       "Vector (0054,0080) alone indexes them (a reconstructed NM tomography, "
+                       "Image Type RECON TOMO); a cine or a gated, dynamic, planar or projection "
+                       "file is not one volume (dcm2niix converts what can be)"));
     }
     if (im.frame_group_count() > 0) {
       return FileError(s.file,
@@ -232,9 +297,6 @@ absl::Status CheckPlaceable(const Slice& s) {
                      "enhanced multi-frame images, whose frames carry their positions, and NM "
                      "reconstructions, whose Frame Increment Pointer is Slice Vector (0054,0080), "
                      "are read; convert the series to NIfTI with dcm2niix"));
-  }
-  if (s.frame >= 0 && FrameStackOf(im) == FrameStack::kNmSlices) {
-    if (absl::Status st = CheckNmFrames(s); !st.ok()) return st;
   }
   if (!im.position) return missing("Image Position (Patient) (0020,0032)");
   if (!im.orientation) return missing("Image Orientation (Patient) (0020,0037)");
@@ -373,8 +435,8 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   int64_t not_dicom = 0, no_image = 0, duplicates = 0;
   std::map<std::string, std::string> compressed;  // series -> why one of its images is refused
   int64_t unreadable = 0;
-  std::string first_unreadable;      // "file: why" of the first"
-  std::string stacked_by_thickness;  // an NM file whose frames Slice Thickness stacked
+  std::string first_unreadable;          // "file: why" of the first"
+  std::vector<std::string> nm_warnings;  // how NM files were placed (NoteNmPlacement)
   for (const std::string& file : *files) {
     absl::StatusOr<FileView> view = FileView::Open(file);
     if (!view.ok()) return view.status();
@@ -413,22 +475,26 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
     // (FrameOf); another multi-frame file (cine, gated or planar NM) is refused by
     // CheckPlaceable.
     const int64_t frames = image->frames;
-    if (FrameStackOf(*image) != FrameStack::kNone) {
-      if (FrameStackOf(*image) == FrameStack::kNmSlices && NmStackingOf(*image).from_thickness) {
-        stacked_by_thickness = file;
+    if (FrameStackOf(*image) == FrameStack::kNmSlices) {
+      if (absl::Status st = CheckNmFile(file, *image, pixel_bytes); !st.ok()) {
+        slices.push_back(Slice{file, FrameOf(*image, 0), pixel_bytes, 0.0, -1, st});
+        continue;
       }
+      NoteNmPlacement(file, *image, &nm_warnings);
+    }
+    if (FrameStackOf(*image) != FrameStack::kNone) {
       if (static_cast<int64_t>(slices.size()) + frames > kMaxVolumeAxis) {
         return FileError(file, absl::StrCat("DICOM file holds ", frames, " frames, more than ",
                                             kMaxVolumeAxis, " slices"));
       }
       for (int64_t f = 0; f < frames; ++f) {
-        slices.push_back(Slice{file, FrameOf(*image, f), pixel_bytes, 0.0, f});
+        slices.push_back(Slice{file, FrameOf(*image, f), pixel_bytes, 0.0, f, {}});
       }
     } else if (frames > 1) {
       // Refused by CheckPlaceable if it is in the series read, which names what is missing.
-      slices.push_back(Slice{file, *std::move(image), pixel_bytes, 0.0});
+      slices.push_back(Slice{file, *std::move(image), pixel_bytes, 0.0, -1, {}});
     } else {
-      slices.push_back(Slice{file, FrameOf(*image, 0), pixel_bytes, 0.0});
+      slices.push_back(Slice{file, FrameOf(*image, 0), pixel_bytes, 0.0, -1, {}});
     }
   }
   // Said after an error about the series, when files were skipped as unreadable.
@@ -608,8 +674,12 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
       image = *std::move(parsed);
       open_file = s.file;
     }
-    const Slice again{s.file, FrameOf(*image, std::max<int64_t>(s.frame, 0)),
-                      image->pixel_data ? image->pixel_data->size() : 0, 0.0, s.frame};
+    const Slice again{s.file,
+                      FrameOf(*image, std::max<int64_t>(s.frame, 0)),
+                      image->pixel_data ? image->pixel_data->size() : 0,
+                      0.0,
+                      s.frame,
+                      {}};
     absl::Status same = CheckPlaceable(again);
     if (same.ok()) same = CheckSameShape(slices.front(), again);
     if (same.ok() && s.frame >= 0 && FrameStackOf(*image) == FrameStack::kNone) {
@@ -670,12 +740,7 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   if (!skipped.empty()) {
     volume->warnings.push_back(absl::StrCat(directory, ": skipped ", absl::StrJoin(skipped, ", ")));
   }
-  if (!stacked_by_thickness.empty()) {
-    volume->warnings.push_back(absl::StrCat(
-        stacked_by_thickness,
-        ": no Spacing Between Slices (0018,0088); the NM slices are stacked by Slice Thickness "
-        "(0018,0050), as contiguous slices"));
-  }
+  volume->warnings.insert(volume->warnings.end(), nm_warnings.begin(), nm_warnings.end());
   return volume;
 }
 

@@ -117,6 +117,11 @@ struct SliceSpec {
   std::vector<uint32_t> increment;
   std::vector<uint16_t> slice_vector;
   std::optional<double> spacing_between_slices, slice_thickness;
+  std::string raw_increment;  // when not empty: the Frame Increment Pointer's bytes instead
+  // NM: a top-level Image Position (Patient) besides the sequence's; more detector items (copies
+  // of the first).
+  std::optional<std::array<double, 3>> nm_top_position;
+  int nm_detector_items = 1;
 };
 
 std::string DefinedItem(const std::string& elements) {
@@ -157,6 +162,10 @@ std::string SliceFile(const SliceSpec& s) {
   }
   file += Element(ex, 0x0020, 0x000E, "UI", s.series);
   const bool enhanced = !s.frame_positions.empty();
+  if (s.nm_top_position) {
+    const auto& p = *s.nm_top_position;
+    file += Element(ex, 0x0020, 0x0032, "DS", Decimals({p[0], p[1], p[2]}));
+  }
   if (s.with_position && !enhanced && !s.nm) {
     file +=
         Element(ex, 0x0020, 0x0032, "DS", Decimals({s.position[0], s.position[1], s.position[2]}));
@@ -169,8 +178,8 @@ std::string SliceFile(const SliceSpec& s) {
   file += Us(ex, 0x0028, 0x0002, static_cast<uint16_t>(s.samples));
   const int frames = enhanced ? static_cast<int>(s.frame_positions.size()) : s.frames;
   if (frames != 1) file += Element(ex, 0x0028, 0x0008, "IS", absl::StrCat(frames));
-  if (!s.increment.empty()) {
-    std::string tags;
+  if (!s.increment.empty() || !s.raw_increment.empty()) {
+    std::string tags = s.raw_increment;
     for (uint32_t t : s.increment) tags += U16(static_cast<uint16_t>(t >> 16)) + U16(t & 0xFFFF);
     file += Element(ex, 0x0028, 0x0009, "AT", tags);
   }
@@ -213,7 +222,9 @@ std::string SliceFile(const SliceSpec& s) {
                          Decimals({s.position[0], s.position[1], s.position[2]})) +
                  detector;
     }
-    file += UndefinedSequence(ex, 0x0054, 0x0022, {detector});
+    file += UndefinedSequence(
+        ex, 0x0054, 0x0022,
+        std::vector<std::string>(static_cast<size_t>(s.nm_detector_items), detector));
   }
   if (!s.slice_vector.empty()) {
     std::string values;
@@ -430,7 +441,14 @@ TEST(IoDicomTest, EnhancedMultiFrameFramesAreSlices) {
     }
     ScratchDir dir;
     WriteBytes(dir.File("enhanced.dcm"), SliceFile(file));
-    for (const std::string& path : {dir.File("enhanced.dcm"), dir.path()}) {
+    // A Frame Increment Pointer only the NM stacking reads, even a malformed one, changes
+    // nothing here (a review found it refused).
+    SliceSpec with_pointer = file;
+    with_pointer.raw_increment = std::string("\x20\x00\x57\x91\x01\x02", 6);
+    ScratchDir pointer_dir;
+    WriteBytes(pointer_dir.File("pointer.dcm"), SliceFile(with_pointer));
+    for (const std::string& path :
+         {dir.File("enhanced.dcm"), dir.path(), pointer_dir.File("pointer.dcm")}) {
       absl::StatusOr<VolumeFile> read = ReadVolume(path);
       ASSERT_TRUE(read.ok()) << read.status();
       EXPECT_EQ(read->volume.grid().dims, (Index3{3, 4, 4}));
@@ -514,12 +532,39 @@ TEST(IoDicomTest, NmReconstructionFramesAreSlices) {
       }
     }
 
+    // Read, with one warning holding `expected`.
+    const auto warned = [&](const SliceSpec& file, const std::string& expected) {
+      ScratchDir dir;
+      WriteBytes(dir.File("spect.dcm"), SliceFile(file));
+      absl::StatusOr<VolumeFile> read = ReadVolume(dir.File("spect.dcm"));
+      ASSERT_TRUE(read.ok()) << read.status();
+      ExpectSeries(read->volume, nm_file(2.5, {1, 2, 3, 4}).second);
+      ASSERT_EQ(read->warnings.size(), 1u);
+      EXPECT_NE(read->warnings[0].find(expected), std::string::npos) << read->warnings[0];
+    };
     const SliceSpec good = nm_file(2.5, {1, 2, 3, 4}).first;
+    SliceSpec top_too = good;
+    top_too.nm_top_position = {0, 0, 0};
+    warned(top_too, "the sequence's places the NM slices");
+    top_too.nm_top_position = good.position;  // the same position twice: nothing to say
+    ScratchDir same_dir;
+    WriteBytes(same_dir.File("spect.dcm"), SliceFile(top_too));
+    const absl::StatusOr<VolumeFile> same = ReadVolume(same_dir.File("spect.dcm"));
+    ASSERT_TRUE(same.ok()) << same.status();
+    EXPECT_TRUE(same->warnings.empty());
+    SliceSpec two_detectors = good;
+    two_detectors.nm_detector_items = 2;
+    warned(two_detectors, "(0054,0022) has 2 items; the first places the NM slices");
+    SliceSpec zero_spacing = good;
+    zero_spacing.spacing_between_slices = 0.0;
+    warned(zero_spacing, "no usable Spacing Between Slices (0018,0088) (absent, zero or not one");
+
     SliceSpec no_spacing = good;
     no_spacing.spacing_between_slices.reset();
     no_spacing.slice_thickness.reset();
     ExpectRefusedFile(no_spacing,
-                      "neither a non-zero Spacing Between Slices (0018,0088) nor a positive");
+                      "neither a usable Spacing Between Slices (0018,0088) (one non-zero number) "
+                      "nor a positive");
     SliceSpec short_vector = good;
     short_vector.slice_vector = {1, 2, 3};
     ExpectRefusedFile(short_vector, "Slice Vector (0054,0080) has 3 values for 4 frames");
@@ -528,7 +573,20 @@ TEST(IoDicomTest, NmReconstructionFramesAreSlices) {
     ExpectRefusedFile(zero_slice, "Slice Vector (0054,0080) value 2 is 0, not a slice from 1 to 4");
     SliceSpec twice = good;
     twice.slice_vector = {1, 2, 2, 4};
-    ExpectRefusedFile(twice, "bad.dcm frame 2 and bad.dcm frame 3 lie at the same position");
+    ExpectRefusedFile(twice, "Slice Vector (0054,0080) names slice 2 for frames 2 and 3");
+    // Checked before the frames become slices: a few bytes claiming a million frames took
+    // 1.1 GB before its missing pixels were seen (found by a review).
+    SliceSpec hostile = good;
+    hostile.frames = 1000000;
+    hostile.rows = hostile.columns = 1;
+    hostile.slice_vector.clear();
+    hostile.pixels = U16(7);
+    ExpectRefusedFile(hostile, "Pixel Data (7FE0,0010) has 2 bytes, its 1000000 frames need");
+    SliceSpec broken_pointer = good;
+    broken_pointer.increment.clear();
+    broken_pointer.raw_increment = std::string("\x54\x00\x80\x00\x01\x02", 6);
+    ExpectRefusedFile(broken_pointer,
+                      "Frame Increment Pointer (0028,0009) has 6 bytes, not a whole number");
     SliceSpec gated = good;
     gated.increment = {0x00540070, 0x00540080};
     ExpectRefusedFile(
