@@ -60,11 +60,11 @@ std::string Printable(absl::string_view bytes) {
   return out;
 }
 
-namespace {
-
 std::string TagText(uint16_t group, uint16_t element) {
   return absl::StrFormat("(%04X,%04X)", group, element);
 }
+
+namespace {
 
 // The value representations whose explicit-VR header has two reserved bytes and a 32-bit length
 // (PS3.5 7.1.2).
@@ -449,13 +449,19 @@ absl::StatusOr<uint64_t> ReadDetectorInformation(const DataSetParser& parser,
         if (tag == 0x00200032) {
           auto v =
               Decimals<3>(value, absl::StrCat("Image Position (Patient) (0020,0032)", where), path);
-          if (v.ok()) image->detector_position = *v;
-          if (!v.ok()) NoteNmProblem(*image, StatusText(v.status(), path));
+          if (v.ok()) {
+            image->detector_position = *v;
+          } else {
+            NoteNmProblem(*image, StatusText(v.status(), path));
+          }
         } else if (tag == 0x00200037) {
           auto v = Decimals<6>(
               value, absl::StrCat("Image Orientation (Patient) (0020,0037)", where), path);
-          if (v.ok()) image->detector_orientation = *v;
-          if (!v.ok()) NoteNmProblem(*image, StatusText(v.status(), path));
+          if (v.ok()) {
+            image->detector_orientation = *v;
+          } else {
+            NoteNmProblem(*image, StatusText(v.status(), path));
+          }
         }
         return absl::OkStatus();
       });
@@ -687,10 +693,10 @@ absl::StatusOr<DicomImage> ParseDicomFile(absl::string_view bytes, absl::string_
           break;
         }
         case 0x00280009: {
-          // AT: (group, element) pairs of 16-bit words. Only multi-frame images need it (Number
-          // of Frames (0028,0008) comes before it): a single frame is read whatever it says.
-          // Only the NM stacking reads it: a malformed one is recorded, not refused, so that an
-          // enhanced file that carries one reads as before (found by a review).
+          // AT: (group, element) pairs of 16-bit words. Only the NM stacking of a multi-frame
+          // image reads it (Number of Frames (0028,0008) comes before it): a malformed one is
+          // recorded, not refused, so that other files carrying one read as before (found by a
+          // review).
           if (image.frames < 2) break;
           if (value.size() % 4 != 0) {
             NoteNmProblem(image,

@@ -107,6 +107,9 @@ inline int StoredBits(const DicomImage& image) {
 // some exporters write it.
 bool HasDicomMagic(absl::string_view bytes);
 
+// A tag as DICOM writes it in text, "(0028,0009)".
+std::string TagText(uint16_t group, uint16_t element);
+
 // `bytes` from a file for a message: printable ASCII kept, every other byte escaped (\x1b),
 // at most 64 bytes, so that a hostile file cannot write terminal escapes through an error.
 std::string Printable(absl::string_view bytes);

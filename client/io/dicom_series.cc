@@ -45,7 +45,7 @@ struct Slice {
   int64_t frame = -1;      // its frame in a multi-frame file (FrameOf); -1: none
   // Why its file cannot be a stack of slices (CheckNmFile), found before its frames were
   // expanded; CheckPlaceable returns it if the slice is of the series read.
-  absl::Status problem;
+  absl::Status problem = absl::OkStatus();
 };
 
 using Vec = std::array<double, 3>;
@@ -142,6 +142,13 @@ absl::Status CheckSameShape(const Slice& first, const Slice& s) {
   return absl::OkStatus();
 }
 
+// The bytes of one frame's samples (0 when Rows, Columns or Bits Allocated say none).
+uint64_t FrameBytes(const DicomImage& im) {
+  return static_cast<uint64_t>(std::max<int64_t>(im.rows, 0)) *
+         static_cast<uint64_t>(std::max<int64_t>(im.columns, 0)) *
+         static_cast<uint64_t>(std::max(im.bits_allocated, 0) / 8);
+}
+
 // What a tag of a Frame Increment Pointer (0028,0009) is called (PS3.3 C.8.4.8, C.7.6.6).
 std::string FrameVectorName(uint32_t tag) {
   struct Known {
@@ -156,7 +163,8 @@ std::string FrameVectorName(uint32_t tag) {
       {0x00540100, "Time Slice Vector"},    {0x00181063, "Frame Time"},
       {0x00181065, "Frame Time Vector"},
   };
-  const std::string tag_text = absl::StrFormat("(%04X,%04X)", tag >> 16, tag & 0xFFFF);
+  const std::string tag_text =
+      TagText(static_cast<uint16_t>(tag >> 16), static_cast<uint16_t>(tag & 0xFFFF));
   for (const Known& k : kKnown) {
     if (k.tag == tag) return absl::StrCat(k.name, " ", tag_text);
   }
@@ -177,9 +185,7 @@ absl::Status CheckNmFile(const std::string& file, const DicomImage& im, size_t p
                                         "Slices (0018,0088) (one non-zero number) nor a positive "
                                         "Slice Thickness (0018,0050) that would stack them"));
   }
-  const uint64_t frame_bytes = static_cast<uint64_t>(std::max<int64_t>(im.rows, 0)) *
-                               static_cast<uint64_t>(std::max<int64_t>(im.columns, 0)) *
-                               static_cast<uint64_t>(std::max(im.bits_allocated, 0) / 8);
+  const uint64_t frame_bytes = FrameBytes(im);
   if (frame_bytes == 0) {
     return FileError(
         file, absl::StrCat("DICOM image is ", im.columns, " x ", im.rows, " (Columns x Rows) of ",
@@ -340,9 +346,7 @@ absl::Status CheckPlaceable(const Slice& s) {
                                             sp, ", not positive"));
     }
   }
-  const uint64_t frame_bytes = static_cast<uint64_t>(im.rows) * static_cast<uint64_t>(im.columns) *
-                               static_cast<uint64_t>(im.bits_allocated / 8);
-  const uint64_t need = frame_bytes * static_cast<uint64_t>(s.frame < 0 ? 1 : s.frame + 1);
+  const uint64_t need = FrameBytes(im) * static_cast<uint64_t>(s.frame < 0 ? 1 : s.frame + 1);
   if (s.pixel_bytes < need) {
     return FileError(
         s.file, absl::StrCat("DICOM Pixel Data (7FE0,0010) has ", s.pixel_bytes, " bytes, ",
@@ -475,26 +479,27 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
     // (FrameOf); another multi-frame file (cine, gated or planar NM) is refused by
     // CheckPlaceable.
     const int64_t frames = image->frames;
-    if (FrameStackOf(*image) == FrameStack::kNmSlices) {
+    const FrameStack stack = FrameStackOf(*image);
+    if (stack == FrameStack::kNmSlices) {
       if (absl::Status st = CheckNmFile(file, *image, pixel_bytes); !st.ok()) {
         slices.push_back(Slice{file, FrameOf(*image, 0), pixel_bytes, 0.0, -1, st});
         continue;
       }
       NoteNmPlacement(file, *image, &nm_warnings);
     }
-    if (FrameStackOf(*image) != FrameStack::kNone) {
+    if (stack != FrameStack::kNone) {
       if (static_cast<int64_t>(slices.size()) + frames > kMaxVolumeAxis) {
         return FileError(file, absl::StrCat("DICOM file holds ", frames, " frames, more than ",
                                             kMaxVolumeAxis, " slices"));
       }
       for (int64_t f = 0; f < frames; ++f) {
-        slices.push_back(Slice{file, FrameOf(*image, f), pixel_bytes, 0.0, f, {}});
+        slices.push_back(Slice{file, FrameOf(*image, f), pixel_bytes, 0.0, f});
       }
     } else if (frames > 1) {
       // Refused by CheckPlaceable if it is in the series read, which names what is missing.
-      slices.push_back(Slice{file, *std::move(image), pixel_bytes, 0.0, -1, {}});
+      slices.push_back(Slice{file, *std::move(image), pixel_bytes, 0.0});
     } else {
-      slices.push_back(Slice{file, FrameOf(*image, 0), pixel_bytes, 0.0, -1, {}});
+      slices.push_back(Slice{file, FrameOf(*image, 0), pixel_bytes, 0.0});
     }
   }
   // Said after an error about the series, when files were skipped as unreadable.
@@ -674,12 +679,8 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
       image = *std::move(parsed);
       open_file = s.file;
     }
-    const Slice again{s.file,
-                      FrameOf(*image, std::max<int64_t>(s.frame, 0)),
-                      image->pixel_data ? image->pixel_data->size() : 0,
-                      0.0,
-                      s.frame,
-                      {}};
+    const Slice again{s.file, FrameOf(*image, std::max<int64_t>(s.frame, 0)),
+                      image->pixel_data ? image->pixel_data->size() : 0, 0.0, s.frame};
     absl::Status same = CheckPlaceable(again);
     if (same.ok()) same = CheckSameShape(slices.front(), again);
     if (same.ok() && s.frame >= 0 && FrameStackOf(*image) == FrameStack::kNone) {
