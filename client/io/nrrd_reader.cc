@@ -1,5 +1,6 @@
 #include "client/io/nrrd_reader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -50,7 +51,7 @@ std::optional<VoxelType> NrrdType(absl::string_view name) {
       {"float", VoxelType::kFloat32},
       {"double", VoxelType::kFloat64},
   };
-  const auto it = kTypes->find(name);
+  const auto it = kTypes->find(absl::AsciiStrToLower(name));
   if (it == kTypes->end()) return std::nullopt;
   return it->second;
 }
@@ -84,6 +85,52 @@ std::vector<absl::string_view> Words(absl::string_view text) {
   return absl::StrSplit(text, absl::ByAnyChar(" \t"), absl::SkipEmpty());
 }
 
+// The field names teem's NRRD reader (nrrd/enumsNrrd.c, _nrrdFieldStrEqv) takes as another
+// spelling of a field, without the space. A reader that looked up only the spaced names read
+// such a file wrong without a word: `byteskip` was ignored (every voxel shifted), `spaceorigin`
+// and `spacedirections` gave a grid at 0 with 1 mm voxels (found 2026-11-28 with files written to
+// the spec; tests/io/volume_formats_test.cc IoNrrdTest.TeemsOtherFieldSpellingsAreRead).
+absl::string_view CanonicalFieldName(absl::string_view lower_case_name) {
+  static const auto* const kSpellings = new std::map<absl::string_view, absl::string_view>{
+      {"blocksize", "block size"},
+      {"spacedimension", "space dimension"},
+      {"axismins", "axis mins"},
+      {"axismaxs", "axis maxs"},
+      {"spacedirections", "space directions"},
+      {"centerings", "centers"},
+      {"oldmin", "old min"},
+      {"oldmax", "old max"},
+      {"lineskip", "line skip"},
+      {"byteskip", "byte skip"},
+      {"sampleunits", "sample units"},
+      {"spaceunits", "space units"},
+      {"spaceorigin", "space origin"},
+      {"measurementframe", "measurement frame"},
+      {"datafile", "data file"},
+  };
+  const auto it = kSpellings->find(lower_case_name);
+  return it == kSpellings->end() ? lower_case_name : it->second;
+}
+
+// The vectors of "space directions": "(x,y,z)" groups (teem reads spaces inside one, as in
+// "(1.5, 0, 0)") or words such as "none", in order. An unclosed "(" runs to the end.
+std::vector<absl::string_view> SpaceVectors(absl::string_view text) {
+  std::vector<absl::string_view> vectors;
+  size_t i = 0;
+  while (i < text.size()) {
+    if (text[i] == ' ' || text[i] == '\t') {
+      ++i;
+      continue;
+    }
+    const size_t end = text[i] == '(' ? std::min(text.find(')', i), text.size() - 1) + 1
+                                      : text.find_first_of(" \t", i);
+    const size_t stop = end == absl::string_view::npos ? text.size() : end;
+    vectors.push_back(text.substr(i, stop - i));
+    i = stop;
+  }
+  return vectors;
+}
+
 struct NrrdFields {
   std::map<std::string, std::string> values;  // field name (lower case) -> value
   size_t data_offset = 0;                     // first byte after the header's blank line
@@ -109,11 +156,18 @@ absl::StatusOr<NrrdFields> ParseNrrdHeader(absl::string_view bytes, const std::s
       return FileLineError(path, lines.line_number(),
                            absl::StrCat("expected \"field: value\", got \"", line, "\""));
     }
-    fields.values[absl::AsciiStrToLower(line.substr(0, colon))] =
-        std::string(absl::StripAsciiWhitespace(line.substr(colon + 2)));
+    const std::string name = absl::AsciiStrToLower(line.substr(0, colon));
+    const std::string value(absl::StripAsciiWhitespace(line.substr(colon + 2)));
+    if (fields.values.count(std::string(CanonicalFieldName(name))) > 0) {
+      return FileLineError(path, lines.line_number(),
+                           absl::StrCat("field \"", name, "\" is given twice"));
+    }
+    fields.values[std::string(CanonicalFieldName(name))] = value;
+    // "data file: LIST": the header's remaining lines name the data files, one a line.
+    if (CanonicalFieldName(name) == "data file" && absl::StartsWith(value, "LIST")) break;
   }
   fields.data_offset = lines.offset();
-  const bool detached = fields.values.count("data file") > 0 || fields.values.count("datafile");
+  const bool detached = fields.values.count("data file") > 0;
   if (!blank_seen && !detached) {
     return FileError(path, "truncated: header has no blank line before the data");
   }
@@ -200,11 +254,32 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
                                               "supported: uchar, short, ushort, int, float, "
                                               "double"));
   }
-  if (Field(*fields, "dimension") != "3") {
-    return FileUnsupported(path, absl::StrCat("dimension \"", Field(*fields, "dimension"),
-                                              "\": only 3D volumes are read"));
+  // A 4D file with one axis of a single sample that is not in space (its space direction
+  // "none", or no space directions at all) is a 3D volume: what pynrrd and 3D Slicer write for a
+  // one-component vector volume ("kinds: list domain domain domain"). NIfTI's singleton fourth
+  // axis is read the same way.
+  std::vector<absl::string_view> sizes = Words(Field(*fields, "sizes"));
+  std::vector<absl::string_view> vectors = SpaceVectors(Field(*fields, "space directions"));
+  std::vector<absl::string_view> spacings = Words(Field(*fields, "spacings"));
+  const absl::string_view dimension = Field(*fields, "dimension");
+  if (dimension == "4" && sizes.size() == 4) {
+    int single = -1;
+    for (int a = 0; a < 4; ++a) {
+      const bool in_space = vectors.size() == 4 && vectors[a] != "none";
+      if (sizes[a] == "1" && !in_space && single < 0) single = a;
+    }
+    if (single < 0) {
+      return FileUnsupported(path,
+                             "dimension \"4\" with no non-spatial axis of size 1: only 3D "
+                             "volumes are read (one scalar a voxel)");
+    }
+    sizes.erase(sizes.begin() + single);
+    if (vectors.size() == 4) vectors.erase(vectors.begin() + single);
+    if (spacings.size() == 4) spacings.erase(spacings.begin() + single);
+  } else if (dimension != "3") {
+    return FileUnsupported(path,
+                           absl::StrCat("dimension \"", dimension, "\": only 3D volumes are read"));
   }
-  const std::vector<absl::string_view> sizes = Words(Field(*fields, "sizes"));
   if (sizes.size() != 3) return FileError(path, "\"sizes\" must give 3 sizes");
   Index3 dims;
   for (int a = 0; a < 3; ++a) {
@@ -224,9 +299,7 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
     }
     signs = *ras;
   }
-  if (const absl::string_view directions = Field(*fields, "space directions");
-      !directions.empty()) {
-    const std::vector<absl::string_view> vectors = Words(directions);
+  if (!Field(*fields, "space directions").empty()) {
     if (vectors.size() != 3) return FileError(path, "\"space directions\" must give 3 vectors");
     for (int a = 0; a < 3; ++a) {
       if (!ParseVector(vectors[a], axes[a])) {
@@ -240,7 +313,6 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
       }
     }
   } else {
-    const std::vector<absl::string_view> spacings = Words(Field(*fields, "spacings"));
     for (int a = 0; a < 3; ++a) {
       double step = 1.0;
       if (a < static_cast<int>(spacings.size()) && ParseDouble(spacings[a], step) &&
@@ -269,8 +341,7 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
   std::string detached_storage;
   absl::string_view payload = absl::string_view(*file).substr(fields->data_offset);
   std::string data_path = path;
-  absl::string_view data_file = Field(*fields, "data file");
-  if (data_file.empty()) data_file = Field(*fields, "datafile");
+  const absl::string_view data_file = Field(*fields, "data file");
   if (!data_file.empty()) {
     if (absl::StartsWith(data_file, "LIST") || Words(data_file).size() > 1) {
       return FileUnsupported(path, "multi-file NRRD data (LIST or pattern) is not supported");

@@ -113,6 +113,65 @@ TEST(IoNrrdTest, ErrorsNameTheFile) {
   EXPECT_THAT(std::string(ReadVolume(path).status().message()), HasSubstr("bzip2"));
 }
 
+// teem reads "spacedirections", "spaceorigin", "byteskip", "lineskip" and "datafile" as the
+// spaced fields, type names in any case and spaces inside a vector; they were once ignored
+// without a word (voxels read from byte 0, a grid at 0 with 1 mm voxels).
+TEST(IoNrrdTest, TeemsOtherFieldSpellingsAreRead) {
+  ScratchDir dir;
+  const std::string header = absl::StrCat(
+      "NRRD0004\ntype: Short\ndimension: 3\nsizes: ", kNx, " ", kNy, " ", kNz,
+      "\nspace: left-posterior-superior\nspacedirections: (2, 0, 0) (0,3,0)  ( 0 , 0 , 4 )\n",
+      "spaceorigin: (10,-20,30)\nendian: little\nencoding: raw\nlineskip: 2\nbyteskip: 5\n");
+  const std::string data = "skip\nthese lines\n12345" + Int16Samples(Ramp(), false);
+  WriteBytes(dir.File("attached.nrrd"), header + "\n" + data);
+  WriteBytes(dir.File("detached.nhdr"), header + "datafile: detached.raw\n");
+  WriteBytes(dir.File("detached.raw"), data);
+  for (const char* name : {"attached.nrrd", "detached.nhdr"}) {
+    SCOPED_TRACE(name);
+    absl::StatusOr<VolumeFile> file = ReadVolume(dir.File(name));
+    ASSERT_TRUE(file.ok()) << file.status();
+    ExpectLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+  }
+  // Both spellings of one field would leave which one counts to chance: refused, as teem does.
+  WriteBytes(dir.File("twice.nrrd"), header + "byte skip: 5\n\n" + data);
+  EXPECT_THAT(std::string(ReadVolume(dir.File("twice.nrrd")).status().message()),
+              HasSubstr("twice.nrrd:12: field \"byte skip\" is given twice"));
+}
+
+// A 4D file whose extra axis holds one sample and is not in space is the 3D volume pynrrd and
+// 3D Slicer write for a one-component vector volume; two components are refused.
+TEST(IoNrrdTest, OneSampleListAxisIsA3dVolume) {
+  ScratchDir dir;
+  const auto header = [](int components, const std::string& directions) {
+    return absl::StrCat("NRRD0005\ntype: int16\ndimension: 4\nspace: left-posterior-superior\n",
+                        "sizes: ", kNx, " ", components, " ", kNy, " ", kNz,
+                        "\nspace directions: ", directions,
+                        "\nkinds: domain list domain domain\nendian: little\nencoding: raw\n",
+                        "space origin: (10,-20,30)\n\n");
+  };
+  WriteBytes(dir.File("one.nrrd"),
+             header(1, "(2,0,0) none (0,3,0) (0,0,4)") + Int16Samples(Ramp(), false));
+  absl::StatusOr<VolumeFile> file = ReadVolume(dir.File("one.nrrd"));
+  ASSERT_TRUE(file.ok()) << file.status();
+  ExpectLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+  WriteBytes(dir.File("two.nrrd"), header(2, "(2,0,0) none (0,3,0) (0,0,4)") +
+                                       Int16Samples(Ramp(), false) + Int16Samples(Ramp(), false));
+  const absl::Status two = ReadVolume(dir.File("two.nrrd")).status();
+  EXPECT_EQ(two.code(), absl::StatusCode::kUnimplemented) << two;
+  EXPECT_THAT(std::string(two.message()), HasSubstr("only 3D volumes are read"));
+}
+
+// "data file: LIST" is followed by the file names, not fields: the refusal says what the file
+// is, not that a file name is not "field: value".
+TEST(IoNrrdTest, ListOfDataFilesIsNamedAsUnsupported) {
+  ScratchDir dir;
+  WriteBytes(dir.File("list.nhdr"),
+             NrrdHeader("short", "raw", "little", "data file: LIST\nslice0.raw\nslice1.raw\n"));
+  const absl::Status status = ReadVolume(dir.File("list.nhdr")).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kUnimplemented) << status;
+  EXPECT_THAT(std::string(status.message()), HasSubstr("multi-file NRRD data"));
+}
+
 std::string MetaHeader(const std::string& extra, const std::string& data_file) {
   return absl::StrCat("ObjectType = Image\nNDims = 3\nBinaryData = True\n", extra,
                       "TransformMatrix = 1 0 0 0 1 0 0 0 1\nOffset = 10 -20 30\n",
