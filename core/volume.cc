@@ -140,10 +140,15 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
       return absl::InvalidArgumentError(
           absl::StrCat("volume.origin.", std::string(1, kAxis[a]), " is not finite"));
     }
-    if (!std::isfinite(grid.spacing[a]) || grid.spacing[a] <= 0.0) {
-      return absl::InvalidArgumentError(absl::StrCat("volume.spacing.", std::string(1, kAxis[a]),
-                                                     " = ", grid.spacing[a],
-                                                     ": must be finite and > 0"));
+    // A subnormal spacing's inverse overflows: every point then mapped to an infinite index and
+    // passed the inside test (a request with spacing 1e-310 was accepted and every vertex read
+    // the boundary's value; found 2026-11-28 by a review of the Python client).
+    if (!std::isfinite(grid.spacing[a]) ||
+        !(grid.spacing[a] >= std::numeric_limits<double>::min())) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("volume.spacing.", std::string(1, kAxis[a]), " = ", grid.spacing[a],
+                       ": must be finite and at least ", std::numeric_limits<double>::min(),
+                       " (the smallest normal double; its inverse must be finite)"));
     }
     if (lo[a] < 0 || hi[a] > grid.dims[a] || hi[a] - lo[a] < 2) {
       return absl::InvalidArgumentError(absl::StrCat(
@@ -196,6 +201,13 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
     for (const Vec3& c : WorldCorners(grid, {0.0, 0.0, 0.0}, last)) {
       for (int a = 0; a < 3; ++a) scale = std::max(scale, std::abs(c[a]));
     }
+    // Corners beyond float64 (a huge origin, or spacing times dims) made the tolerance infinite
+    // and every point "inside", as a subnormal spacing did.
+    if (!std::isfinite(scale)) {
+      return absl::InvalidArgumentError(
+          "volume grid: its far corner, origin + direction * spacing * (dims - 1), overflows "
+          "float64");
+    }
     for (int a = 0; a < 3; ++a) {
       double row = 0.0;
       for (int b = 0; b < 3; ++b) {
@@ -204,6 +216,13 @@ absl::StatusOr<Volume> Volume::Create(const GridGeometry& grid, const Index3& lo
       }
       v.boundary_tolerance_[a] =
           kGridBoundaryTolerance + 8.0 * std::numeric_limits<double>::epsilon() * scale * row;
+      // An index map that overflows would make the tolerance infinite, and every point
+      // "inside" (the corners were checked above).
+      if (!std::isfinite(v.boundary_tolerance_[a])) {
+        return absl::InvalidArgumentError(
+            absl::StrCat("volume grid: its world-to-index map overflows float64 on axis ",
+                         std::string(1, kAxis[a]), " (spacing ", grid.spacing[a], ")"));
+      }
     }
   }
   v.lo_ = lo;

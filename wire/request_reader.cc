@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <new>
 #include <string>
 #include <utility>
@@ -200,9 +201,12 @@ absl::Status RequestReader::AddVolumeHeader(const v1::VolumeHeader& header) {
       return Invalid(absl::StrCat("volume_header.origin.", kAxis[a], ": must be finite, got ",
                                   grid_.origin[a]));
     }
-    if (!(grid_.spacing[a] > 0.0) || !std::isfinite(grid_.spacing[a])) {
+    // Below the smallest normal double the inverse overflows (core's Volume::Create says why).
+    if (!(grid_.spacing[a] >= std::numeric_limits<double>::min()) ||
+        !std::isfinite(grid_.spacing[a])) {
       return Invalid(absl::StrCat("volume_header.spacing.", kAxis[a],
-                                  ": must be finite and > 0, got ", grid_.spacing[a]));
+                                  ": must be finite and > 0 (at least ",
+                                  std::numeric_limits<double>::min(), "), got ", grid_.spacing[a]));
     }
     if (lo_[a] < 0 || lo_[a] >= grid_.dims[a]) {
       return Invalid(absl::StrCat("volume_header.slab_lo.", kAxis[a], ": must be in [0, ",

@@ -1,4 +1,5 @@
 // Bad input gets an InvalidArgument error that names the field and the index.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -301,6 +302,31 @@ TEST(Volume, TrilinearMatchesEquation1AndEveryVoxelType) {
     EXPECT_EQ(vol16->Sample(p), vol64->Sample(p));
   }
   EXPECT_FALSE(Volume::CreateWhole(g, VoxelType::kInt16, {}).ok());
+}
+
+// A grid whose index map overflows float64 is refused naming the axis: a subnormal spacing made
+// every index infinite and every point "inside" (a request with spacing 1e-310 refined with the
+// boundary's value at every vertex), and corners beyond float64 did the same.
+TEST(Volume, GridsWhoseIndexMapOverflowsAreRefused) {
+  const std::vector<double> values(8, 1.0);
+  GridGeometry g;
+  g.dims = {2, 2, 2};
+  g.spacing = {1.0, 1e-310, 1.0};
+  absl::StatusOr<Volume> subnormal = Volume::FromDoubles(g, values);
+  ASSERT_FALSE(subnormal.ok());
+  EXPECT_THAT(
+      std::string(subnormal.status().message()),
+      ::testing::HasSubstr("volume.spacing.y = 1e-310: must be finite and at least 2.22507e-308"));
+  g.spacing = {1.0, std::numeric_limits<double>::min(), 1.0};
+  EXPECT_TRUE(Volume::FromDoubles(g, values).ok());
+  g.spacing = {1.0, 1.0, 1e308};
+  g.origin = {0.0, 0.0, 1e308};
+  absl::StatusOr<Volume> huge = Volume::FromDoubles(g, values);
+  ASSERT_FALSE(huge.ok());
+  EXPECT_THAT(std::string(huge.status().message()),
+              ::testing::HasSubstr("far corner"));
+  g.direction = {0.6, -0.8, 0.0, 0.8, 0.6, 0.0, 0.0, 0.0, 1.0};
+  EXPECT_FALSE(Volume::FromDoubles(g, values).ok());
 }
 
 }  // namespace

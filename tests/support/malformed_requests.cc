@@ -675,7 +675,16 @@ std::vector<MalformedRequest> MalformedRequests() {
            "--max_lattice_points"},
           kExhausted),
       Edit("SpacingInfinite", [](Requests& r) { VolumeHeader(r).mutable_spacing()->set_y(kInf); },
-           {"volume_header.spacing.y: must be finite and > 0, got inf"}),
+           {"volume_header.spacing.y: must be finite and > 0", "got inf"}),
+      Edit("SpacingSubnormal",
+           [](Requests& r) { VolumeHeader(r).mutable_spacing()->set_x(1e-310); },
+           {"volume_header.spacing.x: must be finite and > 0 (at least 2.22507e-308), got 1e-310"}),
+      Edit("GridBeyondFloat64",
+           [](Requests& r) {
+             VolumeHeader(r).mutable_origin()->set_z(1e308);
+             VolumeHeader(r).mutable_spacing()->set_z(1e308);
+           },
+           {"volume grid: its far corner", "overflows float64"}),
       Edit("OriginNaN", [](Requests& r) { VolumeHeader(r).mutable_origin()->set_z(kNaN); },
            {"volume_header.origin.z: must be finite", "nan"}),
       Edit("EpsilonInfinite", [](Requests& r) { Options(r).set_epsilon(kInf); },
