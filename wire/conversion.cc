@@ -398,6 +398,17 @@ ServiceLimits LimitsFromWire(const v1::ServerLimits& in) {
                        .bytes_per_output_tet = in.bytes_per_output_tet()};
 }
 
+size_t LabelWireBytes(const std::vector<int32_t>& labels) {
+  int32_t largest = 0;
+  for (int32_t label : labels) {
+    if (label < 0) return 10;
+    largest = std::max(largest, label);
+  }
+  size_t bytes = 1;
+  for (uint32_t rest = static_cast<uint32_t>(largest) >> 7; rest != 0; rest >>= 7) ++bytes;
+  return bytes;
+}
+
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
   return grpc::Status(static_cast<grpc::StatusCode>(status.code()), std::string(status.message()));

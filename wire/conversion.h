@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -76,6 +77,12 @@ absl::Status SummaryFromWire(const v1::Summary& summary, RefineResult* result,
 
 void LimitsToWire(const ServiceLimits& limits, v1::ServerLimits* out);
 ServiceLimits LimitsFromWire(const v1::ServerLimits& limits);
+
+// The bytes one label of `labels` can take in a TetLabelChunk (a varint int32): the most any of
+// them takes, 1 to 5, or 10 when one is negative (sign-extended to 64 bits). Chunks sized at 4
+// bytes a label ran past a server's --max_message_bytes for negative labels (found 2026-11-28:
+// 20,000 labels of -1 in an 82 KB message against a 64 KB limit).
+size_t LabelWireBytes(const std::vector<int32_t>& labels);
 
 // gRPC and Abseil share canonical status codes.
 grpc::Status ToGrpcStatus(const absl::Status& status);

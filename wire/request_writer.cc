@@ -88,7 +88,7 @@ bool WriteMesh(const Mesh& mesh, size_t chunk_bytes, const RequestSink& sink) {
     if (!sink(request)) return false;
   }
   if (!has_labels) return true;
-  const size_t label_step = PerChunk(chunk_bytes, sizeof(int32_t));
+  const size_t label_step = PerChunk(chunk_bytes, LabelWireBytes(mesh.labels));
   for (size_t start = 0; start < mesh.labels.size(); start += label_step) {
     const size_t end = std::min(mesh.labels.size(), start + label_step);
     request.Clear();

@@ -102,7 +102,7 @@ bool ResponseWriter::WriteMesh(int iteration, bool final, const Mesh& mesh,
                                                         tet_quality.begin() + end);
                      return sink_(response_);
                    }) &&
-      ForEachChunk(mesh.labels.size(), sizeof(int32_t), chunk_bytes_,
+      ForEachChunk(mesh.labels.size(), LabelWireBytes(mesh.labels), chunk_bytes_,
                    [&](size_t start, size_t end) {
                      response_.Clear();
                      v1::TetLabelChunk* chunk = response_.mutable_tet_label_chunk();

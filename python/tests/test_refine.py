@@ -432,7 +432,13 @@ def test_chunks_follow_the_servers_message_limit(server_binary):
             assert client.server_info().limits.max_message_bytes == 65536
             result = client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.05,
                                    max_iterations=1)
+            # A negative label takes 10 bytes on the wire: 8,640 of them are 86 KB, and label
+            # chunks sized at 4 bytes a label were refused by this server.
+            labels = np.where(np.arange(len(tets)) % 2 == 0, -1, -2**31)
+            labelled = client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.05,
+                                     max_iterations=1, labels=labels)
         assert len(result.tets) > len(tets)
+        assert set(labelled.labels.tolist()) == {-1, -2**31}
     finally:
         small.stop()
 

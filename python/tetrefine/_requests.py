@@ -285,6 +285,18 @@ def _per_chunk(chunk_bytes, element_bytes):
     return max(1, chunk_bytes // element_bytes)
 
 
+def _label_wire_bytes(labels):
+    """Bytes a label of `labels` can take as a varint int32: 1 to 5, or 10 if one is negative.
+
+    Sized at 4 bytes a label, negative labels overran a server's --max_message_bytes (as the
+    C++ writer's wire::LabelWireBytes says)."""
+    if len(labels) == 0:
+        return 1
+    if int(labels.min()) < 0:
+        return 10
+    return max(1, (int(labels.max()).bit_length() + 6) // 7)
+
+
 def requests(pb, protocol, options, inputs, chunk_bytes):
     """Yields the Refine request stream: options, volume, mesh in chunks, end of input."""
     yield pb.RefineRequest(options=options)
@@ -321,7 +333,7 @@ def requests(pb, protocol, options, inputs, chunk_bytes):
             start_index=start, indices=inputs.tets[start:start + step].ravel().tolist()))
     if inputs.labels is not None:
         kind = protocol.request_labels
-        step = _per_chunk(chunk_bytes, 4)
+        step = _per_chunk(chunk_bytes, _label_wire_bytes(inputs.labels))
         for start in range(0, len(inputs.labels), step):
             request = pb.RefineRequest()
             chunk = getattr(request, kind.name)

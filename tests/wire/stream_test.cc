@@ -331,6 +331,45 @@ TEST(WireStreams, LabelsParentsAndCertifiedResultsRoundTrip) {
   ExpectSameResult(*result, response_reader.Take().result);
 }
 
+// A label chunk's labels take what LabelWireBytes says, so its message stays within the chunk
+// size (plus the chunk's own few bytes of framing) for negative and large labels too: sized at 4
+// bytes a label, -1 labels took 10 each and a server's --max_message_bytes refused them.
+TEST(WireStreams, LabelChunksStayWithinTheChunkSizeWhateverTheLabels) {
+  EXPECT_EQ(LabelWireBytes({}), 1u);
+  EXPECT_EQ(LabelWireBytes({0, 127}), 1u);
+  EXPECT_EQ(LabelWireBytes({128}), 2u);
+  EXPECT_EQ(LabelWireBytes({(1 << 28) - 1}), 4u);
+  EXPECT_EQ(LabelWireBytes({1 << 28, 3}), 5u);
+  EXPECT_EQ(LabelWireBytes({2147483647}), 5u);
+  EXPECT_EQ(LabelWireBytes({5, -1}), 10u);
+  const Mesh base = TestMesh(/*with_values=*/false);
+  const Volume volume = TestSlab({10, 10, 10}, {0, 0, 0}, {10, 10, 10});
+  constexpr size_t kChunk = 256;
+  constexpr size_t kFraming = 16;  // oneof tag, length, start_index, the packed field's header
+  for (const int32_t label : {3, 1 << 29, -1, -2147483647 - 1}) {
+    SCOPED_TRACE(label);
+    Mesh mesh = base;
+    mesh.labels.assign(mesh.tets.size(), label);
+    size_t label_chunks = 0;
+    for (const v1::RefineRequest& r : Requests(RequestOptions{}, volume, mesh, kChunk)) {
+      if (!r.has_tet_label_chunk()) continue;
+      ++label_chunks;
+      EXPECT_LE(r.ByteSizeLong(), kChunk + kFraming);
+    }
+    EXPECT_GE(label_chunks, 1u);
+    size_t response_label_chunks = 0;
+    ResponseWriter writer(kChunk, [&](const v1::RefineResponse& r) {
+      if (r.has_tet_label_chunk()) {
+        ++response_label_chunks;
+        EXPECT_LE(r.ByteSizeLong(), kChunk + kFraming);
+      }
+      return true;
+    });
+    ASSERT_TRUE(writer.WriteMesh(1, true, mesh, {}, {}));
+    EXPECT_GE(response_label_chunks, 1u);
+  }
+}
+
 TEST(WireResponseStream, ReaderRefusesABrokenStreamNamingTheField) {
   const RefineResult result = SmallResult();
   std::vector<v1::RefineResponse> responses;
