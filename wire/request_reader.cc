@@ -63,6 +63,21 @@ absl::Status DirectionFromWire(const v1::VolumeHeader& header, Mat3* direction) 
                        "columns is ",
                        defect.det, ", must be >= ", kMinDirectionDeterminant, ")"));
   }
+  // The protocol's columns are unit vectors and the voxel size is `spacing`. Core would take a
+  // scaled column as a scale, so the likely mistake, direction = affine[:3, :3] sent with
+  // spacing = the voxel sizes, refined a volume scaled twice without a word (found 2026-11-28 by
+  // a review of the Python client). 1e-3 accepts directions typed with four digits (0.7071)
+  // and refuses any voxel size that differs from 1 by more than that.
+  constexpr double kUnitTolerance = 1e-3;
+  for (int c = 0; c < 3; ++c) {
+    const double length = std::hypot((*direction)[c], (*direction)[3 + c], (*direction)[6 + c]);
+    if (!(std::abs(length - 1.0) <= kUnitTolerance)) {
+      return Invalid(absl::StrCat(
+          "volume_header.direction: column ", c, " has length ", length,
+          "; the columns are unit vectors and the voxel size goes in volume_header.spacing "
+          "(from an affine: its 3x3 part with each column divided by that column's length)"));
+    }
+  }
   return absl::OkStatus();
 }
 

@@ -314,6 +314,11 @@ def test_the_servers_message_for_bad_input(server):
     (dict(spacing=(1, 0, 1)), "spacing: must be > 0 on every axis, got 0.0 on axis y"),
     (dict(origin=(0, 0)), "origin: expected 3 numbers, got 2"),
     (dict(direction=np.eye(2)), r"direction: expected a 3x3 matrix"),
+    # Found by a review (2026-11-28): a direction with lengths scaled the volume a second time;
+    # a complex one warned and then said "column 0 is zero".
+    (dict(direction=np.diag([2.0, 2.0, 2.0])), "direction: column 0 has length 2; the columns "
+     "are unit vectors"),
+    (dict(direction=np.eye(3) * (1 + 0j)), "direction: expected real numbers"),
     # Found by a sweep of the API (2026-11-25): these raised numpy's, protobuf's or Python's own
     # exceptions, or were coerced.
     (dict(tets=[[0, 1, 2, 3], [0, 1, 2]]), "tets: not an array of numbers"),

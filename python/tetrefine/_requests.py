@@ -201,6 +201,8 @@ def _direction(direction):
     """9 floats row-major, or None when `direction` is None or the identity."""
     if direction is None:
         return None
+    if np.iscomplexobj(direction):
+        raise invalid("direction", "expected real numbers, got complex ones")
     try:
         d = np.asarray(direction, dtype=np.float64)
     except (TypeError, ValueError):
@@ -210,6 +212,14 @@ def _direction(direction):
     d = d.reshape(3, 3)
     if not np.all(np.isfinite(d)):
         raise invalid("direction", "must be finite")
+    # Unit columns, as the server requires (wire/request_reader.cc says why): a direction taken
+    # straight from an affine would scale the volume a second time.
+    lengths = np.sqrt((d * d).sum(axis=0))
+    for column, length in enumerate(lengths):
+        if not abs(length - 1.0) <= 1e-3:
+            raise invalid("direction", f"column {column} has length {length:g}; the columns are "
+                          "unit vectors and the voxel size goes in spacing (from an affine: "
+                          "affine[:3, :3] / spacing)")
     if np.array_equal(d, np.eye(3)):
         return None
     return [float(x) for x in d.reshape(-1)]

@@ -200,8 +200,10 @@ class Client:
           tets: (m, 4) integer vertex indices, positively oriented unless fix_orientation=True:
             dot(p1 - p0, cross(p2 - p0, p3 - p0)) > 0.
           epsilon: relative tolerance of the edge-midpoint error (paper eq. 3), > 0.
-          direction: 3x3 matrix whose columns are the world directions of the volume's x, y, z
-            index axes (for an oblique volume); None or the identity for an axis-aligned one.
+          direction: 3x3 matrix whose columns are the unit world directions of the volume's
+            x, y, z index axes (for an oblique volume; the voxel size goes in spacing, so from
+            an affine pass affine[:3, :3] / spacing); None or the identity for an axis-aligned
+            one.
           labels: (m,) integer label per tet, inherited by every child tet.
           scheme: "longest-edge" (reaches epsilon with bounded quality) or "paper" (the
             published scheme, unchanged); None: the server's default (longest-edge).

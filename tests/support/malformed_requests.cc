@@ -348,6 +348,15 @@ std::vector<MalformedRequest> MalformedRequests() {
          }
        },
        {"volume_header.direction[4]", "nan"}},
+      {"DirectionWithLengths",
+       [](Requests& r) {
+         // An affine's 3x3 part (voxel sizes 1, 1, 2.5) sent as the direction.
+         for (double d : {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 2.5}) {
+           VolumeHeader(r).add_direction(d);
+         }
+       },
+       {"volume_header.direction: column 2 has length 2.5", "unit vectors",
+        "volume_header.spacing"}},
       {"VoxelTypeUnknown",
        [](Requests& r) { VolumeHeader(r).set_voxel_type(static_cast<v1::VoxelType>(42)); },
        {"volume_header.voxel_type", "42"}},
