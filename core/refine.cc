@@ -425,6 +425,10 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
         norm, options.epsilon, clamp, [&cancel] { return cancel.Check(); }, known);
     // An incomplete lattice is not a result: say the refinement was cancelled.
     if (cancel.IsSet()) result.stop_reason = StopReason::kCancelled;
+  } else {
+    // No check ran: n = 8 (the default) beside a max of 0 read as a lattice that found nothing
+    // (the service's summary said so to Python callers of lattice_n = 0).
+    result.lattice.n = 0;
   }
   if (certified) {
     result.certified_max_error = 0.0;

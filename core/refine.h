@@ -47,7 +47,7 @@ struct IterationStats {
 // Discrepancy sampled inside tets on the barycentric lattice of the paper's section 5.1:
 // points (i, j, k, l) / n with i + j + k + l = n (165 points for n = 8).
 struct LatticeStats {
-  int n = 8;
+  int n = 8;  // RefineResult::lattice: 0 when no check ran (lattice_n 0, or cancelled)
   int64_t tets_sampled = 0;
   int64_t points_sampled = 0;
   double max_error = 0.0;

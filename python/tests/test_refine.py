@@ -518,9 +518,12 @@ def test_lattice_and_guard_options(server, cli_binary, tmp_path):
                                  max_iterations=4)
         guarded = client.refine(*args, min_edge_length=8.0, max_iterations=4)
         floored = client.refine(*args, min_quality=0.9, max_iterations=4)
+        unchecked = client.refine(*args, lattice_n=0, max_iterations=4)
         with pytest.raises(tetrefine.TetrefineError) as error:
             client.refine(*args, lattice_n=-1)
-    assert "lattice_n" in error.value.details
+    assert "lattice_n: must be in [0, 64]" in error.value.details
+    # No check ran: the summary says order 0 (it said 8, with a max of 0).
+    assert unchecked.lattice.n == 0 and unchecked.lattice.tets_sampled == 0
     assert_same_as_cli_output(result, output)
     cli_lattice = json.load(open(stats))["lattice"]
     assert result.lattice.n == 5 == cli_lattice["n"]

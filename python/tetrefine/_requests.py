@@ -243,7 +243,8 @@ def build_options(pb, protocol, epsilon, *, max_iterations=None, max_tets=None, 
     # What the CLI's --lattice-n, --lattice-max-tets, --lattice-seed, --min-edge-length and
     # --min-quality set (a service sweep could not reproduce such CLI runs from Python).
     if lattice_n is not None:
-        options.lattice_n = integer("lattice_n", lattice_n, 0, 2**31 - 1)
+        # The core's bound; a server's --max_lattice_n may be lower and says so.
+        options.lattice_n = integer("lattice_n", lattice_n, 0, 64)
     if lattice_max_tets is not None:
         options.lattice_max_tets = integer("lattice_max_tets", lattice_max_tets, 0, 2**63 - 1)
     if lattice_seed is not None:
