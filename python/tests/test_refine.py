@@ -3,6 +3,7 @@
 import json
 import os
 import subprocess
+import time
 
 import grpc
 import meshio
@@ -448,6 +449,30 @@ def test_chunks_follow_the_servers_message_limit(server_binary):
         small.stop()
 
 
+def test_a_callback_slower_than_the_servers_write_stall_is_told_so(server_binary):
+    """The server cancels a call whose client reads nothing for --write_stall_seconds; a
+    cancel carries no message, so the client says what a callback's author needs to know."""
+    from conftest import Server
+    strict = Server(server_binary, ["--write_stall_seconds=1"]).start()
+    try:
+        volume = noise_volume((40, 40, 40))
+        points, tets = box_mesh((1, 1, 1), (38, 38, 38), (12, 12, 12))
+
+        def slow(stats):
+            if stats.iteration == 1:
+                time.sleep(4)  # the final mesh (megabytes) waits behind it
+
+        with tetrefine.Client(strict.target) as client:
+            with pytest.raises(tetrefine.TetrefineError) as error:
+                client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.02,
+                              max_iterations=2, on_iteration=slow)
+        assert error.value.code == grpc.StatusCode.CANCELLED
+        assert "reads no response for 1 s (limits.write_stall_seconds)" in error.value.details
+        assert "keep on_iteration and on_mesh short" in error.value.details
+    finally:
+        strict.stop()
+
+
 def test_tls_with_a_client_certificate(server_binary, tmp_path):
     def openssl(*args):
         subprocess.run(["openssl", *args], check=True, capture_output=True)
@@ -488,6 +513,15 @@ def test_tls_with_a_client_certificate(server_binary, tmp_path):
         tls_server.stop()
     with pytest.raises(tetrefine.TetrefineError, match="tls\\['ca'\\]: .*missing.pem"):
         tetrefine.Client("127.0.0.1:1", tls={"ca": tmp_path / "missing.pem"})
+    # Not PEM: named at once (gRPC said "UNAVAILABLE: empty address list" when connecting).
+    with pytest.raises(tetrefine.TetrefineError,
+                       match="tls\\['ca'\\]: 7 bytes: not PEM") as error:
+        tetrefine.Client("127.0.0.1:1", tls={"ca": b"garbage"})
+    assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
+    (tmp_path / "notakey.pem").write_bytes(b"not a key")
+    with pytest.raises(tetrefine.TetrefineError, match="tls\\['key'\\]: .*notakey.pem: not PEM"):
+        tetrefine.Client("127.0.0.1:1", tls={"ca": ca[1], "cert": client_key[1],
+                                             "key": tmp_path / "notakey.pem"})
 
 @pytest.mark.parametrize("callback", ["on_iteration", "on_mesh"])
 def test_a_non_callable_callback_is_refused_before_sending(server, callback):

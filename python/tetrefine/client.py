@@ -33,6 +33,17 @@ def _read_bytes(name, value):
         raise invalid(f"tls[{name!r}]", f"{value}: {error.strerror}") from None
 
 
+def _read_pem(name, value):
+    """The bytes of a PEM entry of `tls`. gRPC takes any bytes and fails only when it connects,
+    as "UNAVAILABLE: empty address list" for a CA that is not PEM (a review, 2026-11-28); the
+    same check as the CLI's --tls-ca (client/cli/grpc_channel.cc) names the entry instead."""
+    data = _read_bytes(name, value)
+    if data is not None and b"-----BEGIN" not in data:
+        source = f"{len(value)} bytes" if isinstance(value, bytes) else f"{value}"
+        raise invalid(f"tls[{name!r}]", f"{source}: not PEM (no \"-----BEGIN\" line)")
+    return data
+
+
 def _credentials(tls):
     """(channel credentials or None, extra channel options) for the `tls` argument."""
     if tls is None or tls is False:
@@ -49,9 +60,9 @@ def _credentials(tls):
         if ("cert" in tls) != ("key" in tls):
             raise invalid("tls", "a client certificate needs both 'cert' and 'key'")
         credentials = grpc.ssl_channel_credentials(
-            root_certificates=_read_bytes("ca", tls.get("ca")),
-            private_key=_read_bytes("key", tls.get("key")),
-            certificate_chain=_read_bytes("cert", tls.get("cert")))
+            root_certificates=_read_pem("ca", tls.get("ca")),
+            private_key=_read_pem("key", tls.get("key")),
+            certificate_chain=_read_pem("cert", tls.get("cert")))
         options = []
         if tls.get("server_name"):
             options.append(("grpc.ssl_target_name_override", tls["server_name"]))
@@ -102,7 +113,7 @@ def _check_target_ports(target):
             raise invalid("target", f"{where} has no port: write host:port "
                           "([address]:port for IPv6); tetrefine_server listens on port 50051 "
                           "unless told otherwise")
-        if port.isascii() and port.isascii() and port.isdigit() and not 1 <= int(port) <= 65535:
+        if port.isascii() and port.isdigit() and not 1 <= int(port) <= 65535:
             raise invalid("target", f"port {port} of {target!r} is out of range (1-65535)")
 
 
@@ -140,6 +151,7 @@ class Client:
         self._metadata = (("authorization", f"Bearer {token}"),) if token else None
         self._protocol = Protocol(pb)
         self._chunk_bytes = None
+        self._write_stall_seconds = None  # the server's, once server_info has been asked
         self.target = target
 
     def close(self):
@@ -169,8 +181,9 @@ class Client:
         """Chunk payload that fits the server's advertised message limit (asked once)."""
         if self._chunk_bytes is None:
             try:
-                limit = self.server_info(timeout=timeout if timeout is not None else 30.0)
-                limit = limit.limits.max_message_bytes
+                info = self.server_info(timeout=timeout if timeout is not None else 30.0)
+                limit = info.limits.max_message_bytes
+                self._write_stall_seconds = getattr(info.limits, "write_stall_seconds", None)
             except TetrefineError as error:
                 if error.code != grpc.StatusCode.UNIMPLEMENTED:
                     raise
@@ -214,6 +227,9 @@ class Client:
           max_tets: stop before an iteration that would exceed this many tets.
           on_iteration: called with each IterationStats as soon as that iteration has finished
             on the server. If it raises, the call is cancelled and the exception propagates.
+            Responses are read only between callbacks: one that takes longer than the
+            server's write_stall_seconds (60 s by default) while the server has more to send
+            gets the call cancelled (CANCELLED, with a message that says so).
           on_mesh: called with each iteration's mesh (an IterationMesh: iteration, points, tets,
             values, labels) as soon as it has arrived, right after that iteration's
             on_iteration; the server then streams every iteration's mesh (as the CLI's
@@ -279,7 +295,20 @@ class Client:
             for response in call:
                 reader.add(response)
         except grpc.RpcError as error:
-            raise TetrefineError.from_rpc_error(error) from None
+            failure = TetrefineError.from_rpc_error(error)
+            if failure.code == grpc.StatusCode.CANCELLED and (on_iteration or on_mesh):
+                # The server cancels a call whose client has read no response for its
+                # --write_stall_seconds, and a cancel carries no message: "Cancelled on the
+                # server side" alone left a slow callback's author guessing (a review,
+                # 2026-11-28).
+                stall = self._write_stall_seconds
+                within = f"{stall:g} s" if stall else "its write_stall_seconds"
+                failure = TetrefineError(failure.code, (
+                    f"{failure.details}: a server cancels a call whose client reads no response "
+                    f"for {within} (limits.write_stall_seconds), and responses are read only "
+                    "between callbacks: keep on_iteration and on_mesh short, or hand their "
+                    "work to another thread"))
+            raise failure from None
         except BaseException:
             # on_iteration or on_mesh raised, or KeyboardInterrupt: stop the server's work too.
             call.cancel()
