@@ -161,13 +161,27 @@ absl::StatusOr<VolumeFile> ReadNifti(const std::string& path) {
         image_path, absl::StrCat("truncated: header says ", need, " voxel bytes at offset ", offset,
                                  ", file has ", have));
   }
-  absl::StatusOr<DecodedVoxels> voxels = DecodeVoxels(
-      image.substr(offset, need), *type, header->order, header->scl_slope, header->scl_inter);
+  // A slope that is not a number is no scaling, as niftilib (nifti1_io.c: FIXED_FLOAT) and
+  // nibabel read it; the CLI refused such a file that Python's volume_from_nibabel took
+  // (a review, 2026-11-28). Said, as the values then are the stored ones. A valid slope with an
+  // intercept that is not a number stays refused (DecodeVoxels), as nibabel refuses it.
+  double slope = header->scl_slope, inter = header->scl_inter;
+  std::string scaling_warning;
+  if (!std::isfinite(slope)) {
+    scaling_warning = absl::StrCat(path, ": scl_slope is ", slope,
+                                   ", not a scaling: the stored values are read unscaled (as "
+                                   "niftilib and nibabel read them)");
+    slope = 0.0;
+    inter = 0.0;
+  }
+  absl::StatusOr<DecodedVoxels> voxels =
+      DecodeVoxels(image.substr(offset, need), *type, header->order, slope, inter);
   if (!voxels.ok()) return WithPath(path, voxels.status());
   NiftiTransform transform;
   const Affine affine = NiftiAffine(*header, &transform);
   absl::StatusOr<VolumeFile> placed =
       PlaceOnGrid(path, affine, *dims, voxels->type, std::move(voxels->data));
+  if (placed.ok() && !scaling_warning.empty()) placed->warnings.push_back(scaling_warning);
   if (placed.ok() && transform == NiftiTransform::kPixdimOnly) {
     // Without qform or sform the spacing is pixdim; a zero or non-finite one is read as 1 (as
     // nibabel does). Said, since every distance in the result then depends on it.

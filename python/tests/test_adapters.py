@@ -37,6 +37,15 @@ def _no_transform_image(data, zooms):
     return image
 
 
+def _nan_slope_image(data):
+    """A NIfTI whose scl_slope is NaN with an intercept of 5: no scaling at all, as niftilib and
+    nibabel read it (the CLI refused the file; a review, 2026-11-28)."""
+    image = nibabel.Nifti1Image(data, np.eye(4))
+    image.header["scl_slope"] = np.nan
+    image.header["scl_inter"] = 5.0
+    return image
+
+
 _RNG = np.random.default_rng(11)
 _INT16 = _RNG.integers(-300, 900, size=(12, 10, 8)).astype(np.int16)
 
@@ -48,6 +57,8 @@ CASES = {
     "float64 with an intercept": _image(_INT16.astype(np.float64), (1, 1, 1), (5, 5, 5), 1.0,
                                         100.0),
     "4-d with one volume": _image(_INT16[..., None], (2.0, 2.0, 2.0), (-10, -10, -10)),
+    "5-d with one component": _image(_INT16[..., None, None], (2.0, 1.0, 2.0), (0, 5, 0)),
+    "a slope that is not a number": _nan_slope_image(_INT16),
     "no sform or qform": _no_transform_image(_INT16, (2.0, 1.5, 1.0)),
 }
 
@@ -238,6 +249,8 @@ def test_adapter_misuse_is_a_tetrefine_error_naming_the_argument():
     cases = [
         (lambda: tetrefine.volume_from_nibabel({"data": 1}), "image", "expected a nibabel image"),
         (lambda: tetrefine.volume_from_nibabel(np.zeros((3, 3, 3))), "image", "got ndarray"),
+        (lambda: tetrefine.volume_from_nibabel(nibabel.AnalyzeImage(_INT16, np.eye(4))),
+         "image", "an ANALYZE 7.5 image has no orientation"),
         (lambda: tetrefine.fit_to_volume(points, None), "grid", "expected a VolumeGrid"),
         (lambda: tetrefine.fit_to_volume(np.vstack([points, [np.nan, 0, 0]]), grid), "points",
          f"points[{len(points)}] is not finite"),

@@ -119,13 +119,24 @@ def volume_from_nibabel(image):
       - rotated, sheared or permuted ("oblique"): the samples stay as stored, spacing = the
         affine's column lengths, origin = its translation, direction = the unit columns (3x3).
     NIfTI spatial units (metres, microns) are converted to millimetres. A 4-d image with one
-    volume is accepted; more volumes are refused.
+    volume (or 5-d with one component) is accepted; more volumes are refused, and so is an
+    ANALYZE 7.5 image (no orientation).
     """
     if not (hasattr(image, "dataobj") and hasattr(image, "affine")):
         raise invalid("image", f"expected a nibabel image (e.g. nibabel.load(path)), got "
                       f"{type(image).__name__}; an array has no geometry: use VolumeGrid")
+    import nibabel
+
+    header = getattr(image, "header", None)
+    if isinstance(header, nibabel.analyze.AnalyzeHeader) and not isinstance(
+            header, nibabel.Nifti1Header):
+        # nibabel gives ANALYZE 7.5 a made-up, centred affine; the CLI refuses the file.
+        raise invalid("image", "an ANALYZE 7.5 image has no orientation; convert it to NIfTI "
+                      "with its real affine (the CLI refuses it too)")
     data = _samples(image)
-    if data.ndim == 4 and data.shape[3] == 1:
+    # Trailing axes of one sample (4-d with one volume, 5-d with one component) are a 3-d
+    # volume, as the CLI reads them.
+    while data.ndim > 3 and data.shape[-1] == 1:
         data = data[..., 0]
     if data.ndim != 3:
         raise invalid("image", f"expected a 3-d volume, got shape {data.shape}")

@@ -283,6 +283,23 @@ TEST(IoNiftiTest, AppliesSlopeAndIntercept) {
   ASSERT_TRUE(file.ok()) << file.status();
   EXPECT_EQ(file->volume.type(), VoxelType::kInt16);
   EXPECT_EQ(file->volume.At(0, 0, 1), 100);
+
+  // A slope that is not a number is no scaling (niftilib's and nibabel's reading), intercept
+  // and all, and the warning says so; a valid slope with a NaN intercept stays refused.
+  spec.slope = std::numeric_limits<double>::quiet_NaN();
+  spec.inter = 5.0;
+  WriteBytes(path, NiftiHeaderBytes(spec) + Int16Samples(raw, false));
+  file = ReadNifti(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->volume.type(), VoxelType::kInt16);
+  EXPECT_EQ(file->volume.At(0, 0, 1), 100);
+  ASSERT_EQ(file->warnings.size(), 1u);
+  EXPECT_THAT(file->warnings[0], HasSubstr("scl_slope is nan, not a scaling"));
+  spec.slope = 2.0;
+  spec.inter = std::numeric_limits<double>::quiet_NaN();
+  WriteBytes(path, NiftiHeaderBytes(spec) + Int16Samples(raw, false));
+  EXPECT_THAT(std::string(ReadNifti(path).status().message()),
+              HasSubstr("intensity scaling is not finite"));
 }
 
 TEST(IoNiftiTest, WriterRoundTripsEveryTypeAndVersion) {
