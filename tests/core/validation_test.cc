@@ -323,8 +323,7 @@ TEST(Volume, GridsWhoseIndexMapOverflowsAreRefused) {
   g.origin = {0.0, 0.0, 1e308};
   absl::StatusOr<Volume> huge = Volume::FromDoubles(g, values);
   ASSERT_FALSE(huge.ok());
-  EXPECT_THAT(std::string(huge.status().message()),
-              ::testing::HasSubstr("far corner"));
+  EXPECT_THAT(std::string(huge.status().message()), ::testing::HasSubstr("far corner"));
   g.direction = {0.6, -0.8, 0.0, 0.8, 0.6, 0.0, 0.0, 0.0, 1.0};
   EXPECT_FALSE(Volume::FromDoubles(g, values).ok());
 }
