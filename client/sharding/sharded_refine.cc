@@ -30,11 +30,17 @@ double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// A replica that is gone (UNAVAILABLE), at its concurrency limit (RESOURCE_EXHAUSTED) or that
-// gave up on the call (ABORTED) says nothing about the part: another replica may succeed.
+// A replica that is gone (UNAVAILABLE), at its concurrency limit (RESOURCE_EXHAUSTED), that
+// gave up on the call (ABORTED) or cancelled it (CANCELLED) says nothing about the part: another
+// replica may succeed. A CANCELLED that reaches here is the server's (the run's own stop is
+// checked first, in RunPart): a replica stopping with SIGTERM closes its connections while a
+// client may still be reading the last response, or cancels a call that arrived as it stopped,
+// and the whole sharded run failed with "part 0: on host:port: CANCELLED" although another
+// replica was listed (found 2026-11-28 by a sweep: 3 of 3 runs, one replica of two sent
+// SIGTERM mid-run). A server also cancels a call whose client stalled (--write_stall_seconds).
 bool Retryable(absl::StatusCode code) {
   return code == absl::StatusCode::kUnavailable || code == absl::StatusCode::kResourceExhausted ||
-         code == absl::StatusCode::kAborted;
+         code == absl::StatusCode::kAborted || code == absl::StatusCode::kCancelled;
 }
 
 absl::Status Prefixed(int part, const absl::Status& status) {
@@ -74,7 +80,9 @@ class TargetHealth {
   // After a retryable failure with `code`: marks `target` down if the code says it is gone;
   // true the first time (the time to say so).
   bool MarkDown(int target, absl::StatusCode code) {
-    if (code != absl::StatusCode::kUnavailable) {
+    // A replica that cancelled a call is stopping (or found this client stalled): left out like
+    // one that is gone, while another is up.
+    if (code != absl::StatusCode::kUnavailable && code != absl::StatusCode::kCancelled) {
       return true;  // busy or aborted: said every time, and it stays in use
     }
     return !down_[target].exchange(true);

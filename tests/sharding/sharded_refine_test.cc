@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -19,6 +20,7 @@
 #include "client/io/mesh_io.h"
 #include "client/io/read_volume.h"
 #include "client/refine_client.h"
+#include "grpcpp/grpcpp.h"
 #include "grpcpp/security/credentials.h"
 #include "gtest/gtest.h"
 #include "tests/sharding/refinement_compare.h"
@@ -26,6 +28,7 @@
 #include "tests/support/mesh_checks.h"
 #include "tests/support/result_compare.h"
 #include "tests/support/server_process.h"
+#include "tetrefine/v1/tetrefine.grpc.pb.h"
 
 namespace tetrefine::testing {
 namespace {
@@ -384,6 +387,55 @@ TEST_F(ShardedRefineTest, ReplicaKilledMidRunStillGivesTheSameResult) {
   EXPECT_GE(sharded.shards[0].attempts, 2);
   EXPECT_NE(sharded.shards[0].target, 0);
   ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+}
+
+// A Refiner that cancels every call, as a replica stopping with SIGTERM does to a client still
+// reading its last response or to a call that arrives as it stops (and as any server does to a
+// client that stops reading for --write_stall_seconds).
+class CancellingRefiner final : public v1::Refiner::Service {
+ public:
+  grpc::Status Refine(grpc::ServerContext*,
+                      grpc::ServerReaderWriter<v1::RefineResponse, v1::RefineRequest>*) override {
+    ++calls;
+    return grpc::Status(grpc::StatusCode::CANCELLED, "");
+  }
+  std::atomic<int> calls{0};
+};
+
+// Its parts go to another replica and the result is the unsharded one. The whole run failed with
+// "part 0: on host:port: CANCELLED" although another replica was listed (a sweep, 2026-11-28:
+// one replica of two sent SIGTERM mid-run, 3 of 3 runs).
+TEST_F(ShardedRefineTest, AReplicaThatCancelsACallHasThePartRetriedElsewhere) {
+  const StructuredCase c;
+  const client::RefineRequestOptions options = Options(0.004, 5);
+  const client::ClientResult whole = Unsharded(c.volume, c.mesh, options, /*replica=*/1);
+  CancellingRefiner cancelling;
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &port);
+  builder.RegisterService(&cancelling);
+  const std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  ASSERT_NE(port, 0);
+  const std::vector<std::shared_ptr<grpc::Channel>> channels = sharding::ChannelsFor(
+      {absl::StrCat("127.0.0.1:", port), addresses_[1]}, grpc::InsecureChannelCredentials());
+  std::atomic<int> cancelled{0};
+  sharding::ShardCallbacks callbacks;
+  callbacks.on_retry = [&](int, int target, const absl::Status& status, int next) {
+    EXPECT_EQ(target, 0) << status;
+    EXPECT_NE(next, 0);
+    if (status.code() == absl::StatusCode::kCancelled) ++cancelled;
+  };
+  sharding::ShardOptions shard = Shards(2);
+  shard.retry_backoff = std::chrono::milliseconds(20);
+  absl::StatusOr<sharding::ShardedResult> sharded =
+      sharding::ShardedRefine(channels, c.volume, c.mesh, options, shard, callbacks);
+  server->Shutdown(std::chrono::system_clock::now());
+  ASSERT_TRUE(sharded.ok()) << sharded.status();
+  EXPECT_GE(cancelling.calls.load(), 1);
+  // Said once: the replica is then left out, as one that is gone.
+  EXPECT_EQ(cancelled.load(), 1);
+  for (const sharding::ShardReport& part : sharded->shards) EXPECT_EQ(part.target, 1);
+  ExpectSameRefinement(c.mesh, whole.result, sharded->reply.result);
 }
 
 // A replica that is already gone: its parts go to the others at once.
