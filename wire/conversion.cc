@@ -6,6 +6,7 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "google/protobuf/io/coded_stream.h"
 
 namespace tetrefine::wire {
 namespace {
@@ -399,13 +400,11 @@ ServiceLimits LimitsFromWire(const v1::ServerLimits& in) {
 }
 
 size_t LabelWireBytes(const std::vector<int32_t>& labels) {
-  int32_t largest = 0;
-  for (int32_t label : labels) {
-    if (label < 0) return 10;
-    largest = std::max(largest, label);
-  }
   size_t bytes = 1;
-  for (uint32_t rest = static_cast<uint32_t>(largest) >> 7; rest != 0; rest >>= 7) ++bytes;
+  for (int32_t label : labels) {
+    bytes =
+        std::max(bytes, google::protobuf::io::CodedOutputStream::VarintSize32SignExtended(label));
+  }
   return bytes;
 }
 

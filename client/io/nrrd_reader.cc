@@ -156,15 +156,15 @@ absl::StatusOr<NrrdFields> ParseNrrdHeader(absl::string_view bytes, const std::s
       return FileLineError(path, lines.line_number(),
                            absl::StrCat("expected \"field: value\", got \"", line, "\""));
     }
-    const std::string name = absl::AsciiStrToLower(line.substr(0, colon));
+    const std::string written = absl::AsciiStrToLower(line.substr(0, colon));
+    const std::string name(CanonicalFieldName(written));
     const std::string value(absl::StripAsciiWhitespace(line.substr(colon + 2)));
-    if (fields.values.count(std::string(CanonicalFieldName(name))) > 0) {
+    if (!fields.values.emplace(name, value).second) {
       return FileLineError(path, lines.line_number(),
-                           absl::StrCat("field \"", name, "\" is given twice"));
+                           absl::StrCat("field \"", written, "\" is given twice"));
     }
-    fields.values[std::string(CanonicalFieldName(name))] = value;
     // "data file: LIST": the header's remaining lines name the data files, one a line.
-    if (CanonicalFieldName(name) == "data file" && absl::StartsWith(value, "LIST")) break;
+    if (name == "data file" && absl::StartsWith(value, "LIST")) break;
   }
   fields.data_offset = lines.offset();
   const bool detached = fields.values.count("data file") > 0;
