@@ -223,7 +223,7 @@ class Client:
           certify: refine until the lattice error of every tet is at most epsilon; the result's
             certified_max_error gives the maximum over every tet.
           track_parents: also return, per output tet, the input tet it lies in (result.parent).
-          max_iterations: iterations at most (server default 16).
+          max_iterations: iterations at most (server default 32).
           max_tets: stop before an iteration that would exceed this many tets.
           on_iteration: called with each IterationStats as soon as that iteration has finished
             on the server. If it raises, the call is cancelled and the exception propagates.

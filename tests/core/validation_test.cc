@@ -328,5 +328,12 @@ TEST(Volume, GridsWhoseIndexMapOverflowsAreRefused) {
   EXPECT_FALSE(Volume::FromDoubles(g, values).ok());
 }
 
+// The documented default (README, `refine --help`): docs/results measures convergence under a
+// cap of 32, and a run that stopped at the old default of 16 converges at 18
+// (core/refine_options.h).
+TEST(RefineOptionsTest, DefaultIterationCapIsTheOneConvergenceIsMeasuredUnder) {
+  EXPECT_EQ(RefineOptions{}.max_iterations, 32);
+}
+
 }  // namespace
 }  // namespace tetrefine

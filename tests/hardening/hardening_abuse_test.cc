@@ -199,7 +199,7 @@ TEST(AbuseTest, SignalsDuringTheDrainAreLoggedAndIgnored) {
   EXPECT_EQ(ignored, 6) << server->process().Output();
 }
 
-// A call with default options (16 iterations, no max_tets) reserves the server's default tet
+// A call with default options (32 iterations, no max_tets) reserves the server's default tet
 // budget; that budget must leave room in the memory budget for the call's own input (it did not:
 // such calls were refused as needing more than the whole budget).
 TEST(AbuseTest, ACallWithDefaultOptionsFitsTheDefaultBudget) {
@@ -207,7 +207,7 @@ TEST(AbuseTest, ACallWithDefaultOptionsFitsTheDefaultBudget) {
       Start({"--memory_limit_bytes=1073741824", "--drain_seconds=2"});
   ASSERT_NE(server, nullptr);
   Workload w = SmallWorkloads()[0];
-  w.options = {};  // defaults: epsilon 0.1, 16 iterations, the server's tet budget
+  w.options = {};  // defaults: epsilon 0.1, 32 iterations, the server's tet budget
   absl::StatusOr<client::ClientResult> result =
       client::RefineViaService(server->NewChannel(), w.volume, w.mesh, w.options);
   EXPECT_TRUE(result.ok()) << result.status();
