@@ -146,6 +146,11 @@ int MeshInfo(const std::string& path) {
   if (!file->dropped_arrays.empty()) {
     rows.push_back({"not read", absl::StrJoin(file->dropped_arrays, ", ")});
   }
+  if (file->ghost_cells_skipped > 0) {
+    rows.push_back({"ghost cells", absl::StrCat(file->ghost_cells_skipped,
+                                                " skipped (vtkGhostType: copies of another "
+                                                "piece's cells)")});
+  }
   rows.push_back({"frame", file->frame == io::MeshFrame::kLps   ? "LPS (SPACE=LPS tag), read as RAS"
                            : file->frame == io::MeshFrame::kRas ? "RAS (SPACE=RAS tag)"
                                                                 : "untagged, taken as RAS"});

@@ -434,6 +434,12 @@ int RunRefinement(const RefineSettings& s) {
   progress.End(absl::StrCat(
       FormatCount(static_cast<int64_t>(mesh_file->mesh.points.size())), " vertices, ",
       MeshFileSummary(s.mesh_path, static_cast<int64_t>(mesh_file->mesh.tets.size()))));
+  if (mesh_file->ghost_cells_skipped > 0) {
+    progress.Line(absl::StrCat(s.mesh_path, ": skipped ",
+                               FormatCount(mesh_file->ghost_cells_skipped),
+                               " ghost cells (vtkGhostType: copies of another piece's cells, which "
+                               "ParaView drops too)"));
+  }
   if (!mesh_file->dropped_arrays.empty()) {
     // The refined file has the sampled values, iteration, quality and the region labels; other
     // arrays of the input have no meaning on new vertices and tets, but their loss must not be

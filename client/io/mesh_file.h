@@ -53,6 +53,9 @@ struct MeshFile {
   // Names of labels (Gmsh $PhysicalNames of dimension 3), for the formats that keep them: .msh
   // writes them back. Printable, without '"'.
   std::map<int32_t, std::string> region_names{};
+  // Cells a VTK file marked as ghosts (copies of another piece's cells, vtkGhostType), which the
+  // reader skipped (io::CellsToTets); the CLI says how many.
+  int64_t ghost_cells_skipped = 0;
 };
 
 // "point data \"name\"" or "cell data \"name\"": an entry of MeshFile::dropped_arrays.

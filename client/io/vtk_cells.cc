@@ -16,7 +16,51 @@ bool IsInt32(int64_t x) {
   return x >= std::numeric_limits<int32_t>::min() && x <= std::numeric_limits<int32_t>::max();
 }
 
+// Drops the points no tet uses, and their values, renumbering the tets (after ghost cells went).
+void DropUnusedPoints(MeshFile& file) {
+  Mesh& mesh = file.mesh;
+  // Values of another length are refused later (ValidateMeshFile), with their own message.
+  const bool values = mesh.values.size() == mesh.points.size();
+  std::vector<int64_t> renamed(mesh.points.size(), -1);
+  for (const Tet& t : mesh.tets) {
+    for (uint32_t v : t) renamed[v] = 0;
+  }
+  size_t kept = 0;
+  for (size_t v = 0; v < renamed.size(); ++v) {
+    if (renamed[v] < 0) continue;
+    renamed[v] = static_cast<int64_t>(kept);
+    mesh.points[kept] = mesh.points[v];
+    if (values) mesh.values[kept] = mesh.values[v];
+    ++kept;
+  }
+  mesh.points.resize(kept);
+  if (values) mesh.values.resize(kept);
+  for (Tet& t : mesh.tets) {
+    for (uint32_t& v : t) v = static_cast<uint32_t>(renamed[v]);
+  }
+}
+
 }  // namespace
+
+bool IsGhostArrayName(absl::string_view name) {
+  return name == "vtkGhostType" || name == "vtkGhostLevels";
+}
+
+absl::Status GhostCellFlags(absl::string_view name, const std::vector<int64_t>& values,
+                            absl::string_view path, VtkCellData* data) {
+  // vtkDataSetAttributes::DUPLICATECELL.
+  constexpr int64_t kDuplicateCell = 1;
+  data->ghost.resize(values.size());
+  for (size_t c = 0; c < values.size(); ++c) {
+    const int64_t g = values[c];
+    if (g < 0 || g > 255) {
+      return FileError(path, absl::StrCat("cell ", c, ": ", name, " ", g,
+                                          " is not an unsigned 8-bit ghost flag"));
+    }
+    data->ghost[c] = name == "vtkGhostLevels" ? g > 0 : (g & kDuplicateCell) != 0;
+  }
+  return absl::OkStatus();
+}
 
 absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t num_points,
                          absl::string_view path, MeshFile& file) {
@@ -35,6 +79,12 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
     return FileError(path, absl::StrCat("cell data \"quality\" has ", data.quality.size(),
                                         " entries for ", n, " cells"));
   }
+  if (!data.ghost.empty() && data.ghost.size() != n) {
+    return FileError(path, absl::StrCat("cell data ghost flags have ", data.ghost.size(),
+                                        " entries for ", n, " cells"));
+  }
+  const auto ghost = [&data](size_t c) { return !data.ghost.empty() && data.ghost[c] != 0; };
+  file.ghost_cells_skipped = 0;
   if (!data.label.empty() && data.label.size() != n) {
     return FileError(path, absl::StrCat("cell data \"", data.label_name, "\" has ",
                                         data.label.size(), " entries for ", n, " cells"));
@@ -47,6 +97,10 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
     const int64_t end = cells.offsets[c + 1];
     if (begin > end || begin < 0) {
       return FileError(path, absl::StrCat("cell ", c, " has decreasing offsets"));
+    }
+    if (ghost(c)) {
+      ++file.ghost_cells_skipped;
+      continue;
     }
     if (cells.types[c] != kVtkTetra) {
       ++other_types[cells.types[c]];
@@ -71,7 +125,7 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
   file.mesh.labels.clear();
   file.label_name.clear();
   for (size_t c = 0; c < n; ++c) {
-    if (cells.types[c] != kVtkTetra) continue;
+    if (cells.types[c] != kVtkTetra || ghost(c)) continue;
     const int64_t begin = cells.offsets[c];
     Tet tet;
     for (int k = 0; k < 4; ++k) {
@@ -110,6 +164,7 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
     }
   }
   if (!data.label.empty()) file.label_name = data.label_name;
+  if (file.ghost_cells_skipped > 0) DropUnusedPoints(file);
   return absl::OkStatus();
 }
 

@@ -330,6 +330,12 @@ absl::Status LegacyParser::ReadArray(absl::string_view raw_name, int64_t compone
       }
       return ReadDoubles(n, type, name, *out);
     }
+    if (want_ != Want::kImage && IsGhostArrayName(name)) {
+      if (point_section) return SkipValues(n, type, name);  // see ParseVtu
+      std::vector<int64_t> flags;
+      if (absl::Status s = ReadInts(n, type, name, flags); !s.ok()) return s;
+      return GhostCellFlags(name, flags, path_, &cell_data_);
+    }
     if (IsLabel(point_section, name)) {
       // A label array the file prefers (LabelNameRank) replaces one read before.
       if (cell_data_.label_rank >= 0)

@@ -130,6 +130,12 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
       file.dropped_arrays.push_back(DroppedArray(false, name));
       continue;
     }
+    if (IsGhostArrayName(name)) {
+      absl::StatusOr<std::vector<int64_t>> flags = arrays.Int64s(child, n);
+      if (!flags.ok()) return flags.status();
+      if (absl::Status s = GhostCellFlags(name, *flags, path, &cell_data); !s.ok()) return s;
+      continue;
+    }
     if (name == "iteration" || name == "quality") {
       absl::StatusOr<std::vector<double>> values = arrays.Doubles(child, n);
       if (!values.ok()) return values.status();
@@ -152,6 +158,9 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
     cell_data.label_rank = rank;
   }
   for (pugi::xml_node child : piece.child("PointData").children("DataArray")) {
+    // Ghost points are the points of ghost cells, which go (CellsToTets); a point shared with
+    // another piece is merged by its coordinates (MergePvtuPieces): nothing to carry.
+    if (IsGhostArrayName(child.attribute("Name").value())) continue;
     if (absl::string_view(child.attribute("Name").value()) != "value" || Components(child) != 1) {
       file.dropped_arrays.push_back(DroppedArray(true, child.attribute("Name").value()));
       continue;
