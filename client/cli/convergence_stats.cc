@@ -60,6 +60,20 @@ absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
   absl::StatusOr<std::string> scheme = OptionalString(*options, "scheme", "options.scheme");
   if (!scheme.ok()) return scheme.status();
   run.scheme = *scheme;
+  if (auto certify = options->find("certify"); certify != options->end() && !certify->is_null()) {
+    if (!certify->is_boolean()) {
+      return FieldError("options.certify",
+                        absl::StrCat("expected true or false, got ", certify->dump()));
+    }
+    run.certify = certify->get<bool>();
+  }
+  if (auto norm = options->find("norm_coeff"); norm != options->end() && !norm->is_null()) {
+    if (!norm->is_number() || !(norm->get<double>() > 0.0)) {
+      return FieldError("options.norm_coeff",
+                        absl::StrCat("expected a number > 0 or null, got ", norm->dump()));
+    }
+    run.norm_coeff = norm->get<double>();
+  }
   absl::StatusOr<std::string> stop = OptionalString(root, "stop_reason", "stop_reason");
   if (!stop.ok()) return stop.status();
   run.stop_reason = *stop;
@@ -87,15 +101,51 @@ absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
       if (!initial.ok()) return initial.status();
       run.tets.push_back(*initial);
     }
+    // The checks below refuse what no run of refine writes (an outside review, 2026-11-28,
+    // plotted an error of -1 as a silent gap and reversed iterations as "tets 29291 -> 5175").
+    if (auto number = it.find("iteration"); number != it.end()) {
+      if (!number->is_number_integer() || number->get<int64_t>() != static_cast<int64_t>(i) + 1) {
+        return FieldError(
+            at + ".iteration",
+            absl::StrCat("expected ", i + 1, " (iterations in order), got ", number->dump()));
+      }
+    }
+    if (i > 0 && it.contains("initial_tets")) {
+      absl::StatusOr<int64_t> initial = Count(it, "initial_tets", at + ".initial_tets");
+      if (!initial.ok()) return initial.status();
+      if (*initial != run.tets.back()) {
+        return FieldError(at + ".initial_tets",
+                          absl::StrCat(*initial, " is not the ", run.tets.back(),
+                                       " tets the iteration before ended with"));
+      }
+    }
     absl::StatusOr<double> error = Number(it, "max_error", at + ".max_error");
     if (!error.ok()) return error.status();
+    if (!(*error >= 0.0)) {
+      return FieldError(at + ".max_error", absl::StrCat("must be >= 0, got ", *error));
+    }
     absl::StatusOr<int64_t> final_tets = Count(it, "final_tets", at + ".final_tets");
     if (!final_tets.ok()) return final_tets.status();
     run.max_error.push_back(*error);
     run.tets.push_back(*final_tets);
   }
+  if (auto output = root.find("output_mesh");
+      output != root.end() && output->is_object() && output->contains("tets")) {
+    absl::StatusOr<int64_t> tets = Count(*output, "tets", "output_mesh.tets");
+    if (!tets.ok()) return tets.status();
+    if (*tets != run.tets.back() && run.stop_reason != "cancelled") {
+      return FieldError("output_mesh.tets",
+                        absl::StrCat(*tets, " is not the ", run.tets.back(), " tets ",
+                                     iterations->empty() ? "of the input (no iteration ran)"
+                                                         : "the last iteration ended with"));
+    }
+  }
   auto final_error = root.find("final_max_error");
   if (final_error != root.end() && final_error->is_number() && run.stop_reason != "cancelled") {
+    if (!(final_error->get<double>() >= 0.0)) {
+      return FieldError("final_max_error",
+                        absl::StrCat("must be >= 0, got ", final_error->get<double>()));
+    }
     run.max_error.push_back(final_error->get<double>());
   }
   return run;

@@ -58,24 +58,52 @@ std::string FileName(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-// The run's name in the legend: --label, else the scheme (with the file name when another run
-// has the same scheme), else the file name.
+// What ran: the scheme, "certified" with --certify (an outside review found a certified run
+// labelled as the default's), or "" when the file does not say.
+std::string Method(const ConvergenceRun& run) {
+  if (run.scheme.empty()) return "";
+  return run.certify ? absl::StrCat(run.scheme, ", certified") : run.scheme;
+}
+
+// The run's name in the legend: --label, else its method (with the file name when another run
+// has the same method), else the file name.
 std::vector<std::string> Names(const PlotSettings& s, const std::vector<ConvergenceRun>& runs) {
-  std::map<std::string, int> scheme_count;
-  for (const ConvergenceRun& run : runs) ++scheme_count[run.scheme];
+  std::map<std::string, int> method_count;
+  for (const ConvergenceRun& run : runs) ++method_count[Method(run)];
   std::vector<std::string> names;
   for (size_t i = 0; i < runs.size(); ++i) {
+    const std::string method = Method(runs[i]);
     if (i < s.labels.size()) {
       names.push_back(s.labels[i]);
-    } else if (runs[i].scheme.empty()) {
+    } else if (method.empty()) {
       names.push_back(FileName(s.stats_paths[i]));
-    } else if (scheme_count[runs[i].scheme] > 1) {
-      names.push_back(absl::StrCat(runs[i].scheme, " (", FileName(s.stats_paths[i]), ")"));
+    } else if (method_count[method] > 1) {
+      names.push_back(absl::StrCat(method, " (", FileName(s.stats_paths[i]), ")"));
     } else {
-      names.push_back(runs[i].scheme);
+      names.push_back(method);
     }
   }
   return names;
+}
+
+// The error axis's title: relative to the value range, to the one norm every run was given, or
+// to each run's own (said in the legend: RelativeTo).
+std::string ErrorAxis(const std::vector<ConvergenceRun>& runs) {
+  std::optional<double> first = runs.front().norm_coeff;
+  bool same = true;
+  for (const ConvergenceRun& run : runs) same = same && run.norm_coeff == first;
+  if (!same) return "largest edge-midpoint error (relative to each run's norm, in the legend)";
+  if (!first.has_value()) return "largest edge-midpoint error (relative to the value range)";
+  return absl::StrFormat("largest edge-midpoint error (relative to --norm-coeff %g)", *first);
+}
+
+// ", errors relative to X" for a run given --norm-coeff X among runs that differ in it.
+std::string RelativeTo(const ConvergenceRun& run, const std::vector<ConvergenceRun>& runs) {
+  bool same = true;
+  for (const ConvergenceRun& other : runs) same = same && other.norm_coeff == run.norm_coeff;
+  if (same) return "";
+  return run.norm_coeff.has_value() ? absl::StrFormat(", errors relative to %g", *run.norm_coeff)
+                                    : ", errors relative to the value range";
 }
 
 std::string ErrorText(const ConvergenceRun& run) {
@@ -98,12 +126,14 @@ const CommandSpec& PlotSpec() {
           "                      --output FIG.png [--width W] [--height H]",
       .description =
           "Draws, side by side, per iteration of each run: the largest edge-midpoint error\n"
-          "(relative to the volume's value range; log scale) with a dashed line at epsilon, and\n"
+          "(relative to the volume's value range, or to the run's --norm-coeff, which the axis\n"
+          "or the legend then names; log scale) with a dashed line at epsilon, and\n"
           "the number of tets (log scale). Iteration 0 is the input mesh; the error of the mesh\n"
           "after iteration k is the one measured at the start of iteration k + 1, and the last\n"
           "mesh's is the file's final_max_error; an error of 0 is a triangle on the bottom edge.\n"
           "One coloured line with markers per file; the legend gives its label (--label in\n"
-          "order, else the file's scheme, else its name), why it stopped, its iterations and\n"
+          "order, else the file's scheme, \"certified\" after it with --certify, else its\n"
+          "name), why it stopped, its iterations and\n"
           "its tets.",
       .flags =
           {
@@ -139,13 +169,15 @@ int RunPlot(const std::vector<std::string>& args) {
   options.width = s.width;
   options.height = s.height;
   options.title = "Convergence: largest edge-midpoint error and tets per iteration";
+  options.error_axis = ErrorAxis(runs);
   for (size_t i = 0; i < runs.size(); ++i) {
     const ConvergenceRun& run = runs[i];
     render::ConvergenceSeries one;
     one.label = absl::StrCat(
         names[i], ": ", run.stop_reason.empty() ? "stop reason unknown" : run.stop_reason, ", ",
         run.tets.size() - 1, run.tets.size() == 2 ? " iteration, " : " iterations, ",
-        run.tets.front(), " -> ", run.tets.back(), " tets, epsilon ", run.epsilon);
+        run.tets.front(), " -> ", run.tets.back(), " tets, epsilon ", run.epsilon,
+        RelativeTo(run, runs));
     one.error = run.max_error;
     one.tets.assign(run.tets.begin(), run.tets.end());
     series.push_back(std::move(one));
@@ -162,8 +194,12 @@ int RunPlot(const std::vector<std::string>& args) {
     return Fail(written, kExitUsage);
   }
   for (size_t i = 0; i < runs.size(); ++i) {
+    // The legend's name and the path, the file named once (the legend adds it to a method two
+    // runs share).
+    const std::string name =
+        i < s.labels.size() || Method(runs[i]).empty() ? names[i] : Method(runs[i]);
     std::printf("%s (%s): %zu iterations, tets %lld -> %lld, max edge-midpoint error %s, %s\n",
-                names[i].c_str(), s.stats_paths[i].c_str(), runs[i].tets.size() - 1,
+                name.c_str(), s.stats_paths[i].c_str(), runs[i].tets.size() - 1,
                 static_cast<long long>(runs[i].tets.front()),
                 static_cast<long long>(runs[i].tets.back()), ErrorText(runs[i]).c_str(),
                 runs[i].stop_reason.empty() ? "stop reason unknown" : runs[i].stop_reason.c_str());

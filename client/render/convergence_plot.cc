@@ -326,8 +326,7 @@ absl::StatusOr<std::string> RenderConvergencePlotPng(const std::vector<Convergen
   Text(cr.get(), kMargin, kMargin + kFontSize + 2, options.title);
   cairo_set_font_size(cr.get(), kFontSize);
 
-  DrawAxes(cr.get(), layout->error, "largest edge-midpoint error (relative to the value range)",
-           "max error");
+  DrawAxes(cr.get(), layout->error, options.error_axis, "max error");
   DrawAxes(cr.get(), layout->tets, "tets", "tets");
   std::vector<double> epsilons;
   for (double e : options.epsilons) {

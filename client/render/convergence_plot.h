@@ -28,6 +28,8 @@ struct ConvergenceOptions {
   std::string title;              // first line of the picture; may be empty
   // A horizontal dashed line on the error panel for each (> 0; duplicates are drawn once).
   std::vector<double> epsilons;
+  // The error panel's axis title: what the errors are relative to.
+  std::string error_axis = "largest edge-midpoint error (relative to the value range)";
 };
 
 // One panel's plot area and its axes: x is the iteration, y is log10 of the value.

@@ -108,6 +108,31 @@ TEST(CliPlotStats, ErrorsNameTheField) {
       {R"({"options": {"epsilon": 0.1}, "iterations": [{"initial_tets": 1, "final_tets": 8,
           "max_error": null}]})",
        "iterations[0].max_error: expected a number, got null"},
+      // Fields that contradict each other, as no run of refine writes them (an outside review
+      // plotted an error of -1 as a silent gap, and reversed iterations as "29291 -> 5175").
+      {R"({"options": {"epsilon": 0.1}, "iterations": [{"initial_tets": 1, "final_tets": 8,
+          "max_error": -1}]})",
+       "iterations[0].max_error: must be >= 0, got -1"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [{"initial_tets": 1, "final_tets": 8,
+          "max_error": 0.5}], "final_max_error": -0.5})",
+       "final_max_error: must be >= 0, got -0.5"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [{"iteration": 2, "initial_tets": 8,
+          "final_tets": 20, "max_error": 0.3}, {"iteration": 1, "initial_tets": 1,
+          "final_tets": 8, "max_error": 0.5}]})",
+       "iterations[0].iteration: expected 1 (iterations in order), got 2"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [{"initial_tets": 1, "final_tets": 8,
+          "max_error": 0.5}, {"initial_tets": 9, "final_tets": 20, "max_error": 0.3}]})",
+       "iterations[1].initial_tets: 9 is not the 8 tets the iteration before ended with"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [{"initial_tets": 1, "final_tets": 8,
+          "max_error": 0.5}], "output_mesh": {"tets": 29}})",
+       "output_mesh.tets: 29 is not the 8 tets the last iteration ended with"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [], "input": {"tets": 1782},
+          "output_mesh": {"tets": 29547}})",
+       "output_mesh.tets: 29547 is not the 1782 tets of the input (no iteration ran)"},
+      {R"({"options": {"epsilon": 0.1, "certify": "yes"}, "iterations": []})",
+       "options.certify: expected true or false, got \"yes\""},
+      {R"({"options": {"epsilon": 0.1, "norm_coeff": 0}, "iterations": []})",
+       "options.norm_coeff: expected a number > 0 or null, got 0"},
   };
   for (const auto& [json, expected] : cases) {
     absl::StatusOr<ConvergenceRun> run = ParseConvergenceRun(json);
@@ -116,6 +141,54 @@ TEST(CliPlotStats, ErrorsNameTheField) {
         << "'" << run.status().message() << "' should contain '" << expected << "'";
     EXPECT_EQ(run.status().message().find('\n'), std::string::npos) << run.status().message();
   }
+}
+
+// What the legend and the error axis say: a certified run is named so (it was labelled as the
+// default scheme's), and errors relative to a --norm-coeff say so on the axis, or in the legend
+// when the runs differ (they were drawn on the value range's axis without a word).
+TEST(CliPlot, TheLegendAndAxisSayCertifiedAndTheNormCoefficient) {
+  ScratchDir dir;
+  std::string certified = RunA();
+  certified.replace(certified.find(R"("scheme": ")"), 0, R"("certify": true, )");
+  std::string normed = RunA();
+  normed.replace(normed.find(R"("scheme": ")"), 0, R"("norm_coeff": 3000, )");
+  WriteBytes(dir.File("a.json"), RunA());
+  WriteBytes(dir.File("c.json"), certified);
+  WriteBytes(dir.File("n.json"), normed);
+  absl::StatusOr<ConvergenceRun> run = ParseConvergenceRun(certified);
+  ASSERT_TRUE(run.ok()) << run.status();
+  EXPECT_TRUE(run->certify);
+  EXPECT_FALSE(run->norm_coeff.has_value());
+  run = ParseConvergenceRun(normed);
+  ASSERT_TRUE(run.ok()) << run.status();
+  EXPECT_EQ(run->norm_coeff, 3000.0);
+
+  const ProcessResult two =
+      RunTetrefine({"plot", "--stats-json", dir.File("a.json"), "--stats-json", dir.File("c.json"),
+                    "--output", dir.File("two.png")});
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_TRUE(absl::StrContains(two.out, "longest-edge (" + dir.File("a.json") + "): 3 iterations"))
+      << two.out;
+  EXPECT_TRUE(absl::StrContains(
+      two.out, "longest-edge, certified (" + dir.File("c.json") + "): 3 iterations"))
+      << two.out;
+  // Two of one method: the legend tells them apart by file, stdout names each file once.
+  const ProcessResult same =
+      RunTetrefine({"plot", "--stats-json", dir.File("a.json"), "--stats-json", dir.File("a.json"),
+                    "--output", dir.File("same.png")});
+  ASSERT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_FALSE(absl::StrContains(same.out, "(a.json) (")) << same.out;
+  EXPECT_TRUE(absl::StrContains(same.out, "longest-edge (" + dir.File("a.json") + "): "))
+      << same.out;
+  // The axis title is drawn, not printed: the picture of runs relative to another norm differs
+  // from the same runs relative to the value range only in the words of the title.
+  const ProcessResult range =
+      RunTetrefine({"plot", "--stats-json", dir.File("a.json"), "--output", dir.File("r.png")});
+  const ProcessResult norm =
+      RunTetrefine({"plot", "--stats-json", dir.File("n.json"), "--output", dir.File("n.png")});
+  ASSERT_EQ(range.exit_code, 0) << range.err;
+  ASSERT_EQ(norm.exit_code, 0) << norm.err;
+  EXPECT_NE(ReadBytes(dir.File("r.png")), ReadBytes(dir.File("n.png")));
 }
 
 std::vector<render::ConvergenceSeries> SeriesAB() {
