@@ -360,7 +360,7 @@ absl::Status CheckPlaceable(const Slice& s) {
 
 // The samples' storage type before any rescaling, and whether they need widening first: 8-bit
 // signed samples to int16 and 32-bit unsigned ones to float64 (Volume has neither type).
-VoxelType StoredType(const DicomImage& im) {
+VoxelType UnscaledType(const DicomImage& im) {
   const bool is_signed = im.pixel_representation == 1;
   switch (im.bits_allocated) {
     case 8:
@@ -654,7 +654,7 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
     }
     one_scaling = one_scaling && slope == first.rescale_slope && inter == first.rescale_intercept;
   }
-  const VoxelType stored = StoredType(first);
+  const VoxelType stored = UnscaledType(first);
   const bool scaled = !one_scaling || first.rescale_slope != 1.0 || first.rescale_intercept != 0.0;
   // Scaled values of one scaling go through DecodeVoxels (float32 for at most 16 bits, as a
   // NIfTI with scl_slope reads); per-slice scalings (PET) and scaled 32-bit samples are float64.
@@ -715,9 +715,9 @@ absl::StatusOr<VolumeFile> ReadDicomSeries(const std::string& path) {
   }
   VoxelType type = gathered;
   if (scaled && !to_float64) {
-    absl::StatusOr<DecodedVoxels> voxels =
-        DecodeVoxels(absl::string_view(reinterpret_cast<const char*>(data.data()), data.size()),
-                     gathered, ByteOrder::kLittle, first.rescale_slope, first.rescale_intercept);
+    absl::StatusOr<DecodedVoxels> voxels = DecodeVoxels(
+        absl::string_view(reinterpret_cast<const char*>(data.data()), data.size()),
+        StoredTypeOf(gathered), ByteOrder::kLittle, first.rescale_slope, first.rescale_intercept);
     if (!voxels.ok()) return WithPath(path, voxels.status());
     type = voxels->type;
     data = std::move(voxels->data);

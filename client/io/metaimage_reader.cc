@@ -23,13 +23,22 @@
 namespace tetrefine::io {
 namespace {
 
-std::optional<VoxelType> MetaType(absl::string_view name) {
-  if (name == "MET_UCHAR") return VoxelType::kUint8;
-  if (name == "MET_SHORT") return VoxelType::kInt16;
-  if (name == "MET_USHORT") return VoxelType::kUint16;
-  if (name == "MET_INT") return VoxelType::kInt32;
-  if (name == "MET_FLOAT") return VoxelType::kFloat32;
-  if (name == "MET_DOUBLE") return VoxelType::kFloat64;
+// MetaIO's element types (metaTypes.h). MET_LONG and MET_ULONG are 4 bytes on disk
+// (MET_LONG_TYPE is int32_t, MET_ValueTypeSize 4) whatever the platform's long: ITK on LP64
+// Linux writes an 8-byte `long` image as MET_LONG_LONG, and on Windows a 4-byte one as MET_LONG.
+// int8, uint32, int64 and uint64 widen exactly (DecodeVoxels). MET_ASCII_CHAR (a char of
+// unstated sign) stays refused.
+std::optional<StoredType> MetaType(absl::string_view name) {
+  if (name == "MET_CHAR") return StoredType::kInt8;
+  if (name == "MET_UCHAR") return StoredType::kUint8;
+  if (name == "MET_SHORT") return StoredType::kInt16;
+  if (name == "MET_USHORT") return StoredType::kUint16;
+  if (name == "MET_INT" || name == "MET_LONG") return StoredType::kInt32;
+  if (name == "MET_UINT" || name == "MET_ULONG") return StoredType::kUint32;
+  if (name == "MET_LONG_LONG") return StoredType::kInt64;
+  if (name == "MET_ULONG_LONG") return StoredType::kUint64;
+  if (name == "MET_FLOAT") return StoredType::kFloat32;
+  if (name == "MET_DOUBLE") return StoredType::kFloat64;
   return std::nullopt;
 }
 
@@ -121,12 +130,14 @@ absl::StatusOr<VolumeFile> ReadMetaImage(const std::string& path) {
         path, absl::StrCat("ElementNumberOfChannels ", channels, ": only scalar volumes are read"));
   }
   const absl::string_view type_name = Value(*header, "elementtype");
-  const std::optional<VoxelType> type = MetaType(type_name);
+  const std::optional<StoredType> type = MetaType(type_name);
   if (!type.has_value()) {
     return FileUnsupported(path, absl::StrCat("ElementType \"", type_name,
                                               "\" is not supported; "
-                                              "supported: MET_UCHAR, MET_SHORT, MET_USHORT, "
-                                              "MET_INT, MET_FLOAT, MET_DOUBLE"));
+                                              "supported: MET_CHAR, MET_UCHAR, MET_SHORT, "
+                                              "MET_USHORT, MET_INT, MET_UINT, MET_LONG, MET_ULONG, "
+                                              "MET_LONG_LONG, MET_ULONG_LONG, MET_FLOAT, "
+                                              "MET_DOUBLE"));
   }
   const absl::string_view binary = Value(*header, "binarydata");
   if (!binary.empty() && !IsTrue(binary)) {
@@ -184,7 +195,7 @@ absl::StatusOr<VolumeFile> ReadMetaImage(const std::string& path) {
   }
 
   const uint64_t need = static_cast<uint64_t>(dims[0]) * static_cast<uint64_t>(dims[1]) *
-                        static_cast<uint64_t>(dims[2]) * VoxelSize(*type);
+                        static_cast<uint64_t>(dims[2]) * StoredSize(*type);
   std::string inflated;
   if (IsTrue(Value(*header, "compresseddata"))) {
     absl::StatusOr<std::string> out = InflateExact(payload, need);

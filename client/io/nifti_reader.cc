@@ -15,20 +15,31 @@
 namespace tetrefine::io {
 namespace {
 
-std::optional<VoxelType> VoxelTypeOfDatatype(int datatype) {
+// NIfTI's datatype codes (nifti1.h, NIFTI_TYPE_*) of the scalar types read; int8, uint32, int64
+// and uint64 widen exactly (DecodeVoxels): nibabel writes an int8 mask as int8 and keeps a label
+// map's uint32.
+std::optional<StoredType> StoredTypeOfDatatype(int datatype) {
   switch (datatype) {
     case 2:
-      return VoxelType::kUint8;
+      return StoredType::kUint8;
     case 4:
-      return VoxelType::kInt16;
+      return StoredType::kInt16;
     case 8:
-      return VoxelType::kInt32;
+      return StoredType::kInt32;
     case 16:
-      return VoxelType::kFloat32;
+      return StoredType::kFloat32;
     case 64:
-      return VoxelType::kFloat64;
+      return StoredType::kFloat64;
+    case 256:
+      return StoredType::kInt8;
     case 512:
-      return VoxelType::kUint16;
+      return StoredType::kUint16;
+    case 768:
+      return StoredType::kUint32;
+    case 1024:
+      return StoredType::kInt64;
+    case 1280:
+      return StoredType::kUint64;
     default:
       return std::nullopt;
   }
@@ -42,14 +53,6 @@ absl::string_view DatatypeName(int datatype) {
       return "complex64";
     case 128:
       return "rgb24";
-    case 256:
-      return "int8";
-    case 768:
-      return "uint32";
-    case 1024:
-      return "int64";
-    case 1280:
-      return "uint64";
     case 1536:
       return "float128";
     case 1792:
@@ -128,13 +131,13 @@ absl::StatusOr<VolumeFile> ReadNifti(const std::string& path) {
 
   absl::StatusOr<Index3> dims = SpatialDims(*header, path);
   if (!dims.ok()) return dims.status();
-  const std::optional<VoxelType> type = VoxelTypeOfDatatype(header->datatype);
+  const std::optional<StoredType> type = StoredTypeOfDatatype(header->datatype);
   if (!type.has_value()) {
     return FileUnsupported(
         path,
         absl::StrCat("NIfTI datatype ", header->datatype, " (", DatatypeName(header->datatype),
-                     ") is not supported; supported: uint8, int16, uint16, int32, "
-                     "float32, float64"));
+                     ") is not supported; supported: uint8, int8, int16, uint16, int32, "
+                     "uint32, int64, uint64, float32, float64"));
   }
   // The standard asks for 352 / 544 (room for the extension flag); old writers used the bare
   // header size, which is still unambiguous.
@@ -154,7 +157,7 @@ absl::StatusOr<VolumeFile> ReadNifti(const std::string& path) {
   // Each axis is at most 2^20, so the product fits in 2^60 and times 8 bytes in uint64.
   const uint64_t count = static_cast<uint64_t>((*dims)[0]) * static_cast<uint64_t>((*dims)[1]) *
                          static_cast<uint64_t>((*dims)[2]);
-  const uint64_t need = count * VoxelSize(*type);
+  const uint64_t need = count * StoredSize(*type);
   const uint64_t have = image.size() > offset ? image.size() - offset : 0;
   if (have < need) {
     return FileError(

@@ -12,6 +12,7 @@
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
@@ -27,29 +28,51 @@
 namespace tetrefine::io {
 namespace {
 
-std::optional<VoxelType> NrrdType(absl::string_view name) {
-  static const auto* const kTypes = new std::map<absl::string_view, VoxelType>{
-      {"uchar", VoxelType::kUint8},
-      {"unsigned char", VoxelType::kUint8},
-      {"uint8", VoxelType::kUint8},
-      {"uint8_t", VoxelType::kUint8},
-      {"short", VoxelType::kInt16},
-      {"short int", VoxelType::kInt16},
-      {"signed short", VoxelType::kInt16},
-      {"signed short int", VoxelType::kInt16},
-      {"int16", VoxelType::kInt16},
-      {"int16_t", VoxelType::kInt16},
-      {"ushort", VoxelType::kUint16},
-      {"unsigned short", VoxelType::kUint16},
-      {"unsigned short int", VoxelType::kUint16},
-      {"uint16", VoxelType::kUint16},
-      {"uint16_t", VoxelType::kUint16},
-      {"int", VoxelType::kInt32},
-      {"signed int", VoxelType::kInt32},
-      {"int32", VoxelType::kInt32},
-      {"int32_t", VoxelType::kInt32},
-      {"float", VoxelType::kFloat32},
-      {"double", VoxelType::kFloat64},
+// Every spelling of a type teem takes (nrrd/enumsNrrd.c, _nrrdTypeStrEqv; not "char" alone,
+// whose sign C leaves open), in any case. int8, uint32, int64 and uint64 widen exactly
+// (DecodeVoxels).
+std::optional<StoredType> NrrdType(absl::string_view name) {
+  static const auto* const kTypes = new std::map<absl::string_view, StoredType>{
+      {"signed char", StoredType::kInt8},
+      {"int8", StoredType::kInt8},
+      {"int8_t", StoredType::kInt8},
+      {"uchar", StoredType::kUint8},
+      {"unsigned char", StoredType::kUint8},
+      {"uint8", StoredType::kUint8},
+      {"uint8_t", StoredType::kUint8},
+      {"short", StoredType::kInt16},
+      {"short int", StoredType::kInt16},
+      {"signed short", StoredType::kInt16},
+      {"signed short int", StoredType::kInt16},
+      {"int16", StoredType::kInt16},
+      {"int16_t", StoredType::kInt16},
+      {"ushort", StoredType::kUint16},
+      {"unsigned short", StoredType::kUint16},
+      {"unsigned short int", StoredType::kUint16},
+      {"uint16", StoredType::kUint16},
+      {"uint16_t", StoredType::kUint16},
+      {"int", StoredType::kInt32},
+      {"signed int", StoredType::kInt32},
+      {"int32", StoredType::kInt32},
+      {"int32_t", StoredType::kInt32},
+      {"uint", StoredType::kUint32},
+      {"unsigned int", StoredType::kUint32},
+      {"uint32", StoredType::kUint32},
+      {"uint32_t", StoredType::kUint32},
+      {"longlong", StoredType::kInt64},
+      {"long long", StoredType::kInt64},
+      {"long long int", StoredType::kInt64},
+      {"signed long long", StoredType::kInt64},
+      {"signed long long int", StoredType::kInt64},
+      {"int64", StoredType::kInt64},
+      {"int64_t", StoredType::kInt64},
+      {"ulonglong", StoredType::kUint64},
+      {"unsigned long long", StoredType::kUint64},
+      {"unsigned long long int", StoredType::kUint64},
+      {"uint64", StoredType::kUint64},
+      {"uint64_t", StoredType::kUint64},
+      {"float", StoredType::kFloat32},
+      {"double", StoredType::kFloat64},
   };
   const auto it = kTypes->find(absl::AsciiStrToLower(name));
   if (it == kTypes->end()) return std::nullopt;
@@ -182,8 +205,10 @@ absl::string_view Field(const NrrdFields& fields, const std::string& name) {
 template <typename T>
 bool AppendIfFits(std::string& out, double value) {
   if constexpr (std::is_integral_v<T>) {
+    // The largest int64 and uint64 round up to 2^63 and 2^64 as doubles, which do not fit.
+    constexpr double kMax = static_cast<double>(std::numeric_limits<T>::max());
     if (!(value >= static_cast<double>(std::numeric_limits<T>::min()) &&
-          value <= static_cast<double>(std::numeric_limits<T>::max()))) {
+          (sizeof(T) < 8 ? value <= kMax : value < kMax))) {
       return false;
     }
   }
@@ -192,32 +217,62 @@ bool AppendIfFits(std::string& out, double value) {
 }
 
 // Appends `value` as a little-endian `type`; false when it does not fit.
-bool AppendSample(std::string& out, VoxelType type, double value) {
+bool AppendSample(std::string& out, StoredType type, double value) {
   switch (type) {
-    case VoxelType::kUint8:
+    case StoredType::kUint8:
       return AppendIfFits<uint8_t>(out, value);
-    case VoxelType::kInt16:
+    case StoredType::kInt16:
       return AppendIfFits<int16_t>(out, value);
-    case VoxelType::kUint16:
+    case StoredType::kUint16:
       return AppendIfFits<uint16_t>(out, value);
-    case VoxelType::kInt32:
+    case StoredType::kInt32:
       return AppendIfFits<int32_t>(out, value);
-    case VoxelType::kFloat32:
+    case StoredType::kFloat32:
       return AppendIfFits<float>(out, value);
-    case VoxelType::kFloat64:
+    case StoredType::kFloat64:
       return AppendIfFits<double>(out, value);
+    case StoredType::kInt8:
+      return AppendIfFits<int8_t>(out, value);
+    case StoredType::kUint32:
+      return AppendIfFits<uint32_t>(out, value);
+    case StoredType::kInt64:
+      return AppendIfFits<int64_t>(out, value);
+    case StoredType::kUint64:
+      return AppendIfFits<uint64_t>(out, value);
   }
   return false;
 }
 
-absl::StatusOr<std::string> DecodeAscii(absl::string_view text, VoxelType type, uint64_t count,
+// Appends a 64-bit integer sample written as an integer, exactly (a double would round one
+// beyond 2^53); false for any other word, which then goes the way of the other types.
+bool AppendExactInteger(std::string& out, StoredType type, absl::string_view word) {
+  if (type == StoredType::kInt64) {
+    int64_t value;
+    if (!absl::SimpleAtoi(word, &value)) return false;
+    AppendLittle(out, value);
+    return true;
+  }
+  if (type == StoredType::kUint64) {
+    uint64_t value;
+    if (!absl::SimpleAtoi(word, &value)) return false;
+    AppendLittle(out, value);
+    return true;
+  }
+  return false;
+}
+
+absl::StatusOr<std::string> DecodeAscii(absl::string_view text, StoredType type, uint64_t count,
                                         absl::string_view path) {
   std::string out;
-  out.reserve(std::min<uint64_t>(count, text.size()) * VoxelSize(type));
+  out.reserve(std::min<uint64_t>(count, text.size()) * StoredSize(type));
   uint64_t seen = 0;
   for (absl::string_view word :
        absl::StrSplit(text, absl::ByAnyChar(" \t\r\n,"), absl::SkipEmpty())) {
     if (seen == count) break;
+    if (AppendExactInteger(out, type, word)) {
+      ++seen;
+      continue;
+    }
     double value;
     if (!ParseDouble(word, value)) {
       return FileError(path, absl::StrCat("ascii sample ", seen, " is not a number: \"",
@@ -225,7 +280,7 @@ absl::StatusOr<std::string> DecodeAscii(absl::string_view text, VoxelType type, 
     }
     if (!AppendSample(out, type, value)) {
       return FileError(path, absl::StrCat("ascii sample ", seen, " = ", word.substr(0, 32),
-                                          " does not fit type ", std::string(VoxelTypeName(type))));
+                                          " does not fit type ", StoredTypeName(type)));
     }
     ++seen;
   }
@@ -247,12 +302,12 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
   if (!fields.ok()) return fields.status();
 
   const absl::string_view type_name = Field(*fields, "type");
-  const std::optional<VoxelType> type = NrrdType(type_name);
+  const std::optional<StoredType> type = NrrdType(type_name);
   if (!type.has_value()) {
     return FileUnsupported(path, absl::StrCat("NRRD type \"", type_name,
                                               "\" is not supported; "
-                                              "supported: uchar, short, ushort, int, float, "
-                                              "double"));
+                                              "supported: int8, uchar, short, ushort, int, uint, "
+                                              "longlong, ulonglong, float, double"));
   }
   // A 4D file with one axis of a single sample that is not in space (its space direction
   // "none", or no space directions at all) is a 3D volume: what pynrrd and 3D Slicer write for a
@@ -369,7 +424,7 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
   const std::string encoding = absl::AsciiStrToLower(Field(*fields, "encoding"));
   const uint64_t count = static_cast<uint64_t>(dims[0]) * static_cast<uint64_t>(dims[1]) *
                          static_cast<uint64_t>(dims[2]);
-  const uint64_t need = count * VoxelSize(*type);
+  const uint64_t need = count * StoredSize(*type);
   std::string decoded;
   if (encoding == "gzip" || encoding == "gz") {
     absl::StatusOr<std::string> inflated = Inflate(payload);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -115,37 +116,12 @@ absl::StatusOr<pugi::xml_node> SampleArray(const VtkXmlFile& xml, absl::string_v
   return FileLineError(path, xml.LineOf(piece), "Piece has no PointData array: no samples");
 }
 
-// The VoxelType a VTK array type is kept as, when it is one.
-std::optional<VoxelType> KeptType(VtkScalar type) {
-  switch (type) {
-    case VtkScalar::kUInt8:
-      return VoxelType::kUint8;
-    case VtkScalar::kInt16:
-      return VoxelType::kInt16;
-    case VtkScalar::kUInt16:
-      return VoxelType::kUint16;
-    case VtkScalar::kInt32:
-      return VoxelType::kInt32;
-    case VtkScalar::kFloat32:
-      return VoxelType::kFloat32;
-    case VtkScalar::kFloat64:
-      return VoxelType::kFloat64;
-    default:
-      return std::nullopt;
-  }
-}
-
-template <typename T>
-void AppendSample(std::vector<std::byte>& out, T value) {
-  const size_t at = out.size();
-  out.resize(at + sizeof(T));
-  std::memcpy(out.data() + at, &value, sizeof(T));
-}
-
-// One piece's samples as Volume storage (little-endian `type`, x fastest).
+// One piece's samples as stored: little-endian values of `type`, x fastest. The widening of
+// types a Volume lacks (DecodeVoxels) waits for the whole image, since whether uint32, int64 or
+// uint64 samples become int32 or float64 depends on all of them.
 struct PieceSamples {
-  VoxelType type = VoxelType::kFloat64;
-  std::vector<std::byte> data;
+  StoredType type = StoredType::kFloat64;
+  std::string data;
 };
 
 absl::StatusOr<PieceSamples> ReadSamples(const VtkXmlFile& xml, VtuArrayReader& arrays,
@@ -160,55 +136,28 @@ absl::StatusOr<PieceSamples> ReadSamples(const VtkXmlFile& xml, VtuArrayReader& 
   if (format.empty() || format == "ascii") {
     absl::StatusOr<std::vector<double>> values = arrays.Doubles(array, count);
     if (!values.ok()) return values.status();
-    out.type = VoxelType::kFloat64;
+    out.type = StoredType::kFloat64;
     out.data.reserve(count * sizeof(double));
-    for (double v : *values) AppendSample(out.data, v);
+    for (double v : *values) AppendLittle(out.data, v);
     return out;
   }
   absl::StatusOr<std::string> bytes = arrays.StoredBytes(array, *type, count);
   if (!bytes.ok()) return bytes.status();
-  if (const std::optional<VoxelType> kept = KeptType(*type)) {
-    absl::StatusOr<DecodedVoxels> voxels = DecodeVoxels(*bytes, *kept, xml.encoding.order, 0, 0);
-    if (!voxels.ok()) return arrays.Error(array, voxels.status().message());
-    out.type = voxels->type;
-    out.data = std::move(voxels->data);
-    return out;
-  }
-  const ByteOrder order = xml.encoding.order;
-  if (*type == VtkScalar::kInt8) {
-    out.type = VoxelType::kInt16;
-    out.data.reserve(count * 2);
-    for (uint64_t i = 0; i < count; ++i) {
-      AppendSample(out.data, static_cast<int16_t>(LoadAs<int8_t>(*bytes, i, order)));
-    }
-    return out;
-  }
-  // UInt32, Int64, UInt64: float64, exact for |v| <= 2^53.
-  out.type = VoxelType::kFloat64;
-  out.data.reserve(count * sizeof(double));
-  const size_t width = VtkScalarSize(*type);
-  for (uint64_t i = 0; i < count; ++i) {
-    double v;
-    bool exact = true;
-    if (*type == VtkScalar::kUInt32) {
-      v = LoadAs<uint32_t>(*bytes, i * width, order);
-    } else if (*type == VtkScalar::kInt64) {
-      const int64_t x = LoadAs<int64_t>(*bytes, i * width, order);
-      exact = x >= -(int64_t{1} << 53) && x <= (int64_t{1} << 53);
-      v = static_cast<double>(x);
-    } else {
-      const uint64_t x = LoadAs<uint64_t>(*bytes, i * width, order);
-      exact = x <= (uint64_t{1} << 53);
-      v = static_cast<double>(x);
-    }
-    if (!exact) {
-      return arrays.Error(array, absl::StrCat("value ", i,
-                                              " is beyond 2^53 and has no exact "
-                                              "float64 (tetrefine's widest sample type)"));
-    }
-    AppendSample(out.data, v);
+  out.type = StoredTypeOfVtk(*type);
+  out.data = *std::move(bytes);
+  if (xml.encoding.order != ByteOrder::kLittle) {
+    SwapEachElement(reinterpret_cast<std::byte*>(out.data.data()), out.data.size(),
+                    StoredSize(out.type));
   }
   return out;
+}
+
+// The samples of a whole image, in storage order, as a Volume holds them.
+absl::StatusOr<DecodedVoxels> Widen(absl::string_view path, StoredType type,
+                                    absl::string_view samples) {
+  absl::StatusOr<DecodedVoxels> voxels = DecodeVoxels(samples, type, ByteOrder::kLittle, 0, 0);
+  if (!voxels.ok()) return WithPath(path, voxels.status());
+  return voxels;
 }
 
 // The grid an <ImageData> or <PImageData> element declares: its extent and index-to-world map.
@@ -315,16 +264,19 @@ absl::StatusOr<VolumeFile> Assemble(absl::string_view path, const ImageGeometry&
   if (pieces.empty()) return FileError(path, "no <Piece>");
   const Index3& dims = g.dims;
   const uint64_t total = static_cast<uint64_t>(dims[0]) * dims[1] * dims[2];
-  const VoxelType type = pieces[0].samples.type;
-  if (pieces.size() == 1 && held == total) {  // one piece holds the whole image: no copy
-    return PlaceOnGrid(path, g.affine(), dims, type, std::move(pieces[0].samples.data));
+  const StoredType type = pieces[0].samples.type;
+  if (pieces.size() == 1 && held == total) {  // one piece holds the whole image: no assembly
+    absl::StatusOr<DecodedVoxels> voxels = Widen(path, type, pieces[0].samples.data);
+    if (!voxels.ok()) return voxels.status();
+    pieces[0].samples.data = {};
+    return PlaceOnGrid(path, g.affine(), dims, voxels->type, std::move(voxels->data));
   }
   if (held < total) {
     return FileError(path, absl::StrCat("the pieces hold ", held, " samples, fewer than the ",
                                         total, " of WholeExtent"));
   }
-  const size_t width = VoxelSize(type);
-  std::vector<std::byte> data(total * width);
+  const size_t width = StoredSize(type);
+  std::string data(total * width, '\0');
   std::vector<bool> covered(total, false);
   uint64_t covered_count = 0;
   for (DecodedPiece& d : pieces) {
@@ -354,7 +306,10 @@ absl::StatusOr<VolumeFile> Assemble(absl::string_view path, const ImageGeometry&
     return FileError(path, absl::StrCat("the pieces cover ", covered_count, " of the ", total,
                                         " samples of WholeExtent"));
   }
-  return PlaceOnGrid(path, g.affine(), dims, type, std::move(data));
+  absl::StatusOr<DecodedVoxels> voxels = Widen(path, type, data);
+  if (!voxels.ok()) return voxels.status();
+  data = {};
+  return PlaceOnGrid(path, g.affine(), dims, voxels->type, std::move(voxels->data));
 }
 
 // A .pvti index: its grid and the piece files it names, resolved against its directory.

@@ -15,8 +15,8 @@ namespace tetrefine::io {
 // in every form the .vtu reader reads (ascii, inline base64, appended raw or base64; zlib, lzma
 // or lz4 blocks; UInt32 or UInt64 headers; either byte order), in one <Piece> or several that
 // tile WholeExtent. Types: UInt8, Int16, UInt16, Int32, Float32 and Float64 are kept as they are;
-// Int8 becomes int16, UInt32 float64, Int64 and UInt64 float64 when every value is within 2^53
-// (exact), an error naming the first that is not; ascii arrays are read as float64.
+// Int8, UInt32, Int64 and UInt64 are widened exactly over the whole image (DecodeVoxels: int16;
+// int32 or float64, or an error naming the largest magnitude); ascii arrays are read as float64.
 //
 // Geometry: sample (i, j, k) of the extent lies at Origin + Direction (Spacing * (i, j, k)), as
 // vtkImageData places it (Direction, row-major, is VTK 9's; identity when absent), and the

@@ -6,22 +6,26 @@
 #include <functional>
 #include <limits>
 #include <optional>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/strip.h"
 #include "client/io/byte_order.h"
 #include "client/io/file_bytes.h"
 #include "client/io/grid_placement.h"
+#include "client/io/io_error.h"
 #include "client/io/label_names.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
+#include "client/io/voxel_decode.h"
 #include "client/io/vtk_cells.h"
 #include "client/io/vtk_scalar.h"
 #include "client/io/world_frame.h"
@@ -94,6 +98,9 @@ class LegacyParser {
                            std::vector<double>& out);
   absl::Status ReadInts(int64_t count, absl::string_view type, absl::string_view what,
                         std::vector<int64_t>& out);
+  // The image's `count` samples, of type sample_type_: a binary file's bytes as stored (widened
+  // exactly later, by DecodeVoxels), an ASCII file's values as numbers.
+  absl::Status ReadImageSamples(int64_t count, absl::string_view what);
   // Reads `count` strings (ASCII: one per line, %-escaped; binary: length-prefixed).
   absl::Status ReadStrings(int64_t count, std::vector<std::string>* out);
   // Skips `count` values of `type`, which may also be "bit" or "string".
@@ -133,7 +140,13 @@ class LegacyParser {
   std::array<double, 3> origin_{0.0, 0.0, 0.0};
   std::array<double, 9> direction_{1, 0, 0, 0, 1, 0, 0, 0, 1};
   std::optional<VtkScalar> sample_type_;
-  std::vector<double> samples_;
+  std::vector<double> samples_;  // ASCII files, and COLOR_SCALARS
+  std::string sample_bytes_;     // binary files: the samples as stored (big-endian)
+  bool binary_samples_ = false;  // the samples are sample_bytes_
+  // ASCII uint32, int64 or uint64 samples beyond 2^53 (which the numbers may have rounded): the
+  // largest magnitude among those written as integers, and among the others.
+  uint64_t ascii_wide_integer_ = 0;
+  double ascii_wide_other_ = 0.0;
 };
 
 absl::StatusOr<absl::string_view> LegacyParser::BinaryBlock(int64_t count, size_t width,
@@ -163,6 +176,46 @@ absl::Status LegacyParser::ReadDoubles(int64_t count, absl::string_view type,
     absl::StatusOr<double> value = in_.Double(what);
     if (!value.ok()) return value.status();
     x = *value;
+  }
+  return absl::OkStatus();
+}
+
+absl::Status LegacyParser::ReadImageSamples(int64_t count, absl::string_view what) {
+  if (binary_) {
+    absl::StatusOr<absl::string_view> bytes =
+        BinaryBlock(count, VtkScalarSize(*sample_type_), what);
+    if (!bytes.ok()) return bytes.status();
+    sample_bytes_ = std::string(*bytes);
+    binary_samples_ = true;
+    return absl::OkStatus();
+  }
+  if (absl::Status s = in_.CheckCount(count, 2, what); !s.ok()) return s;
+  ReserveHuge(samples_, count);
+  samples_.resize(count);
+  const bool wide = *sample_type_ == VtkScalar::kUInt32 || *sample_type_ == VtkScalar::kInt64 ||
+                    *sample_type_ == VtkScalar::kUInt64;
+  for (double& x : samples_) {
+    absl::StatusOr<absl::string_view> token = in_.Token(what);
+    if (!token.ok()) return token.status();
+    if (!ParseDouble(*token, x)) {
+      return in_.Error(absl::StrCat("expected ", what, " (a number), got ", QuoteToken(*token)));
+    }
+    // A finite value from 2^53 up (NaN and infinities go on to float64, whose check names the
+    // voxel): its magnitude, exact when written as a 64-bit integer (2^53 + 1 reads as 2^53).
+    if (wide && std::isfinite(x) && !(std::abs(x) < 0x1p53)) {
+      int64_t signed_value;
+      uint64_t unsigned_value;
+      if (absl::SimpleAtoi(*token, &unsigned_value)) {
+        ascii_wide_integer_ = std::max(ascii_wide_integer_, unsigned_value);
+      } else if (absl::SimpleAtoi(*token, &signed_value)) {
+        ascii_wide_integer_ =
+            std::max(ascii_wide_integer_, signed_value < 0
+                                              ? uint64_t{0} - static_cast<uint64_t>(signed_value)
+                                              : static_cast<uint64_t>(signed_value));
+      } else {
+        ascii_wide_other_ = std::max(ascii_wide_other_, std::abs(x));
+      }
+    }
   }
   return absl::OkStatus();
 }
@@ -327,6 +380,7 @@ absl::Status LegacyParser::ReadArray(absl::string_view raw_name, int64_t compone
         if (!sample_type_) {
           return in_.Error(absl::StrCat("unsupported data type ", QuoteToken(type), " for ", name));
         }
+        return ReadImageSamples(n, name);
       }
       return ReadDoubles(n, type, name, *out);
     }
@@ -656,7 +710,32 @@ absl::StatusOr<VolumeFile> LegacyParser::ParseImage() {
             : absl::StrCat("no one-component POINT_DATA array to sample (the file has ",
                            absl::StrJoin(dropped_, ", "), ")"));
   }
-  // The file's own type where a volume can keep it and every value is one; float64 otherwise.
+  // Sample (i, j, k) at ORIGIN + DIRECTION (SPACING * (i, j, k)), as vtkImageData places it.
+  std::array<Vec3, 3> axes;
+  for (int a = 0; a < 3; ++a) {
+    for (int row = 0; row < 3; ++row) axes[a][row] = direction_[3 * row + a] * spacing_[a];
+  }
+  Affine affine = AffineFromAxes(axes, {origin_[0], origin_[1], origin_[2]});
+  if (frame_ == MeshFrame::kLps) affine = LpsToRas(affine);
+  if (binary_samples_) {
+    // The stored values, widened exactly where a volume lacks their type (DecodeVoxels).
+    absl::StatusOr<DecodedVoxels> voxels =
+        DecodeVoxels(sample_bytes_, StoredTypeOfVtk(*sample_type_), ByteOrder::kBig, 0, 0);
+    sample_bytes_ = {};
+    if (!voxels.ok()) return WithPath(path_, voxels.status());
+    return PlaceOnGrid(path_, affine, dimensions_, voxels->type, std::move(voxels->data));
+  }
+  // ASCII values as DecodeVoxels widens stored ones: uint32, int64 and uint64 beyond 2^53 are
+  // refused, as float64 would round them.
+  if (ascii_wide_integer_ > (uint64_t{1} << 53) || ascii_wide_other_ > 0x1p53) {
+    const StoredType stored = StoredTypeOfVtk(*sample_type_);
+    return WithPath(
+        path_, TooWideError(stored, static_cast<double>(ascii_wide_integer_) >= ascii_wide_other_
+                                        ? absl::StrCat(ascii_wide_integer_)
+                                        : absl::StrCat(ascii_wide_other_)));
+  }
+  // The file's own type where a volume can keep it and every value is one (int32 for uint32,
+  // int64 and uint64); float64 otherwise.
   VoxelType type = VoxelType::kFloat64;
   std::vector<std::byte> data;
   bool packed = false;
@@ -675,6 +754,9 @@ absl::StatusOr<VolumeFile> LegacyParser::ParseImage() {
       type = VoxelType::kUint16;
       break;
     case VtkScalar::kInt32:
+    case VtkScalar::kUInt32:
+    case VtkScalar::kInt64:
+    case VtkScalar::kUInt64:
       packed = PackExactly<int32_t>(samples_, data);
       type = VoxelType::kInt32;
       break;
@@ -691,13 +773,6 @@ absl::StatusOr<VolumeFile> LegacyParser::ParseImage() {
   }
   samples_.clear();
   samples_.shrink_to_fit();
-  // Sample (i, j, k) at ORIGIN + DIRECTION (SPACING * (i, j, k)), as vtkImageData places it.
-  std::array<Vec3, 3> axes;
-  for (int a = 0; a < 3; ++a) {
-    for (int row = 0; row < 3; ++row) axes[a][row] = direction_[3 * row + a] * spacing_[a];
-  }
-  Affine affine = AffineFromAxes(axes, {origin_[0], origin_[1], origin_[2]});
-  if (frame_ == MeshFrame::kLps) affine = LpsToRas(affine);
   return PlaceOnGrid(path_, affine, dimensions_, type, std::move(data));
 }
 

@@ -28,8 +28,11 @@ absl::StatusOr<MeshFile> ParseVtkLegacy(absl::string_view text, absl::string_vie
 // other attributes and cell data are skipped. Sample (i, j, k) lies at ORIGIN + DIRECTION
 // (SPACING * (i, j, k)) (ASPECT_RATIO is SPACING's old name; DIRECTION, row-major, is optional);
 // like meshes, the coordinates are RAS unless the title says SPACE=LPS (then converted). The
-// file's type is kept where a volume has it (unsigned_char, short, unsigned_short, int, float;
-// char as int16), float64 otherwise or when an ASCII value does not fit it. Errors name the file
+// file's type is kept where a volume has it (unsigned_char, short, unsigned_short, int, float);
+// binary char, unsigned_int, long and unsigned_long (and the vtktype names) are widened exactly
+// (DecodeVoxels); ASCII values keep the type (int16 for char, int32 for 32- and 64-bit integers)
+// where every one fits it, float64 otherwise, and 32- and 64-bit integers beyond 2^53 are
+// refused as DecodeVoxels refuses them. Errors name the file
 // and line: an UNSTRUCTURED_GRID (a mesh), fewer than 2 samples on an axis, no samples.
 absl::StatusOr<VolumeFile> ParseVtkLegacyImage(absl::string_view text, absl::string_view path);
 absl::StatusOr<VolumeFile> ReadVtkLegacyImage(const std::string& path);

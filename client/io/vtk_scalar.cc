@@ -73,6 +73,32 @@ size_t VtkScalarSize(VtkScalar type) {
   return Dispatch(type, [](auto v) { return sizeof(v); });
 }
 
+StoredType StoredTypeOfVtk(VtkScalar type) {
+  switch (type) {
+    case VtkScalar::kInt8:
+      return StoredType::kInt8;
+    case VtkScalar::kUInt8:
+      return StoredType::kUint8;
+    case VtkScalar::kInt16:
+      return StoredType::kInt16;
+    case VtkScalar::kUInt16:
+      return StoredType::kUint16;
+    case VtkScalar::kInt32:
+      return StoredType::kInt32;
+    case VtkScalar::kUInt32:
+      return StoredType::kUint32;
+    case VtkScalar::kInt64:
+      return StoredType::kInt64;
+    case VtkScalar::kUInt64:
+      return StoredType::kUint64;
+    case VtkScalar::kFloat32:
+      return StoredType::kFloat32;
+    case VtkScalar::kFloat64:
+      break;
+  }
+  return StoredType::kFloat64;
+}
+
 bool IsVtkInteger(VtkScalar type) {
   return Dispatch(type, [](auto v) { return std::numeric_limits<decltype(v)>::is_integer; });
 }

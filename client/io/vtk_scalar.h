@@ -6,6 +6,7 @@
 
 #include "absl/strings/string_view.h"
 #include "client/io/byte_order.h"
+#include "client/io/voxel_decode.h"
 
 namespace tetrefine::io {
 
@@ -26,6 +27,8 @@ enum class VtkScalar {
 
 // Bytes per value: 1, 2, 4 or 8.
 size_t VtkScalarSize(VtkScalar type);
+// The volume readers' name for the same type (DecodeVoxels widens those a Volume lacks).
+StoredType StoredTypeOfVtk(VtkScalar type);
 bool IsVtkInteger(VtkScalar type);
 
 // The XML type attribute ("Int8" ... "Float64"); nullopt for anything else (e.g. "String").

@@ -60,6 +60,12 @@ CASES = {
     "5-d with one component": _image(_INT16[..., None, None], (2.0, 1.0, 2.0), (0, 5, 0)),
     "a slope that is not a number": _nan_slope_image(_INT16),
     "no sform or qform": _no_transform_image(_INT16, (2.0, 1.5, 1.0)),
+    # Types a Volume lacks, as nibabel keeps them: the CLI widens them as the client does.
+    "int8 mask": _image(np.clip(_INT16, -128, 127).astype(np.int8), (1.0, 1.5, 1.0), (0, 0, 0)),
+    "int8 scaled": _image(np.clip(_INT16, -128, 127).astype(np.int8), (1, 1, 1), (2, 2, 2), 0.5,
+                          2.0),
+    "uint32 labels within int32": _image((_INT16 + 300).astype(np.uint32), (1, 1, 1), (0, 0, 0)),
+    "uint32 beyond int32": _image(_INT16.astype(np.int64).astype(np.uint32), (2, 1, 1), (0, 0, 0)),
 }
 
 

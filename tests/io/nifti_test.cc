@@ -1,12 +1,16 @@
 // NIfTI reading and writing: real files, the RAS frame, byte order, versions, scaling, errors.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "client/io/nifti_reader.h"
 #include "client/io/nifti_writer.h"
@@ -15,6 +19,8 @@
 #include "gtest/gtest.h"
 #include "tests/io/io_test_util.h"
 #include "tests/io/nifti_builder.h"
+#include "tests/io/widening_cases.h"
+#include "tests/support/child_process.h"
 
 namespace tetrefine::io {
 namespace {
@@ -302,6 +308,162 @@ TEST(IoNiftiTest, AppliesSlopeAndIntercept) {
               HasSubstr("intensity scaling is not finite"));
 }
 
+int16_t NiftiDatatype(StoredType type) {
+  switch (type) {
+    case StoredType::kInt8:
+      return 256;
+    case StoredType::kUint32:
+      return 768;
+    case StoredType::kInt64:
+      return 1024;
+    case StoredType::kUint64:
+      return 1280;
+    default:
+      ADD_FAILURE() << "not a widening type";
+      return 0;
+  }
+}
+
+// int8, uint32, int64 and uint64 (nibabel writes an int8 mask as int8 and keeps a uint32 label
+// map's type) read as the Python client sends such arrays: every value as stored, or refused.
+TEST(IoNiftiTest, WideIntegerTypesReadExactlyOrAreRefused) {
+  ScratchDir dir;
+  for (const iotest::WideningCase& c : iotest::WideningCases()) {
+    for (int version : {1, 2}) {
+      for (bool big_endian : {false, true}) {
+        SCOPED_TRACE(::testing::Message() << "v" << version << (big_endian ? " big" : " little"));
+        NiftiSpec spec;
+        spec.version = version;
+        spec.big_endian = big_endian;
+        spec.datatype = NiftiDatatype(c.stored);
+        const std::string path = dir.File("wide.nii");
+        WriteBytes(path, NiftiHeaderBytes(spec) + iotest::WideningBytes(c, big_endian));
+        iotest::ExpectWidened(c, ReadVolume(path), path);
+      }
+    }
+  }
+}
+
+// Scaled, they are float32 from int8 (as from the other types of at most 16 bits) and float64
+// from the 32- and 64-bit ones, whose values float32 would round. A scaled value is computed, not
+// stored, so a 64-bit one beyond 2^53 is no refusal: it is rounded as every scaled value is.
+TEST(IoNiftiTest, ScaledWideIntegerTypesAreFloat) {
+  ScratchDir dir;
+  const struct {
+    std::string label;
+    double slope, inter;
+    VoxelType read_as;
+  } scalings[] = {{"int8 extremes", 0.5, -3.0, VoxelType::kFloat32},
+                  {"uint32 within int32", 0.25, 1.0, VoxelType::kFloat64},
+                  {"uint32 beyond int32", 0.5, 10.0, VoxelType::kFloat64},
+                  {"int64 at -2^53 and 2^53", 0.5, 0.0, VoxelType::kFloat64},
+                  {"uint64 beyond 2^53", 2.0, 1.0, VoxelType::kFloat64}};
+  const std::vector<iotest::WideningCase> cases = iotest::WideningCases();
+  for (const auto& scaling : scalings) {
+    const auto c = std::find_if(cases.begin(), cases.end(),
+                                [&](const auto& w) { return w.label == scaling.label; });
+    ASSERT_NE(c, cases.end()) << scaling.label;
+    for (bool big_endian : {false, true}) {
+      SCOPED_TRACE(::testing::Message() << scaling.label << (big_endian ? " big" : " little"));
+      NiftiSpec spec;
+      spec.big_endian = big_endian;
+      spec.datatype = NiftiDatatype(c->stored);
+      spec.slope = scaling.slope;
+      spec.inter = scaling.inter;
+      const std::string path = dir.File("scaled.nii");
+      WriteBytes(path, NiftiHeaderBytes(spec) + iotest::WideningBytes(*c, big_endian));
+      absl::StatusOr<VolumeFile> file = ReadVolume(path);
+      ASSERT_TRUE(file.ok()) << file.status();
+      EXPECT_EQ(file->volume.type(), scaling.read_as);
+      for (int n = 0; n < 8; ++n) {
+        // The stored value as the reader converts it (exactly, up to 2^53), then scaled.
+        double x = 0;
+        ASSERT_TRUE(absl::SimpleAtod(c->values[n], &x));
+        double want = scaling.slope * x + scaling.inter;
+        if (scaling.read_as == VoxelType::kFloat32) want = static_cast<float>(want);
+        EXPECT_EQ(file->volume.At(n % 2, (n / 2) % 2, n / 4), want) << "sample " << n;
+      }
+    }
+  }
+}
+
+// nibabel (python3-nibabel) writes int8, uint32 and int64 files, little- and big-endian, plain
+// and with a scaling; what nibabel's own get_fdata reads from each is what ReadVolume must read.
+constexpr char kNibabelScript[] = R"PY(
+import sys, numpy as np, nibabel
+out = sys.argv[1]
+cases = {
+    'int8': (np.int8, [-128, 127, 0, -1, 1, 64, -64, 5], 'int16', 'float32'),
+    'uint32': (np.uint32, [4294967295, 0, 2147483648, 1, 5, 6, 7, 8], 'float64', 'float64'),
+    'uint32_labels': (np.uint32, [0, 2147483647, 1, 65536, 7, 100000, 3, 2], 'int32', 'float64'),
+    'int64': (np.int64, [-2**53, 2**53, 0, -1, 2**31, -2**31 - 1, 7, 8], 'float64', 'float64'),
+}
+for name, (dtype, values, plain_type, scaled_type) in cases.items():
+    data = np.array(values, dtype=dtype).reshape((2, 2, 2), order='F')
+    # The usual way: an image saved by nibabel (gzip, nibabel's own byte order).
+    path = '%s/%s.nii.gz' % (out, name)
+    nibabel.save(nibabel.Nifti1Image(data, np.eye(4), dtype=dtype), path)
+    files = [(path, plain_type)]
+    # A header nibabel builds, in both byte orders, with and without scl_slope / scl_inter.
+    for endian in '<>':
+        for scaled in (False, True):
+            header = nibabel.Nifti1Header(endianness=endian)
+            header.set_data_dtype(dtype)
+            header.set_data_shape(data.shape)
+            header.set_sform(np.eye(4), code=1)
+            if scaled:
+                header.set_slope_inter(0.5, -3.0)
+            header['vox_offset'] = 352
+            path = '%s/%s_%s%s.nii' % (out, name, 'big' if endian == '>' else 'little',
+                                       '_scaled' if scaled else '')
+            with open(path, 'wb') as f:
+                header.write_to(f)
+                f.seek(352)
+                f.write(data.astype(np.dtype(dtype).newbyteorder(endian)).tobytes(order='F'))
+            files.append((path, scaled_type if scaled else plain_type))
+    for path, expected_type in files:
+        image = nibabel.load(path)
+        stored = image.get_data_dtype()
+        assert stored.newbyteorder('<') == np.dtype(dtype).newbyteorder('<'), (path, stored)
+        values = image.get_fdata()
+        for k in range(2):
+            for j in range(2):
+                for i in range(2):
+                    print(path, expected_type, i, j, k, repr(float(values[i, j, k])))
+)PY";
+
+TEST(IoNiftiTest, WideIntegerFilesNibabelWritesReadAsNibabelReadsThem) {
+  if (!std::filesystem::exists(iotest::kPython) ||
+      testing::RunProcess({iotest::kPython, "-c", "import nibabel, numpy"}).exit_code != 0) {
+    GTEST_SKIP() << "python3-nibabel is not installed";
+  }
+  ScratchDir dir;
+  WriteBytes(dir.File("write.py"), kNibabelScript);
+  const testing::ProcessResult run =
+      testing::RunProcess({iotest::kPython, dir.File("write.py"), dir.path()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::istringstream lines(run.out);
+  std::string path, type, last;
+  int i, j, k;
+  double value;
+  int files = 0, samples = 0;
+  absl::StatusOr<VolumeFile> file = absl::UnknownError("no file yet");
+  while (lines >> path >> type >> i >> j >> k >> value) {
+    SCOPED_TRACE(path);
+    if (path != last) {
+      file = ReadVolume(path);
+      ASSERT_TRUE(file.ok()) << file.status();
+      EXPECT_EQ(VoxelTypeName(file->volume.type()), type);
+      last = path;
+      ++files;
+    }
+    EXPECT_EQ(file->volume.At(i, j, k), value) << i << " " << j << " " << k;
+    ++samples;
+  }
+  EXPECT_EQ(files, 20);
+  EXPECT_EQ(samples, 160);
+}
+
 TEST(IoNiftiTest, WriterRoundTripsEveryTypeAndVersion) {
   ScratchDir dir;
   std::mt19937_64 rng(7);
@@ -427,12 +589,12 @@ TEST(IoNiftiErrorTest, TruncatedDataNamesPathAndSizes) {
 TEST(IoNiftiErrorTest, UnsupportedDatatypeAnd4DAreClearErrors) {
   ScratchDir dir;
   NiftiSpec spec;
-  spec.datatype = 256;  // int8
-  const std::string path = dir.File("int8.nii");
-  WriteBytes(path, NiftiHeaderBytes(spec) + std::string(8, '\0'));
+  spec.datatype = 32;  // complex64 (int8, once refused here, is read: WideIntegerTypes...)
+  const std::string path = dir.File("complex.nii");
+  WriteBytes(path, NiftiHeaderBytes(spec) + std::string(64, '\0'));
   absl::Status status = ReadNifti(path).status();
   EXPECT_EQ(status.code(), absl::StatusCode::kUnimplemented);
-  EXPECT_THAT(std::string(status.message()), HasSubstr("int8"));
+  EXPECT_THAT(std::string(status.message()), HasSubstr("NIfTI datatype 32 (complex64)"));
   EXPECT_THAT(std::string(status.message()), HasSubstr(path));
 
   spec.datatype = 16;

@@ -4,6 +4,7 @@
 #include <utility>
 #include <vector>
 
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "client/io/mesh_io.h"
 #include "client/io/read_volume.h"
@@ -12,6 +13,7 @@
 #include "gtest/gtest.h"
 #include "tests/io/io_test_util.h"
 #include "tests/io/nifti_builder.h"
+#include "tests/io/widening_cases.h"
 
 namespace tetrefine::io {
 namespace {
@@ -172,6 +174,95 @@ TEST(IoNrrdTest, ListOfDataFilesIsNamedAsUnsupported) {
   EXPECT_THAT(std::string(status.message()), HasSubstr("multi-file NRRD data"));
 }
 
+// A 2 x 2 x 2 NRRD of a widening case's values: raw, gzip or ascii, in either byte order.
+std::string WideNrrd(const std::string& type, const iotest::WideningCase& c,
+                     const std::string& encoding, bool big_endian) {
+  std::string data;
+  if (encoding == "ascii") {
+    data = iotest::WideningText(c, "\n") + "\n";
+  } else {
+    data = iotest::WideningBytes(c, big_endian);
+    if (encoding == "gzip") {
+      absl::StatusOr<std::string> gz = GzipCompress(data);
+      EXPECT_TRUE(gz.ok());
+      data = gz.ok() ? *gz : "";
+    }
+  }
+  return absl::StrCat("NRRD0004\ntype: ", type, "\ndimension: 3\nsizes: 2 2 2\n",
+                      "spacings: 1 1 1\nendian: ", big_endian ? "big" : "little",
+                      "\nencoding: ", encoding, "\n\n", data);
+}
+
+std::string NrrdTypeName(StoredType type) {
+  switch (type) {
+    case StoredType::kInt8:
+      return "signed char";
+    case StoredType::kUint32:
+      return "uint";
+    case StoredType::kInt64:
+      return "long long";
+    case StoredType::kUint64:
+      return "unsigned long long int";
+    default:
+      ADD_FAILURE() << "not a widening type";
+      return "";
+  }
+}
+
+// int8, uint32, int64 and uint64 read as the Python client sends such arrays: every value as
+// stored (ascii 64-bit integers too, which a double would round), or refused.
+TEST(IoNrrdTest, WideIntegerTypesReadExactlyOrAreRefused) {
+  ScratchDir dir;
+  const std::string path = dir.File("wide.nrrd");
+  for (const iotest::WideningCase& c : iotest::WideningCases()) {
+    for (const auto& [encoding, big_endian] : std::vector<std::pair<std::string, bool>>{
+             {"raw", false}, {"raw", true}, {"gzip", true}, {"ascii", false}}) {
+      SCOPED_TRACE(absl::StrCat(encoding, big_endian ? " big" : " little"));
+      WriteBytes(path, WideNrrd(NrrdTypeName(c.stored), c, encoding, big_endian));
+      iotest::ExpectWidened(c, ReadVolume(path), path);
+    }
+  }
+}
+
+// Every spelling teem takes for the four types (nrrd/enumsNrrd.c, _nrrdTypeStrEqv), each read
+// with a case its sign and width decide: int8 -128 (uint8 would be 128), uint32 4294967295
+// (int32 would be -1), int64 -2^53 (uint64 would be refused) and uint64's maximum (int64 would
+// be -1; the refusal names uint64).
+TEST(IoNrrdTest, EveryTeemSpellingOfTheWideTypesIsRead) {
+  ScratchDir dir;
+  const std::string path = dir.File("spelling.nrrd");
+  const std::vector<iotest::WideningCase> cases = iotest::WideningCases();
+  const auto find = [&](const std::string& label) {
+    for (const iotest::WideningCase& c : cases) {
+      if (c.label == label) return c;
+    }
+    ADD_FAILURE() << label;
+    return cases[0];
+  };
+  const std::pair<std::string, std::vector<std::string>> spellings[] = {
+      {"int8 extremes", {"signed char", "int8", "int8_t", "Signed Char"}},
+      {"uint32 beyond int32", {"uint", "unsigned int", "uint32", "uint32_t"}},
+      {"int64 at -2^53 and 2^53",
+       {"longlong", "long long", "long long int", "signed long long", "signed long long int",
+        "int64", "int64_t"}},
+      {"uint64 maximum",
+       {"ulonglong", "unsigned long long", "unsigned long long int", "uint64", "uint64_t"}},
+  };
+  for (const auto& [label, names] : spellings) {
+    const iotest::WideningCase c = find(label);
+    for (const std::string& name : names) {
+      SCOPED_TRACE(name);
+      WriteBytes(path, WideNrrd(name, c, "raw", false));
+      iotest::ExpectWidened(c, ReadVolume(path), path);
+    }
+  }
+  // "char" alone, whose sign C leaves open, stays refused as teem refuses it.
+  WriteBytes(path, WideNrrd("char", find("int8 extremes"), "raw", false));
+  const absl::Status status = ReadVolume(path).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kUnimplemented) << status;
+  EXPECT_THAT(std::string(status.message()), HasSubstr("NRRD type \"char\" is not supported"));
+}
+
 std::string MetaHeader(const std::string& extra, const std::string& data_file) {
   return absl::StrCat("ObjectType = Image\nNDims = 3\nBinaryData = True\n", extra,
                       "TransformMatrix = 1 0 0 0 1 0 0 0 1\nOffset = 10 -20 30\n",
@@ -210,6 +301,86 @@ TEST(IoMetaImageTest, ErrorsNameTheFile) {
   WriteBytes(dir.File("missing.mhd"), MetaHeader("", "nowhere.raw"));
   EXPECT_THAT(std::string(ReadVolume(dir.File("missing.mhd")).status().message()),
               HasSubstr("nowhere.raw"));
+}
+
+std::string WideMetaImage(const std::string& type, const std::string& samples, bool msb,
+                          bool compressed) {
+  std::string data = samples;
+  if (compressed) {
+    absl::StatusOr<std::string> gz = GzipCompress(samples);
+    EXPECT_TRUE(gz.ok());
+    data = gz.ok() ? *gz : "";
+  }
+  return absl::StrCat("ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = ",
+                      msb ? "True" : "False", "\nCompressedData = ", compressed ? "True" : "False",
+                      "\nTransformMatrix = 1 0 0 0 1 0 0 0 1\nOffset = 10 -20 30\n",
+                      "ElementSpacing = 1 1 1\nDimSize = 2 2 2\nElementType = ", type,
+                      "\nElementDataFile = LOCAL\n", data);
+}
+
+std::string MetaTypeName(StoredType type) {
+  switch (type) {
+    case StoredType::kInt8:
+      return "MET_CHAR";
+    case StoredType::kUint32:
+      return "MET_UINT";
+    case StoredType::kInt64:
+      return "MET_LONG_LONG";
+    case StoredType::kUint64:
+      return "MET_ULONG_LONG";
+    default:
+      ADD_FAILURE() << "not a widening type";
+      return "";
+  }
+}
+
+TEST(IoMetaImageTest, WideIntegerTypesReadExactlyOrAreRefused) {
+  ScratchDir dir;
+  const std::string path = dir.File("wide.mha");
+  for (const iotest::WideningCase& c : iotest::WideningCases()) {
+    for (const auto& [msb, compressed] :
+         std::vector<std::pair<bool, bool>>{{false, false}, {true, false}, {true, true}}) {
+      SCOPED_TRACE(absl::StrCat(msb ? "msb" : "lsb", compressed ? " compressed" : ""));
+      WriteBytes(path, WideMetaImage(MetaTypeName(c.stored), iotest::WideningBytes(c, msb), msb,
+                                     compressed));
+      iotest::ExpectWidened(c, ReadVolume(path), path);
+    }
+  }
+}
+
+// MetaIO's MET_LONG and MET_ULONG are 4 bytes (metaTypes.h: MET_LONG_TYPE is int32_t) on every
+// platform; ITK writes an 8-byte long as MET_LONG_LONG.
+TEST(IoMetaImageTest, MetLongAndMetUlongAreFourBytes) {
+  ScratchDir dir;
+  const std::string path = dir.File("long.mha");
+  for (const iotest::WideningCase& c : iotest::WideningCases()) {
+    if (c.label == "uint32 beyond int32") {
+      for (bool msb : {false, true}) {
+        WriteBytes(path, WideMetaImage("MET_ULONG", iotest::WideningBytes(c, msb), msb, false));
+        iotest::ExpectWidened(c, ReadVolume(path), path);
+      }
+    }
+    if (c.label == "int64 within int32") {
+      // The same values stored as 4-byte int32, read as int32.
+      for (bool msb : {false, true}) {
+        std::string bytes;
+        for (const std::string& v : c.values) {
+          int64_t x = 0;
+          ASSERT_TRUE(absl::SimpleAtoi(v, &x));
+          const auto u = static_cast<uint32_t>(static_cast<int32_t>(x));
+          for (int b = 0; b < 4; ++b) {
+            bytes.push_back(static_cast<char>(u >> (msb ? 8 * (3 - b) : 8 * b)));
+          }
+        }
+        WriteBytes(path, WideMetaImage("MET_LONG", bytes, msb, false));
+        iotest::ExpectWidened(c, ReadVolume(path), path);
+      }
+    }
+  }
+  WriteBytes(path, WideMetaImage("MET_ASCII_CHAR", std::string(8, 'a'), false, false));
+  const absl::Status status = ReadVolume(path).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kUnimplemented) << status;
+  EXPECT_THAT(std::string(status.message()), HasSubstr("ElementType \"MET_ASCII_CHAR\""));
 }
 
 // An oblique LPS frame: axis i along 2 * (0.6, 0.8, 0), j along 3 * (-0.8, 0.6, 0), k along

@@ -13,6 +13,7 @@
 #include "gtest/gtest.h"
 #include "tests/io/io_test_util.h"
 #include "tests/io/vtk_probe.h"
+#include "tests/io/widening_cases.h"
 
 namespace tetrefine::io::vti_test {
 namespace {
@@ -223,6 +224,71 @@ TEST(IoVtiTest, TruncatedFilesAreErrorsNotCrashes) {
   }
 }
 
+// A 2 x 2 x 2 image whose point array of `type` is stored appended and raw, one block per piece
+// (each piece a z layer of `pieces` bytes blocks, or one piece holding everything).
+std::string AppendedVti(const std::string& type, const std::vector<std::string>& blocks,
+                        bool big_endian) {
+  std::string out = absl::StrCat(
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"",
+      big_endian ? "BigEndian" : "LittleEndian",
+      "\" header_type=\"UInt64\">\n  <ImageData WholeExtent=\"0 1 0 1 0 1\" Origin=\"0 0 0\" "
+      "Spacing=\"1 1 1\">\n");
+  std::string appended;
+  for (size_t p = 0; p < blocks.size(); ++p) {
+    const std::string z = blocks.size() == 1 ? "0 1" : absl::StrCat(p, " ", p);
+    absl::StrAppend(&out, "    <Piece Extent=\"0 1 0 1 ", z,
+                    "\">\n      <PointData Scalars=\"v\">\n", "        <DataArray type=\"", type,
+                    "\" Name=\"v\" format=\"appended\" offset=\"", appended.size(),
+                    "\"/>\n      </PointData>\n    </Piece>\n");
+    const uint64_t size = blocks[p].size();
+    for (int b = 0; b < 8; ++b) {
+      appended.push_back(static_cast<char>(size >> (big_endian ? 8 * (7 - b) : 8 * b)));
+    }
+    appended += blocks[p];
+  }
+  absl::StrAppend(&out, "  </ImageData>\n  <AppendedData encoding=\"raw\">\n   _", appended,
+                  "\n  </AppendedData>\n</VTKFile>\n");
+  return out;
+}
+
+std::string VtkTypeName(StoredType type) {
+  switch (type) {
+    case StoredType::kInt8:
+      return "Int8";
+    case StoredType::kUint32:
+      return "UInt32";
+    case StoredType::kInt64:
+      return "Int64";
+    case StoredType::kUint64:
+      return "UInt64";
+    default:
+      ADD_FAILURE() << "not a widening type";
+      return "";
+  }
+}
+
+// Int8, UInt32, Int64 and UInt64 read as the Python client sends such arrays (UInt32 was float64
+// whatever its values, and a value beyond 2^53 an error naming neither it nor its size). Whether
+// the values fit int32 is decided over the whole image, not piece by piece.
+TEST(IoVtiTest, WideIntegerTypesReadExactlyOrAreRefused) {
+  ScratchDir dir;
+  const std::string path = dir.File("wide.vti");
+  for (const iotest::WideningCase& c : iotest::WideningCases()) {
+    for (bool big_endian : {false, true}) {
+      const std::string bytes = iotest::WideningBytes(c, big_endian);
+      for (bool two_pieces : {false, true}) {
+        SCOPED_TRACE(absl::StrCat(big_endian ? "big" : "little", two_pieces ? " two pieces" : ""));
+        const std::vector<std::string> blocks =
+            two_pieces ? std::vector<std::string>{bytes.substr(0, bytes.size() / 2),
+                                                  bytes.substr(bytes.size() / 2)}
+                       : std::vector<std::string>{bytes};
+        WriteBytes(path, AppendedVti(VtkTypeName(c.stored), blocks, big_endian));
+        iotest::ExpectWidened(c, ReadVolume(path), path);
+      }
+    }
+  }
+}
+
 // VTK 9 (python3-vtk9) writes one image in every storage and type; VTK's own probe (trilinear
 // inside each voxel) gives the reference values at points inside the image.
 constexpr char kVtkScript[] = R"PY(
@@ -234,12 +300,13 @@ dims = (7, 5, 6)
 base = rng.normal(100.0, 40.0, dims[::-1])
 types = {'Int8': vtk.VTK_SIGNED_CHAR, 'UInt8': vtk.VTK_UNSIGNED_CHAR, 'Int16': vtk.VTK_SHORT,
          'UInt16': vtk.VTK_UNSIGNED_SHORT, 'Int32': vtk.VTK_INT, 'UInt32': vtk.VTK_UNSIGNED_INT,
-         'Int64': vtk.VTK_LONG_LONG, 'Float32': vtk.VTK_FLOAT, 'Float64': vtk.VTK_DOUBLE}
+         'Int64': vtk.VTK_LONG_LONG, 'UInt64': vtk.VTK_UNSIGNED_LONG_LONG, 'Float32': vtk.VTK_FLOAT,
+         'Float64': vtk.VTK_DOUBLE}
 np_types = {'Int8': np.int8, 'UInt8': np.uint8, 'Int16': np.int16, 'UInt16': np.uint16,
-            'Int32': np.int32, 'UInt32': np.uint32, 'Int64': np.int64, 'Float32': np.float32,
-            'Float64': np.float64}
+            'Int32': np.int32, 'UInt32': np.uint32, 'Int64': np.int64, 'UInt64': np.uint64,
+            'Float32': np.float32, 'Float64': np.float64}
 def image(type_name, oblique):
-    values = np.clip(base, 0, 120) if type_name == 'Int8' else base
+    values = {'Int8': np.clip(base, 0, 120), 'UInt64': np.clip(base, 0, None)}.get(type_name, base)
     im = vtk.vtkImageData()
     im.SetExtent(2, 2 + dims[0] - 1, -3, -3 + dims[1] - 1, 1, dims[2])
     im.SetSpacing(1.5, 2.0, 0.75)
@@ -311,7 +378,7 @@ TEST(IoVtiTest, EveryStorageVtkWritesSamplesAsVtkProbes) {
         EXPECT_EQ(file.volume.grid().dims, (Index3{7, 5, 6})) << name;
         EXPECT_EQ(file.volume.axis_aligned(), name.find("oblique") == std::string::npos) << name;
       });
-  EXPECT_EQ(files, 31);
+  EXPECT_EQ(files, 32);
 }
 
 // VTK's parallel image writer: a .pvti index and one .vti per piece, for several piece counts,

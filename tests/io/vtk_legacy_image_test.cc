@@ -14,6 +14,7 @@
 #include "gtest/gtest.h"
 #include "tests/io/io_test_util.h"
 #include "tests/io/vtk_probe.h"
+#include "tests/io/widening_cases.h"
 
 namespace tetrefine::io::vtk_legacy_image_test {
 namespace {
@@ -189,6 +190,46 @@ TEST(IoVtkLegacyImageTest, ErrorsNameTheFileAndLine) {
   }
 }
 
+// A 2 x 2 x 2 image of a widening case's values, ASCII or BINARY (big-endian, as VTK writes).
+std::string WideImage(const std::string& type, const iotest::WideningCase& c, bool binary) {
+  return absl::StrCat("# vtk DataFile Version 3.0\nwide\n", binary ? "BINARY" : "ASCII",
+                      "\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\nSPACING 1 1 1\n",
+                      "ORIGIN 0 0 0\nPOINT_DATA 8\nSCALARS v ", type, "\nLOOKUP_TABLE default\n",
+                      binary ? iotest::WideningBytes(c, true) : iotest::WideningText(c), "\n");
+}
+
+// char, unsigned_int, 64-bit integers: read as the Python client sends such arrays, binary
+// values exactly as stored (a binary int64 beyond 2^53 was rounded without a word) and ASCII
+// ones by the same rule (int32 where they fit, float64 to 2^53, refused beyond).
+TEST(IoVtkLegacyImageTest, WideIntegerTypesReadExactlyOrAreRefused) {
+  ScratchDir dir;
+  const std::string path = dir.File("wide.vtk");
+  const auto names = [](StoredType type) -> std::vector<std::string> {
+    switch (type) {
+      case StoredType::kInt8:
+        return {"char", "signed_char", "vtktypeint8"};
+      case StoredType::kUint32:
+        return {"unsigned_int", "vtktypeuint32"};
+      case StoredType::kInt64:
+        return {"long", "vtktypeint64"};
+      case StoredType::kUint64:
+        return {"unsigned_long", "vtktypeuint64"};
+      default:
+        ADD_FAILURE() << "not a widening type";
+        return {};
+    }
+  };
+  for (const iotest::WideningCase& c : iotest::WideningCases()) {
+    for (const std::string& type : names(c.stored)) {
+      for (bool binary : {true, false}) {
+        SCOPED_TRACE(absl::StrCat(type, binary ? " binary" : " ascii"));
+        WriteBytes(path, WideImage(type, c, binary));
+        iotest::ExpectWidened(c, ReadVolume(path), path);
+      }
+    }
+  }
+}
+
 // VTK 9 writes an image in both encodings and file versions and in several types; VTK's probe of
 // a float64 copy gives the reference values.
 constexpr char kVtkScript[] = R"PY(
@@ -199,7 +240,8 @@ rng = np.random.default_rng(17)
 base = rng.normal(90.0, 30.0, (6, 5, 7))
 for n, (typ, binary, version) in enumerate([(np.int16, True, 42), (np.int16, False, 42),
         (np.float32, True, 51), (np.float64, False, 51), (np.uint8, True, 51),
-        (np.int32, False, 42), (np.uint16, True, 42), (np.uint8, False, 42)]):
+        (np.int32, False, 42), (np.uint16, True, 42), (np.uint8, False, 42), (np.int8, True, 42),
+        (np.uint32, False, 51), (np.int64, True, 51), (np.uint64, False, 42)]):
     values = np.clip(base, 0, 250).astype(typ)
     im = vtk.vtkImageData(); im.SetDimensions(7, 5, 6); im.SetSpacing(0.8, 1.25, 2.0)
     im.SetOrigin(-7.5, 3.0, 40.0)
@@ -232,7 +274,7 @@ TEST(IoVtkLegacyImageTest, WhatVtkWritesSamplesAsVtkProbes) {
       kVtkScript, dir, [](const std::string& name, const VolumeFile& file) {
         EXPECT_EQ(file.volume.grid().dims, (Index3{7, 5, 6})) << name;
       });
-  EXPECT_EQ(files, 8);
+  EXPECT_EQ(files, 12);
 }
 
 }  // namespace
