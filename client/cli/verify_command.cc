@@ -25,19 +25,32 @@ namespace {
 constexpr int kLatticeN = 8;
 constexpr int64_t kLatticeMaxTets = 200'000;
 
-std::vector<std::string> Problems(const MeshReport& r, int64_t outside, int64_t first_outside) {
+// "tet 37: vertices 4, 9, 12, 30 at (x, y, z), ... mm": where a tet is, not only its number (an
+// outside review found verify's other findings located and these not).
+std::string TetWhere(const Mesh& mesh, int64_t t) {
+  const Tet& tet = mesh.tets[t];
+  std::vector<std::string> corners;
+  for (uint32_t v : tet) {
+    const Vec3& p = mesh.points[v];
+    corners.push_back(absl::StrFormat("%u (%g, %g, %g)", v, p[0], p[1], p[2]));
+  }
+  return absl::StrCat("tet ", t, ": vertices ", absl::StrJoin(corners, ", "), " mm");
+}
+
+std::vector<std::string> Problems(const MeshReport& r, const Mesh& mesh, const Volume& volume,
+                                  int64_t outside, int64_t first_outside) {
   std::vector<std::string> problems;
   if (r.duplicate_vertices > 0) {
     problems.push_back(absl::StrCat(r.duplicate_vertices, " duplicate vertices (first: ",
                                     r.first_duplicate[1], " repeats ", r.first_duplicate[0], ")"));
   }
   if (r.inverted_tets > 0) {
-    problems.push_back(
-        absl::StrCat(r.inverted_tets, " inverted tets (first: tet ", r.first_inverted, ")"));
+    problems.push_back(absl::StrCat(
+        r.inverted_tets, " inverted tets (first: ", TetWhere(mesh, r.first_inverted), ")"));
   }
   if (r.degenerate_tets > 0) {
-    problems.push_back(
-        absl::StrCat(r.degenerate_tets, " degenerate tets (first: tet ", r.first_degenerate, ")"));
+    problems.push_back(absl::StrCat(
+        r.degenerate_tets, " degenerate tets (first: ", TetWhere(mesh, r.first_degenerate), ")"));
   }
   if (!r.faces.ok()) {
     // The face check skips degenerate tets, so its indices then count only the others.
@@ -47,8 +60,11 @@ std::vector<std::string> Problems(const MeshReport& r, int64_t outside, int64_t 
                                                            : ""));
   }
   if (outside > 0) {
-    problems.push_back(absl::StrCat(outside, " vertices outside the volume (first: vertex ",
-                                    first_outside, "; --clamp accepts them)"));
+    const Vec3& p = mesh.points[first_outside];
+    problems.push_back(absl::StrFormat(
+        "%d vertices outside the volume (first: vertex %d at (%g, %g, %g) mm; the volume spans %s "
+        "mm; --clamp accepts them)",
+        outside, first_outside, p[0], p[1], p[2], FormatBox(VolumeWorldBox(volume))));
   }
   return problems;
 }
@@ -146,7 +162,8 @@ int RunVerify(const std::vector<std::string>& args) {
   const LatticeStats lattice = SampleLattice(volume, mesh, kLatticeN, kLatticeMaxTets,
                                              /*seed=*/1, *norm_coeff, epsilon, /*clamp=*/true);
 
-  const std::vector<std::string> problems = Problems(report, clamp ? 0 : outside, first_outside);
+  const std::vector<std::string> problems =
+      Problems(report, mesh, volume, clamp ? 0 : outside, first_outside);
   const auto count = [](int64_t n) { return absl::StrCat(n); };
   std::vector<std::vector<std::string>> rows = {
       {"mesh", absl::StrCat(mesh_path, ": ", report.vertices, " vertices, ", report.tets, " tets")},

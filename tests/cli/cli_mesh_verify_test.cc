@@ -6,6 +6,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "client/io/mesh_io.h"
 #include "core/mesh_validation.h"
 #include "gtest/gtest.h"
@@ -94,8 +95,46 @@ TEST_F(CliMeshVerify, InvertedTetIsNotValid) {
   EXPECT_EQ(run.exit_code, 1);
   ASSERT_EQ(SplitLines(run.err).size(), 1u) << run.err;
   EXPECT_TRUE(absl::StrContains(run.err, dir_.File("inverted.vtu"))) << run.err;
-  EXPECT_TRUE(absl::StrContains(run.err, "1 inverted tets (first: tet 7)")) << run.err;
+  // Where it is, not only its number: its vertices and their coordinates.
+  const Tet& t = mesh.mesh.tets[7];
+  const Vec3& p = mesh.mesh.points[t[0]];
+  EXPECT_TRUE(absl::StrContains(
+      run.err, absl::StrFormat("1 inverted tets (first: tet 7: vertices %u (%g, %g, %g), %u (",
+                               t[0], p[0], p[1], p[2], t[1])))
+      << run.err;
   EXPECT_TRUE(absl::StrContains(run.out, "NOT VALID")) << run.out;
+}
+
+TEST_F(CliMeshVerify, DegenerateTetsAndOutsideVerticesAreLocated) {
+  io::MeshFile mesh = MakeMesh("grid.vtu", {"--block", "3"});
+  // A flat tet on three vertices of tet 0 and their centroid.
+  const Tet t0 = mesh.mesh.tets[0];
+  Vec3 c{};
+  for (int k = 0; k < 3; ++k) {
+    for (int a = 0; a < 3; ++a) c[a] += mesh.mesh.points[t0[k]][a] / 3.0;
+  }
+  mesh.mesh.points.push_back(c);
+  mesh.mesh.values.push_back(0.0);
+  const uint32_t flat_vertex = static_cast<uint32_t>(mesh.mesh.points.size() - 1);
+  mesh.mesh.tets.push_back({t0[0], t0[1], t0[2], flat_vertex});
+  ASSERT_TRUE(io::WriteMesh(dir_.File("flat.vtu"), mesh).ok());
+  const ProcessResult flat = Verify(dir_.File("flat.vtu"));
+  EXPECT_EQ(flat.exit_code, 1) << flat.out;
+  EXPECT_TRUE(absl::StrContains(flat.err, absl::StrCat("1 degenerate tets (first: tet ",
+                                                       mesh.mesh.tets.size() - 1, ": vertices ")))
+      << flat.err;
+
+  io::MeshFile moved = MakeMesh("grid.vtu", {"--block", "3"});
+  moved.mesh.points[5][0] += 1000.0;
+  ASSERT_TRUE(io::WriteMesh(dir_.File("moved.vtu"), moved).ok());
+  const ProcessResult out = Verify(dir_.File("moved.vtu"));
+  EXPECT_EQ(out.exit_code, 1) << out.out;
+  const Vec3& p = moved.mesh.points[5];
+  EXPECT_TRUE(absl::StrContains(out.err, absl::StrFormat("1 vertices outside the volume (first: "
+                                                         "vertex 5 at (%g, %g, %g) mm; the volume "
+                                                         "spans [",
+                                                         p[0], p[1], p[2])))
+      << out.err;
 }
 
 TEST_F(CliMeshVerify, FaceInThreeTetsIsNotValid) {
