@@ -116,12 +116,18 @@ void DrawBar(cairo_t* cr, const PixelRect& at, Colour colour, double lo, double 
   Paint(cr, image.get(), at);
   cairo_set_source_rgb(cr, 0, 0, 0);
   const double x = at.x + at.width + 4;
-  Text(cr, x, at.y + kFontSize - 1, absl::StrFormat("%.6g", hi));
-  Text(cr, x, at.y + at.height / 2.0 + kFontSize / 2 - 1, absl::StrFormat("%.6g", (lo + hi) / 2));
-  Text(cr, x, at.y + at.height, absl::StrFormat("%.6g", lo));
+  Text(cr, x, at.y + kFontSize - 1, BarLabel(hi, lo, hi));
+  Text(cr, x, at.y + at.height / 2.0 + kFontSize / 2 - 1, BarLabel((lo + hi) / 2, lo, hi));
+  Text(cr, x, at.y + at.height, BarLabel(lo, lo, hi));
 }
 
 }  // namespace
+
+std::string BarLabel(double value, double lo, double hi) {
+  const double scale = std::max(std::abs(lo), std::abs(hi));
+  if (std::abs(value) <= 1e-9 * scale) return "0";
+  return absl::StrFormat("%.6g", value);
+}
 
 FigureLayout LayoutFigure(int rows, int panel_width, int panel_height) {
   FigureLayout layout;

@@ -48,6 +48,12 @@ FigureLayout LayoutFigure(int rows, int panel_width, int panel_height);
 // is where the eye starts to see a difference.
 double DiscrepancyScale(double max_discrepancy);
 
+// A colour bar's label for `value` on a bar from `lo` to `hi`: six significant digits, and 0
+// for a value below a billionth of the bar's largest magnitude (an outside review found a
+// float32 volume's 0.5th percentile, a denormal 1.96e-44, printed as "1.96182e-44" over the
+// next panel).
+std::string BarLabel(double value, double lo, double hi);
+
 // The figure as PNG bytes (RGB, 8 bits per channel), drawn with Cairo. Errors: no rows, rows on
 // different planes, a bad option, or Cairo failing.
 absl::StatusOr<std::string> RenderSliceFigurePng(const std::vector<FigureRow>& rows,

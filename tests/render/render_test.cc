@@ -317,6 +317,16 @@ TEST(DiscrepancyScale, RoundsUpToARoundNumberAboveAFloor) {
   }
 }
 
+TEST(BarLabel, SixDigitsAndZeroForWhatIsNothingOnTheBar) {
+  EXPECT_EQ(BarLabel(1.96182e-44, 1.96182e-44, 1234.5), "0");
+  EXPECT_EQ(BarLabel(-1e-300, -1e-300, 0.02), "0");
+  EXPECT_EQ(BarLabel(617.25, 0, 1234.5), "617.25");
+  EXPECT_EQ(BarLabel(1234.5678, 0, 1234.5678), "1234.57");
+  EXPECT_EQ(BarLabel(1e-12, 1e-12, 2e-12), "1e-12");  // a bar of tiny values keeps them
+  EXPECT_EQ(BarLabel(-3, -3, 5), "-3");
+  EXPECT_EQ(BarLabel(0, 0, 0), "0");
+}
+
 TEST(DisplayRange, LeavesOutliersOutAndFallsBackToTheWholeRange) {
   const GridGeometry g = Grid({10, 10, 10}, {0, 0, 0}, {1, 1, 1});
   int n = 0;
