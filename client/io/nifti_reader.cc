@@ -89,15 +89,25 @@ absl::StatusOr<Index3> SpatialDims(const NiftiHeader& header, absl::string_view 
       dims[a - 1] = size;
     } else if (size != 1) {
       // A 4D series (fMRI, DCE or DSC perfusion) is common input: say how to take one frame.
-      return FileUnsupported(
-          path, absl::StrCat("dim[", a, "] = ", size, ": only 3D volumes are read (this is a ",
-                             rank, "D series",
-                             a == 4 ? absl::StrCat(" of ", size,
-                                                   " frames; take one first, e.g. frame k with "
-                                                   "`fslroi IN OUT k 1` or nibabel's "
-                                                   "`image.slicer[..., k]`")
-                                    : "",
-                             ")"));
+      // dim[5] is, by the NIfTI-1 standard, the values stored per voxel (a vector, tensor or
+      // displacement image, nibabel's shape (x, y, z, 1, n)): not a series, and said so.
+      std::string what;
+      if (a == 4) {
+        what = absl::StrCat("a ", rank, "D series of ", size,
+                            " frames; take one first, e.g. frame k with `fslroi IN OUT k 1` or "
+                            "nibabel's `image.slicer[..., k]`");
+      } else if (a == 5) {
+        what = absl::StrCat(size,
+                            " values per voxel (dim[5]: a vector, tensor or displacement image); "
+                            "take one component first, e.g. component c with nibabel's "
+                            "`image.dataobj[..., 0, c]`");
+      } else {
+        what = absl::StrCat("a ", rank, "D image");
+      }
+      return FileUnsupported(path, absl::StrCat("dim[", a, "] = ", size,
+                                                ": only 3D volumes of one value per voxel are "
+                                                "read (this is ",
+                                                what, ")"));
     }
   }
   return dims;

@@ -33,6 +33,7 @@ using iotest::ScratchDir;
 using iotest::SharedData;
 using iotest::WriteBytes;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 struct RealVolume {
   const char* file;
@@ -606,6 +607,14 @@ TEST(IoNiftiErrorTest, UnsupportedDatatypeAnd4DAreClearErrors) {
   EXPECT_THAT(std::string(status.message()),
               HasSubstr("4D series of 3 frames; take one first, e.g. frame k with `fslroi IN OUT "
                         "k 1`"));
+  // dim[5] holds the values per voxel (a vector image, as nibabel writes one): not a series.
+  spec.dim = {5, 2, 2, 2, 1, 3, 1, 1};
+  WriteBytes(path, NiftiHeaderBytes(spec) + std::string(96, '\0'));
+  status = ReadNifti(path).status();
+  EXPECT_THAT(std::string(status.message()),
+              HasSubstr("dim[5] = 3: only 3D volumes of one value per voxel are read (this is 3 "
+                        "values per voxel (dim[5]: a vector, tensor or displacement image)"));
+  EXPECT_THAT(std::string(status.message()), Not(HasSubstr("series")));
 }
 
 // vox_offset errors give the value the header holds (they said "-1" for every bad one), and a
