@@ -33,8 +33,8 @@ size_t ExtensionStart(const std::string& path) {
 }  // namespace
 
 bool IsVolumePath(const std::string& path) {
-  return EndsWithAny(path, {".nii", ".nii.gz", ".hdr", ".hdr.gz", ".nrrd", ".nhdr", ".mha", ".mhd",
-                            ".vti", ".pvti"});
+  return EndsWithAny(path, {".nii", ".nii.gz", ".hdr", ".hdr.gz", ".img", ".img.gz", ".nrrd",
+                            ".nhdr", ".mha", ".mhd", ".vti", ".pvti"});
 }
 
 bool IsMeshPath(const std::string& path) { return io::IsMeshPath(path); }

@@ -19,6 +19,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/string_view.h"
+#include "absl/strings/strip.h"
 #include "client/cli/command_support.h"
 #include "client/cli/commands.h"
 #include "client/cli/exit_codes.h"
@@ -425,6 +426,21 @@ int RunRefinement(const RefineSettings& s) {
         FormatBytes(v.voxel_count() * static_cast<int64_t>(VoxelSize(v.type())))));
   }
   PrintVolumeWarnings(*volume);
+  if (s.options.refine.norm_coeff.has_value()) {
+    // The service refuses these too, but its message names the mesh (or the volume) and the
+    // wire's field; the user typed --norm-coeff (an outside review, 2026-11-28).
+    const double norm = *s.options.refine.norm_coeff;
+    const std::array<double, 2> range = volume->volume.ValueRange();
+    absl::Status fits = CheckNormCoeffForRange(norm, range);
+    if (fits.ok()) fits = CheckValuePrecision(norm, range, s.options.refine.epsilon);
+    if (!fits.ok()) {
+      absl::string_view message = fits.message();
+      absl::ConsumePrefix(&message, "options.norm_coeff: ");
+      absl::ConsumePrefix(&message, "volume: ");
+      return Fail(absl::StrCat("--norm-coeff ", norm, ": ", message, " (", s.volume_path, ")"),
+                  kExitUsage);
+    }
+  }
   progress.Begin(absl::StrCat("reading mesh ", s.mesh_path));
   absl::StatusOr<io::MeshFile> mesh_file = LoadMesh(s.mesh_path, "--mesh");
   if (!mesh_file.ok()) {
@@ -686,7 +702,13 @@ int RunRefinement(const RefineSettings& s) {
                                 : WriteMeshReported(s, progress, s.output_path, files[0]);
   if (!written.ok()) return Fail(written, kExitUsage);
   const std::string series_path = s.every_iteration ? SeriesPath(s.output_path) : "";
-  if (!series_path.empty() && !series.empty()) {
+  // No iteration ran (the input met epsilon): the series is the one mesh there is, the output,
+  // so that a pipeline that opens <stem>.pvd finds it (there was no .pvd and no word, an outside
+  // review found).
+  const bool input_only = series.empty();
+  if (!series_path.empty() && input_only)
+    series.push_back({.timestep = 0.0, .file = s.output_path});
+  if (!series_path.empty()) {
     absl::Status pvd = io::WritePvd(series_path, series);
     if (!pvd.ok()) return Fail(pvd, kExitUsage);
   }
@@ -706,7 +728,10 @@ int RunRefinement(const RefineSettings& s) {
       static_cast<long long>(out_vertices), s.pvtu ? " over the pieces" : "",
       static_cast<long long>(out_tets),
       s.stats_json_path.empty() ? "" : absl::StrCat("; statistics in ", s.stats_json_path).c_str());
-  if (!series_path.empty() && !series.empty()) {
+  if (!series_path.empty() && input_only) {
+    std::printf("Wrote %s: no iteration ran, so the series is the output alone\n",
+                series_path.c_str());
+  } else if (!series_path.empty()) {
     std::printf("Wrote %s: the %zu iteration meshes as a ParaView time series\n",
                 series_path.c_str(), series.size());
   }

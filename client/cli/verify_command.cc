@@ -11,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/strip.h"
 #include "client/cli/command_support.h"
 #include "client/cli/commands.h"
 #include "client/cli/exit_codes.h"
@@ -157,7 +158,9 @@ int RunVerify(const std::vector<std::string>& args) {
   } else if (absl::Status norm = CheckNormCoeffForRange(*norm_coeff, volume.ValueRange());
              !norm.ok()) {
     // The bound refine's service applies: a smaller one printed "max inf" and "valid".
-    return Fail(absl::StrCat("--norm-coeff: ", norm.message()), kExitUsage);
+    absl::string_view message = norm.message();
+    absl::ConsumePrefix(&message, "options.norm_coeff: ");
+    return Fail(absl::StrCat("--norm-coeff ", *norm_coeff, ": ", message), kExitUsage);
   }
   const LatticeStats lattice = SampleLattice(volume, mesh, kLatticeN, kLatticeMaxTets,
                                              /*seed=*/1, *norm_coeff, epsilon, /*clamp=*/true);

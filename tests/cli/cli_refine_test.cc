@@ -272,6 +272,27 @@ TEST_F(CliRefine, EveryIterationIntoVtuWritesAParaViewSeries) {
   EXPECT_EQ(pvd.find("<DataSet", at), std::string::npos) << "only the iteration files:\n" << pvd;
 }
 
+// A run that needs no iteration still writes <stem>.pvd, its one entry the output, so that a
+// pipeline that opens the series finds it (there was no .pvd and no word, an outside review
+// found).
+TEST_F(CliRefine, EveryIterationWithNoIterationStillWritesTheSeries) {
+  const std::string out = dir_.File("done.vtu");
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.99", "--output",
+                    out, "--every-iteration", "--quiet"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ASSERT_TRUE(absl::StrContains(run.out, "Stopped after 0 iterations")) << run.out;
+  EXPECT_TRUE(absl::StrContains(
+      run.out, absl::StrCat("Wrote ", dir_.File("done.pvd"),
+                            ": no iteration ran, so the series is the output alone")))
+      << run.out;
+  const std::string pvd = ReadBytes(dir_.File("done.pvd"));
+  EXPECT_TRUE(
+      absl::StrContains(pvd, R"(<DataSet timestep="0" group="" part="0" file="done.vtu"/>)"))
+      << pvd;
+  EXPECT_FALSE(FileExists(dir_.File("done.iter01.vtu")));
+}
+
 TEST_F(CliRefine, DefaultOutputIsTheMeshNameInTheWorkingDirectory) {
   const ProcessResult run = RunTetrefine(
       {"refine", "--volume", "bump.nii", "--mesh", "grid.vtu", "--epsilon", "0.2"}, dir_.path());

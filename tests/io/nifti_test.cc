@@ -268,6 +268,33 @@ TEST(IoNiftiTest, BigEndianAndNifti2AndPairsReadTheSameVolume) {
   }
 }
 
+// A .hdr/.img pair named by its .img half reads through its header, as nibabel reads it; with
+// no header beside it, the message names the header it looked for.
+TEST(IoNiftiTest, APairNamedByItsImgHalfReadsThroughItsHeader) {
+  ScratchDir dir;
+  NiftiSpec spec;
+  spec.pair = true;
+  spec.dim = {3, 2, 3, 4, 1, 1, 1, 1};
+  std::vector<float> values(24);
+  for (size_t i = 0; i < values.size(); ++i) values[i] = static_cast<float>(i) * 1.5f;
+  WriteBytes(dir.File("pair.hdr"), NiftiHeaderBytes(spec));
+  WriteBytes(dir.File("pair.img"), FloatSamples(values, false));
+  absl::StatusOr<VolumeFile> by_header = ReadVolume(dir.File("pair.hdr"));
+  absl::StatusOr<VolumeFile> by_image = ReadVolume(dir.File("pair.img"));
+  ASSERT_TRUE(by_header.ok()) << by_header.status();
+  ASSERT_TRUE(by_image.ok()) << by_image.status();
+  EXPECT_EQ(by_image->volume.grid().dims, by_header->volume.grid().dims);
+  for (int64_t i = 0; i < 24; ++i) {
+    EXPECT_EQ(by_image->volume.At(i % 2, (i / 2) % 3, i / 6), values[i]);
+  }
+  WriteBytes(dir.File("lone.img"), FloatSamples(values, false));
+  absl::StatusOr<VolumeFile> lone = ReadVolume(dir.File("lone.img"));
+  ASSERT_FALSE(lone.ok());
+  EXPECT_THAT(std::string(lone.status().message()),
+              HasSubstr("an .img file holds only samples, and its header " + dir.File("lone.hdr") +
+                        " is missing"));
+}
+
 TEST(IoNiftiTest, AppliesSlopeAndIntercept) {
   ScratchDir dir;
   NiftiSpec spec;
