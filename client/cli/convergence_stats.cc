@@ -45,6 +45,24 @@ absl::StatusOr<std::string> OptionalString(const Json& object, const std::string
   return it->get<std::string>();
 }
 
+// OK when `key` is absent, null or a number >= 0; an error naming `field` for a negative one.
+absl::Status CheckNonNegative(const Json& object, const std::string& key,
+                              const std::string& field) {
+  auto it = object.find(key);
+  if (it == object.end() || !it->is_number() || it->get<double>() >= 0.0) {
+    return absl::OkStatus();
+  }
+  return FieldError(field, absl::StrCat("must be >= 0, got ", it->get<double>()));
+}
+
+bool IsStopReason(const std::string& name) {
+  for (const char* known : {"converged", "max_iterations", "tet_budget", "cancelled",
+                            "quality_floor", "min_edge_length"}) {
+    if (name == known) return true;
+  }
+  return false;
+}
+
 absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
   if (!root.is_object()) return absl::InvalidArgumentError("expected a JSON object at the top");
   ConvergenceRun run;
@@ -77,6 +95,33 @@ absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
   absl::StatusOr<std::string> stop = OptionalString(root, "stop_reason", "stop_reason");
   if (!stop.ok()) return stop.status();
   run.stop_reason = *stop;
+  if (!run.stop_reason.empty() && !IsStopReason(run.stop_reason)) {
+    return FieldError("stop_reason", absl::StrCat("\"", run.stop_reason,
+                                                  "\" is not one refine writes (converged, "
+                                                  "max_iterations, tet_budget, cancelled, "
+                                                  "quality_floor, min_edge_length)"));
+  }
+  if (absl::Status s = CheckNonNegative(root, "final_mean_error", "final_mean_error"); !s.ok()) {
+    return s;
+  }
+  if (absl::Status s = CheckNonNegative(root, "certified_max_error", "certified_max_error");
+      !s.ok()) {
+    return s;
+  }
+  if (auto certified = root.find("certified_max_error");
+      certified != root.end() && certified->is_number()) {
+    if (!run.certify) {
+      return FieldError("certified_max_error", "set, but options.certify is not true");
+    }
+    run.certified = true;
+  }
+  // The run's own normalisation, when given, is the one the top level reports.
+  if (auto top = root.find("norm_coeff"); run.norm_coeff.has_value() && top != root.end() &&
+                                          top->is_number() &&
+                                          top->get<double>() != *run.norm_coeff) {
+    return FieldError("norm_coeff", absl::StrCat(top->get<double>(), " is not options.norm_coeff ",
+                                                 *run.norm_coeff));
+  }
 
   auto iterations = root.find("iterations");
   if (iterations == root.end()) return FieldError("iterations", "missing");
@@ -99,8 +144,18 @@ absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
     if (i == 0) {
       absl::StatusOr<int64_t> initial = Count(it, "initial_tets", at + ".initial_tets");
       if (!initial.ok()) return initial.status();
+      if (auto input = root.find("input");
+          input != root.end() && input->is_object() && input->contains("tets")) {
+        absl::StatusOr<int64_t> input_tets = Count(*input, "tets", "input.tets");
+        if (!input_tets.ok()) return input_tets.status();
+        if (*input_tets != *initial) {
+          return FieldError(at + ".initial_tets",
+                            absl::StrCat(*initial, " is not the input's ", *input_tets, " tets"));
+        }
+      }
       run.tets.push_back(*initial);
     }
+    if (absl::Status s = CheckNonNegative(it, "mean_error", at + ".mean_error"); !s.ok()) return s;
     // The checks below refuse what no run of refine writes (an outside review, 2026-11-28,
     // plotted an error of -1 as a silent gap and reversed iterations as "tets 29291 -> 5175").
     if (auto number = it.find("iteration"); number != it.end()) {

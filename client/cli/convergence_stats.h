@@ -17,6 +17,8 @@ namespace tetrefine::cli {
 struct ConvergenceRun {
   std::string scheme;    // options.scheme; empty when absent
   bool certify = false;  // options.certify; false when absent
+  // certified_max_error is a number: the run was asked to certify and did (certify converged).
+  bool certified = false;
   // options.norm_coeff: what the errors are relative to when the run was given one; unset (null
   // or absent) means the volume's value range.
   std::optional<double> norm_coeff;

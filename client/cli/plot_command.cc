@@ -58,11 +58,13 @@ std::string FileName(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-// What ran: the scheme, "certified" with --certify (an outside review found a certified run
-// labelled as the default's), or "" when the file does not say.
+// What ran: the scheme, "certified" for a --certify run that was (certified_max_error set),
+// "certify, not certified" for one that stopped first (both found by outside reviews: the first
+// labelled as the default's, the second as certified), or "" when the file does not say.
 std::string Method(const ConvergenceRun& run) {
   if (run.scheme.empty()) return "";
-  return run.certify ? absl::StrCat(run.scheme, ", certified") : run.scheme;
+  if (!run.certify) return run.scheme;
+  return absl::StrCat(run.scheme, run.certified ? ", certified" : ", certify, not certified");
 }
 
 // The run's name in the legend: --label, else its method (with the file name when another run

@@ -133,6 +133,24 @@ TEST(CliPlotStats, ErrorsNameTheField) {
        "options.certify: expected true or false, got \"yes\""},
       {R"({"options": {"epsilon": 0.1, "norm_coeff": 0}, "iterations": []})",
        "options.norm_coeff: expected a number > 0 or null, got 0"},
+      {R"({"options": {"epsilon": 0.1}, "input": {"tets": 1782}, "iterations": [{
+          "initial_tets": 1000, "final_tets": 8, "max_error": 0.5}]})",
+       "iterations[0].initial_tets: 1000 is not the input's 1782 tets"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [{"initial_tets": 1, "final_tets": 8,
+          "max_error": 0.5, "mean_error": -0.1}]})",
+       "iterations[0].mean_error: must be >= 0, got -0.1"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [], "input": {"tets": 5},
+          "final_mean_error": -1})",
+       "final_mean_error: must be >= 0, got -1"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [], "input": {"tets": 5},
+          "stop_reason": "banana"})",
+       "stop_reason: \"banana\" is not one refine writes"},
+      {R"({"options": {"epsilon": 0.1}, "iterations": [], "input": {"tets": 5},
+          "certified_max_error": 0.05})",
+       "certified_max_error: set, but options.certify is not true"},
+      {R"({"options": {"epsilon": 0.1, "norm_coeff": 5000}, "norm_coeff": 31003,
+          "iterations": [], "input": {"tets": 5}})",
+       "norm_coeff: 31003 is not options.norm_coeff 5000"},
   };
   for (const auto& [json, expected] : cases) {
     absl::StatusOr<ConvergenceRun> run = ParseConvergenceRun(json);
@@ -150,6 +168,10 @@ TEST(CliPlot, TheLegendAndAxisSayCertifiedAndTheNormCoefficient) {
   ScratchDir dir;
   std::string certified = RunA();
   certified.replace(certified.find(R"("scheme": ")"), 0, R"("certify": true, )");
+  // A certify run that stopped before it was certified has certified_max_error null.
+  std::string uncertified = certified;
+  certified.replace(certified.find(R"("final_max_error")"), 0, R"("certified_max_error": 0.1, )");
+  WriteBytes(dir.File("u.json"), uncertified);
   std::string normed = RunA();
   normed.replace(normed.find(R"("scheme": ")"), 0, R"("norm_coeff": 3000, )");
   WriteBytes(dir.File("a.json"), RunA());
@@ -158,6 +180,7 @@ TEST(CliPlot, TheLegendAndAxisSayCertifiedAndTheNormCoefficient) {
   absl::StatusOr<ConvergenceRun> run = ParseConvergenceRun(certified);
   ASSERT_TRUE(run.ok()) << run.status();
   EXPECT_TRUE(run->certify);
+  EXPECT_TRUE(run->certified);
   EXPECT_FALSE(run->norm_coeff.has_value());
   run = ParseConvergenceRun(normed);
   ASSERT_TRUE(run.ok()) << run.status();
@@ -165,12 +188,15 @@ TEST(CliPlot, TheLegendAndAxisSayCertifiedAndTheNormCoefficient) {
 
   const ProcessResult two =
       RunTetrefine({"plot", "--stats-json", dir.File("a.json"), "--stats-json", dir.File("c.json"),
-                    "--output", dir.File("two.png")});
+                    "--stats-json", dir.File("u.json"), "--output", dir.File("two.png")});
   ASSERT_EQ(two.exit_code, 0) << two.err;
   EXPECT_TRUE(absl::StrContains(two.out, "longest-edge (" + dir.File("a.json") + "): 3 iterations"))
       << two.out;
   EXPECT_TRUE(absl::StrContains(
       two.out, "longest-edge, certified (" + dir.File("c.json") + "): 3 iterations"))
+      << two.out;
+  EXPECT_TRUE(absl::StrContains(
+      two.out, "longest-edge, certify, not certified (" + dir.File("u.json") + "): 3 iterations"))
       << two.out;
   // Two of one method: the legend tells them apart by file, stdout names each file once.
   const ProcessResult same =
