@@ -1,13 +1,16 @@
 #include "client/cli/command_support.h"
 
+#include <array>
 #include <cstdio>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/strip.h"
 #include "client/cli/exit_codes.h"
 #include "client/cli/file_kind.h"
 #include "client/io/mesh_io.h"
 #include "client/io/read_volume.h"
+#include "core/refine_options.h"
 
 namespace tetrefine::cli {
 
@@ -43,6 +46,26 @@ absl::StatusOr<io::MeshFile> LoadMesh(const std::string& path, const std::string
                      " takes a mesh (.vtu, .pvtu, .vtk, .msh, .mesh, .meshb, .ele, .inp)"));
   }
   return io::ReadMesh(path);
+}
+
+absl::Status CheckNormCoeffFlag(double norm, const Volume& volume, double epsilon,
+                                const std::string& volume_path) {
+  const std::array<double, 2> range = volume.ValueRange();
+  absl::Status fits = CheckNormCoeffForRange(norm, range);
+  if (fits.ok()) fits = CheckValuePrecision(norm, range, epsilon);
+  if (fits.ok()) return fits;
+  absl::string_view message = fits.message();
+  absl::ConsumePrefix(&message, "options.norm_coeff: ");
+  absl::ConsumePrefix(&message, "volume: ");
+  // The core's remedy is for a volume's own range; here the flag chose the normalisation.
+  const size_t remedy = message.find("; subtract an offset");
+  return absl::InvalidArgumentError(
+      absl::StrCat("--norm-coeff ", norm, ": ", message.substr(0, remedy),
+                   remedy == absl::string_view::npos
+                       ? ""
+                       : absl::StrCat("; give a larger --norm-coeff, or none for the value range (",
+                                      range[1] - range[0], ")"),
+                   " (", volume_path, ")"));
 }
 
 void PrintVolumeWarnings(const io::VolumeFile& volume) {

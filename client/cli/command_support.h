@@ -11,6 +11,7 @@
 #include "client/cli/arg_parser.h"
 #include "client/io/mesh_file.h"
 #include "client/io/volume_file.h"
+#include "core/volume.h"
 
 namespace tetrefine::cli {
 
@@ -26,5 +27,13 @@ absl::StatusOr<io::MeshFile> LoadMesh(const std::string& path, const std::string
 
 // The volume's reading warnings, one stderr line each.
 void PrintVolumeWarnings(const io::VolumeFile& volume);
+
+// OK when --norm-coeff `norm` suits `volume` at `epsilon` as the service checks it
+// (CheckNormCoeffForRange, CheckValuePrecision); else INVALID_ARGUMENT "--norm-coeff X: ...
+// (volume_path)", with the remedy a user who gave the flag has: a larger --norm-coeff or none.
+// refine and verify both check it (outside reviews: refine's refusal named the mesh and the
+// wire's field, and verify printed a 200-digit discrepancy and "valid").
+absl::Status CheckNormCoeffFlag(double norm, const Volume& volume, double epsilon,
+                                const std::string& volume_path);
 
 }  // namespace tetrefine::cli

@@ -148,7 +148,7 @@ int MeshInfo(const std::string& path) {
   }
   if (file->ghost_cells_skipped > 0) {
     rows.push_back({"ghost cells", absl::StrCat(file->ghost_cells_skipped,
-                                                " skipped (vtkGhostType: copies of another "
+                                                " skipped (VTK ghost cells: copies of another "
                                                 "piece's cells)")});
   }
   rows.push_back({"frame", file->frame == io::MeshFrame::kLps   ? "LPS (SPACE=LPS tag), read as RAS"

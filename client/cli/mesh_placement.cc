@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 
 namespace tetrefine::cli {
 
@@ -67,6 +68,19 @@ Box VolumeWorldBox(const Volume& volume) {
 std::string FormatBox(const Box& box) {
   return absl::StrCat("[", box[0][0], ", ", box[1][0], "] x [", box[0][1], ", ", box[1][1], "] x [",
                       box[0][2], ", ", box[1][2], "]");
+}
+
+std::string WhereOutside(const Volume& volume, const Vec3& p) {
+  const std::string at = absl::StrFormat("at (%g, %g, %g) mm", p[0], p[1], p[2]);
+  if (volume.axis_aligned()) {
+    return absl::StrCat(at, "; the volume spans ", FormatBox(VolumeWorldBox(volume)), " mm");
+  }
+  const Vec3 u = volume.ContinuousIndex(p);
+  const Index3& d = volume.grid().dims;
+  return absl::StrFormat(
+      "%s, grid index (%g, %g, %g); the volume's oblique grid spans index [0, %d] x [0, %d] x "
+      "[0, %d]",
+      at, u[0], u[1], u[2], d[0] - 1, d[1] - 1, d[2] - 1);
 }
 
 int64_t FirstVertexOutside(const Volume& volume, const Mesh& mesh) {

@@ -22,6 +22,13 @@ std::string FormatBox(const Box& box);
 // Index of the first vertex outside the volume's sampled box (with the core's tolerance), or -1.
 int64_t FirstVertexOutside(const Volume& volume, const Mesh& mesh);
 
+// Where world point `p`, outside the volume, is, for messages: "at (x, y, z) mm; the volume
+// spans [..] x [..] x [..] mm", and for an oblique volume, whose world bounding box can hold
+// points outside its grid, "at (x, y, z) mm, grid index (i, j, k); the volume's oblique grid
+// spans index [0, nx - 1] x [0, ny - 1] x [0, nz - 1]" (an outside review found a vertex said
+// to lie outside a box that held it).
+std::string WhereOutside(const Volume& volume, const Vec3& p);
+
 // --fit-mesh-to-volume: scales each axis and translates so that the bounding box of the vertices
 // the tets use (all vertices without tets; an unused vertex outside it is clamped onto it) becomes
 // the volume's world box shrunk by a margin of one voxel on every side (a quarter of the box when

@@ -429,16 +429,10 @@ int RunRefinement(const RefineSettings& s) {
   if (s.options.refine.norm_coeff.has_value()) {
     // The service refuses these too, but its message names the mesh (or the volume) and the
     // wire's field; the user typed --norm-coeff (an outside review, 2026-11-28).
-    const double norm = *s.options.refine.norm_coeff;
-    const std::array<double, 2> range = volume->volume.ValueRange();
-    absl::Status fits = CheckNormCoeffForRange(norm, range);
-    if (fits.ok()) fits = CheckValuePrecision(norm, range, s.options.refine.epsilon);
-    if (!fits.ok()) {
-      absl::string_view message = fits.message();
-      absl::ConsumePrefix(&message, "options.norm_coeff: ");
-      absl::ConsumePrefix(&message, "volume: ");
-      return Fail(absl::StrCat("--norm-coeff ", norm, ": ", message, " (", s.volume_path, ")"),
-                  kExitUsage);
+    if (absl::Status fits = CheckNormCoeffFlag(*s.options.refine.norm_coeff, volume->volume,
+                                               s.options.refine.epsilon, s.volume_path);
+        !fits.ok()) {
+      return Fail(fits, kExitUsage);
     }
   }
   progress.Begin(absl::StrCat("reading mesh ", s.mesh_path));
@@ -453,8 +447,8 @@ int RunRefinement(const RefineSettings& s) {
   if (mesh_file->ghost_cells_skipped > 0) {
     progress.Line(absl::StrCat(s.mesh_path, ": skipped ",
                                FormatCount(mesh_file->ghost_cells_skipped),
-                               " ghost cells (vtkGhostType: copies of another piece's cells, which "
-                               "ParaView drops too)"));
+                               " ghost cells (copies of another piece's cells, as VTK flags them; "
+                               "ParaView drops them too)"));
   }
   if (!mesh_file->dropped_arrays.empty()) {
     // The refined file has the sampled values, iteration, quality and the region labels; other

@@ -61,11 +61,9 @@ std::vector<std::string> Problems(const MeshReport& r, const Mesh& mesh, const V
                                                            : ""));
   }
   if (outside > 0) {
-    const Vec3& p = mesh.points[first_outside];
     problems.push_back(absl::StrFormat(
-        "%d vertices outside the volume (first: vertex %d at (%g, %g, %g) mm; the volume spans %s "
-        "mm; --clamp accepts them)",
-        outside, first_outside, p[0], p[1], p[2], FormatBox(VolumeWorldBox(volume))));
+        "%d vertices outside the volume (first: vertex %d %s; --clamp accepts them)", outside,
+        first_outside, WhereOutside(volume, mesh.points[first_outside])));
   }
   return problems;
 }
@@ -155,12 +153,10 @@ int RunVerify(const std::vector<std::string>& args) {
   if (!norm_coeff.has_value()) {
     const std::array<double, 2> range = volume.ValueRange();
     norm_coeff = range[1] > range[0] ? range[1] - range[0] : 1.0;
-  } else if (absl::Status norm = CheckNormCoeffForRange(*norm_coeff, volume.ValueRange());
+  } else if (absl::Status norm = CheckNormCoeffFlag(*norm_coeff, volume, epsilon, volume_path);
              !norm.ok()) {
-    // The bound refine's service applies: a smaller one printed "max inf" and "valid".
-    absl::string_view message = norm.message();
-    absl::ConsumePrefix(&message, "options.norm_coeff: ");
-    return Fail(absl::StrCat("--norm-coeff ", *norm_coeff, ": ", message), kExitUsage);
+    // The bounds refine's service applies: a smaller one printed "max inf" and "valid".
+    return Fail(norm, kExitUsage);
   }
   const LatticeStats lattice = SampleLattice(volume, mesh, kLatticeN, kLatticeMaxTets,
                                              /*seed=*/1, *norm_coeff, epsilon, /*clamp=*/true);

@@ -133,6 +133,18 @@ absl::StatusOr<PieceSamples> ReadSamples(const VtkXmlFile& xml, VtuArrayReader& 
   }
   PieceSamples out;
   const absl::string_view format = array.attribute("format").value();
+  if ((format.empty() || format == "ascii") &&
+      (*type == VtkScalar::kInt64 || *type == VtkScalar::kUInt64)) {
+    // Text 64-bit integers are read exactly and widen as the binary ones do: read as doubles,
+    // -9007199254740993 became -9007199254740992 without a word (an outside review, 2026-11-28),
+    // where the same samples stored in binary are refused.
+    absl::StatusOr<std::vector<int64_t>> values = arrays.Int64s(array, count);
+    if (!values.ok()) return values.status();
+    out.type = StoredType::kInt64;
+    out.data.reserve(count * sizeof(int64_t));
+    for (int64_t v : *values) AppendLittle(out.data, v);
+    return out;
+  }
   if (format.empty() || format == "ascii") {
     absl::StatusOr<std::vector<double>> values = arrays.Doubles(array, count);
     if (!values.ok()) return values.status();

@@ -380,6 +380,13 @@ TEST_F(CliMeshVerify, NormCoeffTooSmallForTheVolumeIsRefusedAsRefineRefusesIt) {
   EXPECT_EQ(rounding.exit_code, 2) << rounding.err;
   EXPECT_TRUE(absl::StrContains(rounding.err, "tetrefine: --norm-coeff 1e-270: values reach "))
       << rounding.err;
+  EXPECT_TRUE(absl::StrContains(rounding.err, "; give a larger --norm-coeff, or none for the "))
+      << rounding.err;
+  // verify applies the same bound: it printed a 200-digit discrepancy and "valid".
+  const ProcessResult verify = Verify(dir_.File("grid.vtu"), {"--norm-coeff", "1e-270"});
+  EXPECT_EQ(verify.exit_code, 2) << verify.out;
+  EXPECT_TRUE(absl::StrContains(verify.err, "tetrefine: --norm-coeff 1e-270: values reach "))
+      << verify.err;
 }
 
 }  // namespace

@@ -373,6 +373,26 @@ TEST(CliMeshPlacement, FitFillsTheBoxLessAVoxelAndKeepsOrientation) {
   EXPECT_EQ(stray.points.back(), want[1]);
 }
 
+// A point outside an oblique grid can lie inside the grid's world bounding box: the message then
+// gives its grid index against the grid's, not a box that holds it (an outside review, 2026-11-28).
+TEST(CliMeshPlacement, WhereOutsideNamesTheGridOfAnObliqueVolume) {
+  const Volume aligned = clitest::BumpVolume({9, 11, 6}, {-4.0, 10.0, 0.0}, {1.0, 2.0, 0.5});
+  EXPECT_EQ(WhereOutside(aligned, {10, 11, 1}),
+            "at (10, 11, 1) mm; the volume spans [-4, 4] x [10, 30] x [0, 2.5] mm");
+  GridGeometry grid{{5, 5, 3}, {0, 0, 0}, {1, 1, 1}};
+  grid.direction = {0.6, -0.8, 0.0, 0.8, 0.6, 0.0, 0.0, 0.0, 1.0};  // a rotation about z
+  const Volume oblique = *Volume::FromDoubles(grid, std::vector<double>(75, 1.0));
+  const Box bounds = VolumeWorldBox(oblique);
+  const Vec3 corner = {bounds[0][0] + 0.1, bounds[0][1] + 0.1, 1.0};  // in the box, off the grid
+  ASSERT_FALSE(oblique.Contains(oblique.ContinuousIndex(corner)));
+  const std::string where = WhereOutside(oblique, corner);
+  EXPECT_TRUE(absl::StrContains(where,
+                                "; the volume's oblique grid spans index [0, 4] x [0, 4] x "
+                                "[0, 2]"))
+      << where;
+  EXPECT_TRUE(absl::StrContains(where, ", grid index (")) << where;
+}
+
 TEST(CliMeshReport, FindsDuplicatesInvertedTetsAndOverusedFaces) {
   const Mesh good = testing::FiveTetMesh({0, 0, 0}, {1, 1, 1}, {2, 1, 1});
   const MeshReport ok = AnalyzeMesh(good);

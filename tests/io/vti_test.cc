@@ -289,6 +289,30 @@ TEST(IoVtiTest, WideIntegerTypesReadExactlyOrAreRefused) {
   }
 }
 
+// Text Int64 samples widen as binary ones do: read through doubles, -2^53 - 1 became -2^53 and
+// the image was taken where the same samples stored in binary are refused (an outside review,
+// 2026-11-28).
+TEST(IoVtiTest, AsciiInt64SamplesWidenAsBinaryOnes) {
+  ScratchDir dir;
+  const std::string path = dir.File("ascii.vti");
+  int cases = 0;
+  for (const iotest::WideningCase& c : iotest::WideningCases()) {
+    if (c.stored != StoredType::kInt64) continue;
+    SCOPED_TRACE(c.label);
+    ++cases;
+    WriteBytes(path,
+               absl::StrCat("<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" "
+                            "version=\"1.0\">\n<ImageData WholeExtent=\"0 1 0 1 0 1\" "
+                            "Origin=\"0 0 0\" Spacing=\"1 1 1\">\n<Piece Extent=\"0 1 0 1 "
+                            "0 1\">\n<PointData Scalars=\"v\">\n<DataArray type=\"Int64\" "
+                            "Name=\"v\" format=\"ascii\">",
+                            iotest::WideningText(c),
+                            "</DataArray>\n</PointData>\n</Piece>\n</ImageData>\n</VTKFile>\n"));
+    iotest::ExpectWidened(c, ReadVolume(path), path);
+  }
+  EXPECT_GE(cases, 2);
+}
+
 // VTK 9 (python3-vtk9) writes one image in every storage and type; VTK's own probe (trilinear
 // inside each voxel) gives the reference values at points inside the image.
 constexpr char kVtkScript[] = R"PY(

@@ -9,6 +9,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "client/io/read_volume.h"
 #include "client/render/colormap.h"
 #include "client/render/display_range.h"
@@ -114,6 +115,27 @@ TEST(CliSlice, ALinearVolumeGivesAZeroDiscrepancyPanelWhateverTheFilesValues) {
     }
   }
   EXPECT_TRUE(absl::StrContains(run.out, "discrepancy on the plane max 0.000000")) << run.out;
+}
+
+// A value array written with fewer digits (VTK's legacy ASCII writer keeps 6) is the volume's
+// samples all the same: no warning (an outside review saw one for 1.6e-6 of the range).
+TEST(CliSlice, ValuesRoundedToSixDigitsAreNotADifference) {
+  ScratchDir dir;
+  const GridGeometry grid{{9, 9, 9}, {0, 0, 0}, {1, 1, 1}};
+  WriteVolume(dir.File("v.nii"), testing::AnalyticVolume(grid, [](const Vec3& p) {
+                return 3.0e7 + 1.2345678 * p[0] + 0.5 * p[1];
+              }));
+  Mesh mesh = testing::FiveTetMesh({0, 0, 0}, {8, 8, 8}, {2, 2, 2});
+  mesh.values.clear();
+  for (const Vec3& p : mesh.points) {
+    mesh.values.push_back(
+        std::stod(absl::StrFormat("%.6g", 3.0e7 + 1.2345678 * p[0] + 0.5 * p[1])));
+  }
+  WriteMeshFile(dir.File("six.vtu"), mesh);
+  const ProcessResult run = RunTetrefine({"slice", "--volume", dir.File("v.nii"), "--mesh",
+                                          dir.File("six.vtu"), "--output", dir.File("f.png")});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.err, "");
 }
 
 // A mesh outside the volume is named, with where it is and where the volume is; a plane that
