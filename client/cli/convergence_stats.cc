@@ -126,16 +126,22 @@ absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
   auto iterations = root.find("iterations");
   if (iterations == root.end()) return FieldError("iterations", "missing");
   if (!iterations->is_array()) return FieldError("iterations", "expected an array");
+  // input.tets: the first point when no iteration ran, else what the first one starts from.
+  auto input = root.find("input");
+  const bool has_input = input != root.end() && input->is_object();
+  std::optional<int64_t> input_tets;
+  if (has_input && (iterations->empty() || input->contains("tets"))) {
+    absl::StatusOr<int64_t> tets = Count(*input, "tets", "input.tets");
+    if (!tets.ok()) return tets.status();
+    input_tets = *tets;
+  }
   if (iterations->empty()) {
     // A run that met epsilon (or its budget) before its first iteration: the input mesh is the
     // result, one point at iteration 0. A pipeline plotting every run must not fail on it.
-    auto input = root.find("input");
-    if (input == root.end() || !input->is_object()) {
+    if (!has_input) {
       return FieldError("input", "missing: with no iteration, the plot needs input.tets");
     }
-    absl::StatusOr<int64_t> tets = Count(*input, "tets", "input.tets");
-    if (!tets.ok()) return tets.status();
-    run.tets.push_back(*tets);
+    run.tets.push_back(*input_tets);
   }
   for (size_t i = 0; i < iterations->size(); ++i) {
     const Json& it = (*iterations)[i];
@@ -144,14 +150,9 @@ absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
     if (i == 0) {
       absl::StatusOr<int64_t> initial = Count(it, "initial_tets", at + ".initial_tets");
       if (!initial.ok()) return initial.status();
-      if (auto input = root.find("input");
-          input != root.end() && input->is_object() && input->contains("tets")) {
-        absl::StatusOr<int64_t> input_tets = Count(*input, "tets", "input.tets");
-        if (!input_tets.ok()) return input_tets.status();
-        if (*input_tets != *initial) {
-          return FieldError(at + ".initial_tets",
-                            absl::StrCat(*initial, " is not the input's ", *input_tets, " tets"));
-        }
+      if (input_tets.has_value() && *input_tets != *initial) {
+        return FieldError(at + ".initial_tets",
+                          absl::StrCat(*initial, " is not the input's ", *input_tets, " tets"));
       }
       run.tets.push_back(*initial);
     }

@@ -1,6 +1,7 @@
 // tetrefine plot: the convergence of one or more refinements (the JSON of refine --stats-json)
 // as a picture: the largest edge-midpoint error and the tets per iteration, side by side.
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -88,22 +89,29 @@ std::vector<std::string> Names(const PlotSettings& s, const std::vector<Converge
   return names;
 }
 
+// Whether every run's errors are relative to the same norm (all given the same --norm-coeff,
+// or none given one).
+bool OneNorm(const std::vector<ConvergenceRun>& runs) {
+  return std::all_of(runs.begin(), runs.end(), [&](const ConvergenceRun& run) {
+    return run.norm_coeff == runs.front().norm_coeff;
+  });
+}
+
 // The error axis's title: relative to the value range, to the one norm every run was given, or
 // to each run's own (said in the legend: RelativeTo).
 std::string ErrorAxis(const std::vector<ConvergenceRun>& runs) {
-  std::optional<double> first = runs.front().norm_coeff;
-  bool same = true;
-  for (const ConvergenceRun& run : runs) same = same && run.norm_coeff == first;
-  if (!same) return "largest edge-midpoint error (relative to each run's norm, in the legend)";
-  if (!first.has_value()) return "largest edge-midpoint error (relative to the value range)";
-  return absl::StrFormat("largest edge-midpoint error (relative to --norm-coeff %g)", *first);
+  if (!OneNorm(runs)) {
+    return "largest edge-midpoint error (relative to each run's norm, in the legend)";
+  }
+  const std::optional<double> norm = runs.front().norm_coeff;
+  if (!norm.has_value()) return "largest edge-midpoint error (relative to the value range)";
+  return absl::StrFormat("largest edge-midpoint error (relative to --norm-coeff %g)", *norm);
 }
 
-// ", errors relative to X" for a run given --norm-coeff X among runs that differ in it.
-std::string RelativeTo(const ConvergenceRun& run, const std::vector<ConvergenceRun>& runs) {
-  bool same = true;
-  for (const ConvergenceRun& other : runs) same = same && other.norm_coeff == run.norm_coeff;
-  if (same) return "";
+// ", errors relative to X" for a run given --norm-coeff X when the runs' norms differ
+// (one_norm false; the axis names a shared one).
+std::string RelativeTo(const ConvergenceRun& run, bool one_norm) {
+  if (one_norm) return "";
   return run.norm_coeff.has_value() ? absl::StrFormat(", errors relative to %g", *run.norm_coeff)
                                     : ", errors relative to the value range";
 }
@@ -172,6 +180,7 @@ int RunPlot(const std::vector<std::string>& args) {
   options.height = s.height;
   options.title = "Convergence: largest edge-midpoint error and tets per iteration";
   options.error_axis = ErrorAxis(runs);
+  const bool one_norm = OneNorm(runs);
   for (size_t i = 0; i < runs.size(); ++i) {
     const ConvergenceRun& run = runs[i];
     render::ConvergenceSeries one;
@@ -179,7 +188,7 @@ int RunPlot(const std::vector<std::string>& args) {
         names[i], ": ", run.stop_reason.empty() ? "stop reason unknown" : run.stop_reason, ", ",
         run.tets.size() - 1, run.tets.size() == 2 ? " iteration, " : " iterations, ",
         run.tets.front(), " -> ", run.tets.back(), " tets, epsilon ", run.epsilon,
-        RelativeTo(run, runs));
+        RelativeTo(run, one_norm));
     one.error = run.max_error;
     one.tets.assign(run.tets.begin(), run.tets.end());
     series.push_back(std::move(one));

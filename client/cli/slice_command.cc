@@ -74,10 +74,12 @@ std::optional<std::string> DescribeValueMismatch(const std::vector<double>& file
 // outside the volume (first: vertex i at (x, y, z) mm; the volume spans [..] x [..] x [..] mm)".
 // nullopt when none does.
 std::optional<std::string> DescribeOutsideVertices(const Volume& volume, const Mesh& mesh) {
-  const int64_t first = FirstVertexOutside(volume, mesh);
-  if (first < 0) return std::nullopt;
-  int64_t outside = 0;
-  for (const Vec3& p : mesh.points) outside += !volume.Contains(volume.ContinuousIndex(p));
+  int64_t outside = 0, first = -1;
+  for (size_t i = 0; i < mesh.points.size(); ++i) {
+    if (volume.Contains(volume.ContinuousIndex(mesh.points[i]))) continue;
+    if (outside++ == 0) first = static_cast<int64_t>(i);
+  }
+  if (outside == 0) return std::nullopt;
   return absl::StrFormat("%d of %d vertices lie outside the volume (first: vertex %d %s)", outside,
                          mesh.points.size(), first, WhereOutside(volume, mesh.points[first]));
 }
