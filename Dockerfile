@@ -32,7 +32,7 @@ RUN apt-get update \
       libgrpc++1.51 libgrpc29 libprotobuf32 libabsl20220623 libc-ares2 libre2-9 libssl3 \
       libtbb12 libspdlog1.10 libfmt9 zlib1g libpugixml1v5 liblzma5 liblz4-1 libdeflate0 libisal2 \
       libprometheus-cpp-core1.0 libprometheus-cpp-pull1.0 libcivetweb1 \
-      libstdc++6 libgcc-s1 ca-certificates \
+      libstdc++6 libgcc-s1 libtcmalloc-minimal4 ca-certificates \
       libcairo2 libpixman-1-0 libfontconfig1 libfreetype6 libpng16-16 libexpat1 libbrotli1 \
       libxcb1 libxcb-render0 libxcb-shm0 libxrender1 libx11-6 libxext6 libxau6 libxdmcp6 \
       libbsd0 libmd0 \

@@ -10,6 +10,8 @@ packages=(
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libabsl-dev libspdlog-dev libtbb-dev zlib1g-dev libpugixml-dev liblzma-dev liblz4-dev libdeflate-dev libisal-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # The programs' allocator, tcmalloc (cmake/FastAllocator.cmake says why).
+  libgoogle-perftools-dev
   prometheus-cpp-dev libssl-dev openssl clang-format
   python3 python3-grpcio python3-numpy python3-meshio python3-yaml
   # The Python package (python/) and its tests: pip install --no-build-isolation in a venv
