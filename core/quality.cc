@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -58,6 +59,23 @@ void SortLex4(std::array<Vec3, 4>& c) {
 
 }  // namespace
 
+namespace quality_internal {
+
+// An estimate from the bits (the exponent divided by 3, within a few percent) and two Halley
+// steps, each of which about triples the correct digits. tests/core/quality_test.cc measures the
+// error against long double's cbrtl over every exponent residue.
+double FastCbrt(double x) {
+  const uint64_t bits = std::bit_cast<uint64_t>(x);
+  double y = std::bit_cast<double>(bits / 3 + 0x2a9f7893782da1ceULL);
+  for (int step = 0; step < 2; ++step) {
+    const double y3 = y * y * y;
+    y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
+  }
+  return y;
+}
+
+}  // namespace quality_internal
+
 double MeanRatio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   return MeanRatioWithVolume6(a, b, c, d, SignedVolume6(a, b, c, d));
 }
@@ -71,9 +89,60 @@ MeanRatioParts MeanRatioPartsOf(const Vec3& a, const Vec3& b, const Vec3& c, con
   return PartsWithVolume6(a, b, c, d, SignedVolume6(a, b, c, d));
 }
 
+MeanRatioParts MeanRatioPartsWithVolume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                                         double volume6) {
+  return PartsWithVolume6(a, b, c, d, volume6);
+}
+
 double MeanRatioOf(const MeanRatioParts& parts) {
   if (parts.sum_l2 <= 0.0) return 0.0;
   return 12.0 * std::cbrt(9.0 * parts.volume * parts.volume) / parts.sum_l2;
+}
+
+// Every tet of a result gets its quality as a float, and std::cbrt (with the frexp and scalbn it
+// calls) was 12% of a one-iteration call on 975 k tets (bench/core_bench BM_OneIteration, perf,
+// 2026-11-28). Rounding to float keeps 24 bits, so a cube root good to 1e-13 decides the float
+// unless the value is that close to the midpoint between two floats: r below is within
+// 1e-13 + a few roundings of the exact mean ratio, and so is MeanRatioOf's value (std::cbrt is
+// within an ulp or two); float rounding is monotone, so when both ends of an interval that holds
+// both round to one float, MeanRatioOf's value rounds to it too. Otherwise (about one tet in
+// 10^5; none of the 975 k of bench/core_bench's input), MeanRatioOf itself.
+// In a loop of its own: each value is a chain of dependent divisions (about 80 cycles), which
+// the processor overlaps across consecutive values only when nothing else sits between them;
+// one at a time, inside the loops that read the tets, it cost what std::cbrt did.
+void MeanRatiosAsFloat(const MeanRatioParts* parts, int64_t n, float* out) {
+  constexpr double kMargin = 4.0 * quality_internal::kFastCbrtError;
+  bool any_exact = false;
+  for (int64_t i = 0; i < n; ++i) {
+    const MeanRatioParts& p = parts[i];
+    const bool safe = CubeIsSafe(p);
+    // Unsafe parts (degenerate, huge or tiny) compute a harmless value and take the exact path.
+    const double volume = safe ? p.volume : 1.0;
+    const double sum_l2 = safe ? p.sum_l2 : 1.0;
+    const double r = 12.0 * quality_internal::FastCbrt(9.0 * volume * volume) / sum_l2;
+    const float low = static_cast<float>(r * (1.0 - kMargin));
+    const float high = static_cast<float>(r * (1.0 + kMargin));
+    out[i] = low;
+    any_exact |= !safe || low != high;
+  }
+  if (!any_exact) return;
+  for (int64_t i = 0; i < n; ++i) {
+    const MeanRatioParts& p = parts[i];
+    if (!CubeIsSafe(p)) {
+      out[i] = static_cast<float>(MeanRatioOf(p));
+      continue;
+    }
+    const double r = 12.0 * quality_internal::FastCbrt(9.0 * p.volume * p.volume) / p.sum_l2;
+    if (static_cast<float>(r * (1.0 - kMargin)) != static_cast<float>(r * (1.0 + kMargin))) {
+      out[i] = static_cast<float>(MeanRatioOf(p));
+    }
+  }
+}
+
+float MeanRatioAsFloat(const MeanRatioParts& parts) {
+  float out = 0.0f;
+  MeanRatiosAsFloat(&parts, 1, &out);
+  return out;
 }
 
 bool MeanRatioBelow(const MeanRatioParts& parts, double threshold) {

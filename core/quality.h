@@ -29,8 +29,20 @@ struct MeanRatioParts {
 // a, b, c, d: the corners in the order MeanRatio would get them (the bits depend on the order).
 MeanRatioParts MeanRatioPartsOf(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
+// The same, for a caller that already has six times the signed volume.
+MeanRatioParts MeanRatioPartsWithVolume6(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                                         double volume6);
+
 // MeanRatio's value from its parts: the same bits as MeanRatio of the same corners.
 double MeanRatioOf(const MeanRatioParts& parts);
+
+// Exactly static_cast<float>(MeanRatioOf(parts)), the per-tet quality a result carries, mostly
+// without std::cbrt: see quality.cc.
+float MeanRatioAsFloat(const MeanRatioParts& parts);
+
+// MeanRatioAsFloat of parts[0, n) into out[0, n): the same values, faster for many (the loop
+// overlaps the values' computations).
+void MeanRatiosAsFloat(const MeanRatioParts* parts, int64_t n, float* out);
 
 // Exactly MeanRatioOf(parts) < threshold.
 bool MeanRatioBelow(const MeanRatioParts& parts, double threshold);
@@ -42,6 +54,13 @@ double MinMeanRatio(const MeanRatioParts* parts, int count);
 // lexicographic order: the same bits whatever the order of a tet's corners (a reoriented tet
 // has two swapped) or of the tets. The default of RefineOptions::quality_reference.
 double QualityReference(const std::vector<Vec3>& points, const std::vector<Tet>& tets);
+
+namespace quality_internal {
+// The cube root of x > 0 (normal), to a relative error below kFastCbrtError; for
+// MeanRatioAsFloat, which falls back to std::cbrt where that error could change its float.
+double FastCbrt(double x);
+inline constexpr double kFastCbrtError = 1e-13;
+}  // namespace quality_internal
 
 struct QualityStats {
   double min = 0.0;

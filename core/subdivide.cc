@@ -176,13 +176,6 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
         next.tet_lattice_error[out] = -1.0;
         next.tet_lattice_sum[out] = std::numeric_limits<double>::quiet_NaN();
       }
-      const auto& np = next.mesh.points;
-      const Vec3 &a = np[child[0]], &b = np[child[1]], &c = np[child[2]], &d = np[child[3]];
-      const double v6 = SignedVolume6(a, b, c, d);
-      const float q = static_cast<float>(MeanRatioWithVolume6(a, b, c, d, v6));
-      next.tet_quality[out] = q;
-      if (v6 <= 0.0) block_worst = -1.0;
-      block_worst = std::min(block_worst, static_cast<double>(q));
       ++out;
     };
     for (int64_t t = begin; t < end; ++t) {
@@ -220,6 +213,34 @@ StepOutcome Subdivide(const Volume& volume, const EdgeTable& edges, const EdgeEr
         write_child({global[lt[0]], global[lt[1]], global[lt[2]], global[lt[3]]}, t);
       }
     }
+    // The children's qualities in a pass of their own over the block's output (its new tets are
+    // the ones of this iteration), a chunk at a time through MeanRatiosAsFloat, whose loop
+    // overlaps the values' computations (see there).
+    const auto& np = next.mesh.points;
+    constexpr int kChunk = 256;
+    std::array<MeanRatioParts, kChunk> parts;
+    std::array<int64_t, kChunk> where;
+    std::array<float, kChunk> quality;
+    int pending = 0;
+    const auto flush = [&] {
+      MeanRatiosAsFloat(parts.data(), pending, quality.data());
+      for (int i = 0; i < pending; ++i) {
+        next.tet_quality[where[i]] = quality[i];
+        block_worst = std::min(block_worst, static_cast<double>(quality[i]));
+      }
+      pending = 0;
+    };
+    for (int64_t o = child_offset[b]; o < out; ++o) {
+      if (next.tet_iteration[o] != iteration) continue;
+      const Tet& child = next.mesh.tets[o];
+      const Vec3 &p0 = np[child[0]], &p1 = np[child[1]], &p2 = np[child[2]], &p3 = np[child[3]];
+      const double v6 = SignedVolume6(p0, p1, p2, p3);
+      if (v6 <= 0.0) block_worst = -1.0;
+      parts[pending] = MeanRatioPartsWithVolume6(p0, p1, p2, p3, v6);
+      where[pending] = o;
+      if (++pending == kChunk) flush();
+    }
+    flush();
     worst[b] = block_worst;
   });
   if (cancel.IsSet()) return StepOutcome::kCancelled;
