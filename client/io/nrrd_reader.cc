@@ -278,6 +278,15 @@ absl::StatusOr<std::string> DecodeAscii(absl::string_view text, StoredType type,
       return FileError(path, absl::StrCat("ascii sample ", seen, " is not a number: \"",
                                           word.substr(0, 32), "\""));
     }
+    // "3.5" in an integer volume was stored as 3 (the conversion truncates): a writer that put
+    // fractions in an integer file is not to be second-guessed. Whole numbers in any notation
+    // ("3.0", "3e2") are read as the integers they are.
+    if (type != StoredType::kFloat32 && type != StoredType::kFloat64 && std::isfinite(value) &&
+        value != std::floor(value)) {
+      return FileError(
+          path, absl::StrCat("ascii sample ", seen, " = ", word.substr(0, 32),
+                             " is not a whole number, as type ", StoredTypeName(type), " needs"));
+    }
     if (!AppendSample(out, type, value)) {
       return FileError(path, absl::StrCat("ascii sample ", seen, " = ", word.substr(0, 32),
                                           " does not fit type ", StoredTypeName(type)));

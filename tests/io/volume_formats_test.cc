@@ -115,6 +115,35 @@ TEST(IoNrrdTest, ErrorsNameTheFile) {
   EXPECT_THAT(std::string(ReadVolume(path).status().message()), HasSubstr("bzip2"));
 }
 
+// An integer volume's ascii samples are whole numbers in any notation; a fraction was stored
+// truncated ("3.5" as 3) without a word.
+TEST(IoNrrdTest, AsciiIntegersMustBeWholeNumbers) {
+  ScratchDir dir;
+  std::string ascii;
+  for (int16_t v : Ramp()) absl::StrAppend(&ascii, v, ".0e0\n");
+  const std::string path = dir.File("whole.nrrd");
+  WriteBytes(path, NrrdHeader("short", "ascii", "little") + "\n" + ascii);
+  absl::StatusOr<VolumeFile> file = ReadVolume(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  ExpectLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+
+  const std::string fraction = absl::StrCat("1\n2\n3.5\n", ascii);
+  for (const char* type : {"short", "uchar", "int", "uint", "longlong"}) {
+    SCOPED_TRACE(type);
+    WriteBytes(path, NrrdHeader(type, "ascii", "little") + "\n" + fraction);
+    const absl::Status status = ReadVolume(path).status();
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_THAT(std::string(status.message()), HasSubstr(path));
+    EXPECT_THAT(std::string(status.message()),
+                HasSubstr("ascii sample 2 = 3.5 is not a whole number, as type"));
+  }
+  // Float volumes keep their fractions.
+  WriteBytes(path, NrrdHeader("float", "ascii", "little") + "\n" + fraction);
+  file = ReadVolume(path);
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->volume.type(), VoxelType::kFloat32);
+}
+
 // teem reads "spacedirections", "spaceorigin", "byteskip", "lineskip" and "datafile" as the
 // spaced fields, type names in any case and spaces inside a vector; they were once ignored
 // without a word (voxels read from byte 0, a grid at 0 with 1 mm voxels).
