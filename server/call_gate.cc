@@ -50,15 +50,31 @@ void CallGate::Reservation::Release() {
 }
 
 CallGate::Ticket::Ticket(Ticket&& other) noexcept
-    : gate_(std::exchange(other.gate_, nullptr)), identity_(std::move(other.identity_)) {}
+    : gate_(std::exchange(other.gate_, nullptr)),
+      identity_(std::move(other.identity_)),
+      counted_(std::exchange(other.counted_, false)) {}
 
 CallGate::Ticket& CallGate::Ticket::operator=(Ticket&& other) noexcept {
   if (this != &other) {
     Release();
     gate_ = std::exchange(other.gate_, nullptr);
     identity_ = std::move(other.identity_);
+    counted_ = std::exchange(other.counted_, false);
   }
   return *this;
+}
+
+void CallGate::UncountLocked(const std::string& identity) {
+  if (auto it = per_identity_.find(identity); it != per_identity_.end() && --it->second == 0) {
+    per_identity_.erase(it);
+  }
+}
+
+void CallGate::Ticket::EndForIdentity() {
+  if (gate_ == nullptr || !counted_) return;
+  std::lock_guard<std::mutex> lock(gate_->mu_);
+  gate_->UncountLocked(identity_);
+  counted_ = false;
 }
 
 void CallGate::Ticket::Release() {
@@ -66,10 +82,7 @@ void CallGate::Ticket::Release() {
   CallGate* gate = std::exchange(gate_, nullptr);
   std::lock_guard<std::mutex> lock(gate->mu_);
   --gate->open_;
-  if (auto it = gate->per_identity_.find(identity_);
-      it != gate->per_identity_.end() && --it->second == 0) {
-    gate->per_identity_.erase(it);
-  }
+  if (std::exchange(counted_, false)) gate->UncountLocked(identity_);
   // Under the lock: a waiter may destroy the gate as soon as it sees no open call.
   gate->idle_.notify_all();
 }
@@ -90,6 +103,7 @@ absl::StatusOr<CallGate::Ticket> CallGate::Open(const std::string& identity) {
   Ticket ticket;
   ticket.gate_ = this;
   ticket.identity_ = identity;
+  ticket.counted_ = true;
   return ticket;
 }
 

@@ -64,11 +64,18 @@ class CallGate {
     Ticket(Ticket&& other) noexcept;
     Ticket& operator=(Ticket&& other) noexcept;
     void Release();
+    // Stops counting the call against its identity's limit; it stays open (open_calls,
+    // WaitUntilIdle) until Release. For a call whose final status is being sent: the client
+    // sees the call end as the status arrives, before the server is done with it, and a client
+    // that starts its next call at once was refused as having one call too many (8 clients
+    // calling one after another were told they had 16 open, in a loaded CI run).
+    void EndForIdentity();
 
    private:
     friend class CallGate;
     CallGate* gate_ = nullptr;
     std::string identity_;
+    bool counted_ = false;  // still counted against identity_
   };
 
   // Admits a new call from `identity`: UNAVAILABLE once StopAdmitting was called,
@@ -119,7 +126,8 @@ class CallGate {
   // Starts every waiter that fits now; their start functions, to run unlocked.
   std::vector<std::function<void()>> Admit();
   void RunStarts(std::vector<std::function<void()>> starts);
-  std::string Free() const;  // "X free of Y" for messages (under mu_)
+  std::string Free() const;                         // "X free of Y" for messages (under mu_)
+  void UncountLocked(const std::string& identity);  // one call fewer for `identity` (under mu_)
 
   const Config config_;
   mutable std::mutex mu_;

@@ -140,6 +140,8 @@ void RefineCall::SendStatus(const grpc::Status& status, std::optional<int> retry
   if (retry_after_ms.has_value()) {
     context_->AddTrailingMetadata("grpc-retry-pushback-ms", std::to_string(*retry_after_ms));
   }
+  // Before Finish: a client that has the status may open its next call at once.
+  ticket_.EndForIdentity();
   Finish(status);  // last: the call may be done with this object from here on
 }
 

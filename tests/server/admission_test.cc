@@ -293,6 +293,22 @@ TEST(AdmissionTest, OpenCallsAreLimitedPerClient) {
   second.context.TryCancel();
 }
 
+// A client that starts its next call as soon as the last one's status arrives is never over its
+// limit: the server stops counting a call against its client when it sends the status, not
+// when it is done with the call (a loaded CI run refused 8 clients calling one after another as
+// having 16 calls open).
+TEST(AdmissionTest, ACallAfterTheLastOnesStatusIsNeverOverTheLimit) {
+  server::ServiceConfig config = Config(2);
+  config.limits.max_calls_per_identity = 1;
+  LoopbackServer server(config);
+  const std::shared_ptr<grpc::Channel> channel = server.NewChannel();
+  // Without the fix one call in 20 to 40 was refused.
+  for (int i = 0; i < 100; ++i) {
+    const absl::Status status = RefineSmall(channel);
+    ASSERT_TRUE(status.ok()) << "call " << i << ": " << status;
+  }
+}
+
 // A volume header declaring `bytes` of float64 voxels (the data never follows).
 Requests DeclaringAVolumeOf(int64_t bytes) {
   Requests requests = RequestsOf(Small().volume, Small().mesh, Small().options);

@@ -145,6 +145,29 @@ TEST(CallGateTest, OpenCallsAreCountedPerIdentity) {
   EXPECT_EQ(gate.Open("peer:c").status().code(), absl::StatusCode::kUnavailable);
 }
 
+// A call whose final status is on its way no longer counts against its client's limit, but is
+// still open until released (a draining server waits for it).
+TEST(CallGateTest, AFinishingCallFreesItsIdentitysPlaceButStaysOpen) {
+  CallGate gate({.slots = 1, .max_calls_per_identity = 1});
+  absl::StatusOr<CallGate::Ticket> a1 = gate.Open("peer:a");
+  ASSERT_TRUE(a1.ok());
+  EXPECT_EQ(gate.Open("peer:a").status().code(), absl::StatusCode::kResourceExhausted);
+  a1->EndForIdentity();
+  a1->EndForIdentity();  // once only
+  EXPECT_EQ(gate.open_calls(), 1);
+  absl::StatusOr<CallGate::Ticket> a2 = gate.Open("peer:a");
+  ASSERT_TRUE(a2.ok()) << a2.status();
+  EXPECT_EQ(gate.open_calls(), 2);
+  // Moved, released: a1 no longer counts for peer:a, and releasing it leaves a2's count alone.
+  CallGate::Ticket moved = *std::move(a1);
+  moved.Release();
+  EXPECT_EQ(gate.open_calls(), 1);
+  EXPECT_EQ(gate.Open("peer:a").status().code(), absl::StatusCode::kResourceExhausted);
+  a2->Release();
+  EXPECT_EQ(gate.open_calls(), 0);
+  EXPECT_TRUE(gate.Open("peer:a").ok());
+}
+
 TEST(TokenTableTest, FindsTheIdentityOfEachTokenAndNothingElse) {
   absl::StatusOr<TokenTable> table = TokenTable::FromText(
       "# operators\n"
