@@ -6,11 +6,13 @@
 #include <map>
 #include <numeric>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "absl/container/flat_hash_map.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "absl/strings/strip.h"
 #include "client/io/byte_order.h"
 #include "client/io/cell_census.h"
@@ -220,6 +222,9 @@ class GmshParser {
   // Physical tags of 4.1 entities, keyed by dimension * 2^32 + entity tag.
   absl::flat_hash_map<int64_t, int64_t> entity_physical_;
   std::map<int32_t, std::string> region_names_;  // $PhysicalNames of dimension 3
+  // Volume entities in more than one physical group: {entity, a group after its first}, in file
+  // order. A tet keeps one label, its entity's first group; the others are named as dropped.
+  std::vector<std::pair<int64_t, int64_t>> other_groups_;
 
   // Tets as read, in file order.
   std::vector<Tet> tets_;
@@ -385,6 +390,7 @@ absl::Status GmshParser::EntityLists(bool partitioned) {
         if (!physical.ok()) return physical.status();
         // An entity may belong to several physical groups; the first is its label.
         if (p == 0) entity_physical_[key] = *physical;
+        if (p > 0 && dim == 3) other_groups_.push_back({*tag, *physical});
       }
       // A partitioned entity without physical tags of its own takes its parent's.
       if (*physicals == 0 && parent_key.has_value()) {
@@ -933,6 +939,24 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
     file.mesh.labels.resize(t);
     for (size_t i = 0; i < t; ++i) file.mesh.labels[i] = labels_[at(i)];
     file.label_name = "gmsh:physical";
+    // A Gmsh 4 volume in two physical groups (a "ball" inside an "everything") lost the second
+    // without a word: the output had only the first.
+    if (!other_groups_.empty()) {
+      std::vector<std::string> listed;
+      for (const auto& [entity, group] : other_groups_) {
+        if (listed.size() == 4) {
+          listed.push_back(absl::StrCat("and ", other_groups_.size() - 4, " more"));
+          break;
+        }
+        const auto name = region_names_.find(static_cast<int32_t>(group));
+        listed.push_back(absl::StrCat(
+            group, name == region_names_.end() ? "" : absl::StrCat(" (\"", name->second, "\")"),
+            " of volume ", entity));
+      }
+      file.dropped_arrays.push_back(absl::StrCat(
+          "physical group", other_groups_.size() == 1 ? " " : "s ", absl::StrJoin(listed, ", "),
+          " (a tet keeps one label: its volume's first physical group)"));
+    }
     file.region_names = std::move(region_names_);
   }
   DropNonFiniteDerivedArrays(&file);
