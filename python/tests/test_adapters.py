@@ -224,6 +224,23 @@ def test_a_meshio_mesh_out_reads_back_in_the_cli(server, cli_binary, tmp_path):
     assert "value (per vertex), iteration (per tet), quality (per tet)" in info, info
 
 
+def test_labels_are_the_refs_of_a_medit_file_written_through_meshio(server, tmp_path):
+    # Medit keeps one integer per cell, meshio's first cell array: that was "iteration", and
+    # Gmsh opened a refined mesh as one volume per iteration.
+    volume = np.random.default_rng(6).uniform(0, 10, size=(10, 10, 10))
+    points, tets = box_mesh((1, 1, 1), (8, 8, 8), (2, 2, 2))
+    labels = np.where(np.arange(len(tets)) % 2 == 0, 7, 9).astype(np.int32)
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.05,
+                               labels=labels, max_iterations=2)
+    assert len(result.tets) > len(tets) and set(result.labels.tolist()) == {7, 9}
+    for name in ("medit:ref", "labels"):
+        result.to_meshio(label_name=name).write(tmp_path / "out.mesh")
+        back = meshio.read(tmp_path / "out.mesh")
+        np.testing.assert_array_equal(back.cell_data["medit:ref"][0], result.labels)
+    np.testing.assert_array_equal(result.to_meshio().cell_data["iteration"][0], result.iteration)
+
+
 def test_fit_to_an_oblique_volume_equals_the_cli(server, cli_binary, tmp_path):
     # Found by a service sweep: on an oblique volume fit_to_volume moved 120 of 448 vertices by
     # up to 3e-14 from the CLI's --fit-mesh-to-volume (a column length taken by math.hypot, and

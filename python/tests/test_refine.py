@@ -2,7 +2,9 @@
 
 import json
 import os
+import signal
 import subprocess
+import threading
 import time
 
 import grpc
@@ -266,6 +268,57 @@ def test_a_callback_raising_cancels_the_call(own_server, callback):
         small = client.refine(smooth_volume((8, 8, 8)), (1, 1, 1), (0, 0, 0),
                               *box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1)), 0.1)
         assert len(small.tets) >= 5
+
+
+class OtherServiceDown(grpc.RpcError):
+    """What a callback that calls another gRPC service gets when that one is down."""
+
+
+def test_a_callback_raising_an_rpc_error_gets_it_back_and_cancels_the_call(own_server):
+    # It was taken for this call's own failure: a TetrefineError(UNAVAILABLE) as if the
+    # tetrefine server were down, and the server refined on to the end.
+    volume, points, tets = _heavy_input()
+    raised = OtherServiceDown()
+
+    def stop(stats):
+        raise raised
+
+    with tetrefine.Client(own_server.target) as client:
+        with pytest.raises(OtherServiceDown) as error:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01, max_iterations=16,
+                          on_iteration=stop)
+    assert error.value is raised
+    lines = own_server.wait_for_refine_lines(1)
+    assert len(lines) == 1 and "status=CANCELLED" in lines[0], lines
+
+
+def test_a_frozen_server_ends_the_call_without_a_timeout(own_server):
+    # A server that stops answering mid-call (SIGSTOP here; a host gone without a reset alike)
+    # left refine() without a timeout waiting forever. Keepalive pings (30 s, answered within
+    # 20 s) end it with UNAVAILABLE, as for the CLI.
+    volume, points, tets = _heavy_input()
+    started = []
+    with tetrefine.Client(own_server.target) as client:
+        client.server_info()
+
+        def freeze(stats):
+            if not started:
+                started.append(time.monotonic())
+                own_server.process.send_signal(signal.SIGSTOP)
+
+        # Without the pings the call would wait for ever: the server thaws after 100 s, and
+        # the call then ends without the error this test expects, rather than hanging.
+        thaw = threading.Timer(100, lambda: own_server.process.send_signal(signal.SIGCONT))
+        thaw.start()
+        try:
+            with pytest.raises(tetrefine.TetrefineError) as error:
+                client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.01,
+                              max_iterations=16, on_iteration=freeze)
+        finally:
+            thaw.cancel()
+            own_server.process.send_signal(signal.SIGCONT)
+    assert error.value.code == grpc.StatusCode.UNAVAILABLE, error.value
+    assert started and time.monotonic() - started[0] < 90
 
 
 def test_a_deadline_ends_the_call_with_deadline_exceeded(own_server):

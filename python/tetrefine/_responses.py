@@ -80,6 +80,24 @@ class _MeshParts:
         return out
 
 
+class CallbackRaised(Exception):
+    """What on_iteration or on_mesh raised, carried out of the response loop as it was, so that
+    the client cancels the call and re-raises it: a grpc.RpcError a callback raised (a call to
+    another service that failed) was taken for this call's own failure, reported as the
+    tetrefine server's status, and the call was left running on the server."""
+
+    def __init__(self, error):
+        super().__init__(error)
+        self.error = error
+
+
+def _call_back(callback, argument):
+    try:
+        callback(argument)
+    except Exception as error:
+        raise CallbackRaised(error) from None
+
+
 class ResponseReader:
     """Feed responses in order with add(); result() once the stream has ended."""
 
@@ -99,7 +117,7 @@ class ResponseReader:
             stats = IterationStats.from_message(response.iteration_stats)
             self.iterations.append(stats)
             if self.on_iteration is not None:
-                self.on_iteration(stats)
+                _call_back(self.on_iteration, stats)
         elif kind == "mesh_header":
             if self.mesh is not None and self.mesh.final:
                 raise _broken("a mesh header after the final mesh")
@@ -131,8 +149,9 @@ class ResponseReader:
                 raise _broken(f"labels were sent, but {0 if labels is None else len(labels)} "
                               f"came back for the {len(arrays['tets'])} tets of iteration "
                               f"{mesh.iteration}'s mesh")
-            self.on_mesh(IterationMesh(mesh.iteration, arrays["points"],
-                                       arrays["tets"].astype(np.int64), arrays["values"], labels))
+            _call_back(self.on_mesh, IterationMesh(mesh.iteration, arrays["points"],
+                                                   arrays["tets"].astype(np.int64),
+                                                   arrays["values"], labels))
 
     def result(self, labels_sent):
         if self.summary is None:

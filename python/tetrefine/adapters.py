@@ -329,8 +329,12 @@ def result_to_meshio(result, label_name="labels"):
     "iteration", "quality" and, when the result has labels, `label_name`."""
     import meshio
 
-    cell_data = {"iteration": [result.iteration], "quality": [result.quality]}
+    # The labels first: formats with one integer per cell (Medit's ref) take meshio's first
+    # cell array, and "iteration" written as Medit refs made a refined mesh one region per
+    # iteration.
+    cell_data = {}
     if result.labels is not None:
         cell_data[label_name] = [result.labels]
+    cell_data.update({"iteration": [result.iteration], "quality": [result.quality]})
     return meshio.Mesh(result.points, [("tetra", result.tets)],
                        point_data={"value": result.values}, cell_data=cell_data)

@@ -8,7 +8,7 @@ import grpc
 
 from tetrefine import _requests
 from tetrefine._protocol import Protocol
-from tetrefine._responses import ResponseReader
+from tetrefine._responses import CallbackRaised, ResponseReader
 from tetrefine.errors import TetrefineError, invalid
 from tetrefine.results import Record
 from tetrefine.v1 import tetrefine_pb2 as pb
@@ -142,7 +142,14 @@ class Client:
             raise invalid("token", "must be a string of printable ASCII characters (no line "
                           "breaks)")
         credentials, options = _credentials(tls)
-        options = options + [("grpc.max_receive_message_length", _MAX_RECEIVE_BYTES)]
+        options = options + [
+            ("grpc.max_receive_message_length", _MAX_RECEIVE_BYTES),
+            # A server that stops answering (frozen, or its host gone without a reset) left a
+            # call without a timeout waiting forever; pings end it with UNAVAILABLE within
+            # about 50 s, as the CLI's channel does. tetrefine_server accepts a ping every 10 s.
+            ("grpc.keepalive_time_ms", 30_000),
+            ("grpc.keepalive_timeout_ms", 20_000),
+        ]
         if credentials is None:
             self._channel = grpc.insecure_channel(target, options=options)
         else:
@@ -245,7 +252,9 @@ class Client:
             refining a result again).
           lattice_n: order of the final lattice check, (n+1)(n+2)(n+3)/6 points a tet (server
             default 8; 0 skips it); lattice_max_tets: results with more tets are checked on a
-            random sample of this many (default 200000; 0: every tet); lattice_seed: that
+            random sample of this many (default 200000; 0: every tet, which a server counts at
+            the tet budget against its max_lattice_points, 2e8 by default: lower max_tets to
+            about 1.2 M at order 8 for it to be accepted); lattice_seed: that
             sample's seed (default 1). As the CLI's --lattice-n, --lattice-max-tets and
             --lattice-seed.
           min_edge_length: edges shorter than this (world units) are never split (default 1/64
@@ -294,6 +303,9 @@ class Client:
         try:
             for response in call:
                 reader.add(response)
+        except CallbackRaised as raised:
+            call.cancel()
+            raise raised.error from None
         except grpc.RpcError as error:
             failure = TetrefineError.from_rpc_error(error)
             if failure.code == grpc.StatusCode.CANCELLED and (on_iteration or on_mesh):
