@@ -59,11 +59,14 @@ absl::Status ValidateRefineOptions(const RefineOptions& o) {
     return Invalid("lattice_n", o.lattice_n, "must be in [0, 64]");
   }
   // Order 1 is the tet's four corners, where the discrepancy is 0 by construction (vertex values
-  // are samples): it would certify 0 for any mesh. Order 2 adds the edge midpoints.
-  if (o.certify && o.lattice_n < 2) {
+  // are samples): it would certify 0 for any mesh. Orders 2 and 3 add points on the edges and
+  // faces only (order 2: the edge midpoints, what the edge test already reads); order 4 is the
+  // first with a point inside (1, 1, 1, 1) / 4. An outside review took a "Certified" of order 2
+  // for a statement about the tets' insides.
+  if (o.certify && o.lattice_n < 4) {
     return Invalid("lattice_n", o.lattice_n,
-                   "certify needs a lattice with points inside the tets (lattice_n >= 2; order 1 "
-                   "is the corners, where the discrepancy is always 0)");
+                   "certify needs a lattice with points inside the tets (lattice_n >= 4; orders "
+                   "1-3 have points on the corners, edges and faces only)");
   }
   if (o.scheme != RefineScheme::kPaper && o.scheme != RefineScheme::kLongestEdge) {
     return Invalid("scheme", static_cast<int>(o.scheme), "not a scheme");
@@ -94,6 +97,14 @@ absl::Status CheckNormCoeffForRange(double norm_coeff, const std::array<double, 
   return absl::OkStatus();
 }
 
+namespace {
+// x > 0 rounded up to three significant digits (a threshold to quote: never below it).
+double RoundedUp(double x) {
+  const double unit = std::pow(10.0, std::floor(std::log10(x)) - 2.0);
+  return std::ceil(x / unit * (1.0 + 1e-12)) * unit;
+}
+}  // namespace
+
 absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>& range,
                                  double epsilon) {
   constexpr double kSmallestNorm = 1e-290;
@@ -106,12 +117,16 @@ absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>&
   const double magnitude = std::max(std::abs(range[0]), std::abs(range[1]));
   const double noise = 16.0 * std::numeric_limits<double>::epsilon() * magnitude / norm_coeff;
   if (!(noise <= 0.01 * epsilon)) {
+    // The remedies end with the smallest epsilon that would pass: a tiny epsilon on an ordinary
+    // volume was blamed on the volume alone (an outside review, 2026-11-28). The CLI's
+    // --norm-coeff message keeps the text before "; subtract an offset" (cli/command_support).
     return absl::InvalidArgumentError(absl::StrCat(
         "volume: values reach ", magnitude, " but vary over only ", norm_coeff,
         " (the normalisation): float64 rounding of the interpolation alone is about ", noise,
         " of it, above a hundredth of epsilon ", epsilon,
         ", so the errors would be rounding, not the data; subtract an offset (e.g. the minimum, ",
-        range[0], ") from the volume first"));
+        range[0], ") from the volume first, or use an epsilon of at least ",
+        RoundedUp(100.0 * noise)));
   }
   return absl::OkStatus();
 }

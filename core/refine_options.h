@@ -102,8 +102,9 @@ struct RefineOptions {
   // Certified mode: refinement also goes on until the discrepancy at every point of the
   // lattice of order lattice_n (the paper's 165 points for 8) of every tet is <= epsilon; each
   // tet that fails has its longest edge split. The result's `certified_max_error` is then the
-  // largest lattice discrepancy over every tet of the output (not a sample). Needs
-  // lattice_n >= 2 (order 1 is the corners, where the discrepancy is 0 by construction).
+  // largest lattice discrepancy over every tet of the output (not a sample): a maximum over
+  // those points, not a bound between them. Needs lattice_n >= 4 (orders 1-3 have no point
+  // inside a tet; order 1 is the corners, where the discrepancy is 0 by construction).
   bool certify = false;
   // Fill RefineResult::tet_parent (4 bytes per output tet).
   bool track_parents = false;

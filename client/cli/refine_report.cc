@@ -83,6 +83,13 @@ std::string DescribeStop(const RefineResult& result) {
           name, ": the next iteration would have made ", result.next_iteration_tets,
           " tets, more than the tet budget (--max-tets, or the service's own limit)");
     case StopReason::kQualityFloor:
+      // Core reports -1 for a child of zero or negative volume ("a tet of quality -1" read as a
+      // number out of range, an outside review found).
+      if (result.next_iteration_min_quality <= 0.0) {
+        return absl::StrCat(name,
+                            ": the next iteration would have made a flat or inverted tet (zero "
+                            "or negative volume), which is never applied");
+      }
       return absl::StrCat(name, ": the next iteration would have made a tet of quality ",
                           absl::StrFormat("%.3g", result.next_iteration_min_quality),
                           ", below the quality floor; it was not applied");
@@ -133,8 +140,10 @@ std::string FormatRefineReport(const RefineResult& result, double epsilon, bool 
   if (result.certified_max_error >= 0.0) {
     absl::StrAppend(&out,
                     absl::StrFormat("Certified: lattice error at most %.6f in every one of "
-                                    "the %d tets (n = %d)\n",
-                                    result.certified_max_error, result.final_quality.count, l.n));
+                                    "the %d tets (n = %d: the maximum over each tet's %d lattice "
+                                    "points, not a bound between them)\n",
+                                    result.certified_max_error, result.final_quality.count, l.n,
+                                    (l.n + 1) * (l.n + 2) * (l.n + 3) / 6));
   } else if (certify) {
     absl::StrAppend(&out,
                     "Not certified: the run stopped before every tet's lattice error was within "

@@ -251,6 +251,11 @@ TEST(CliRefineReport, TheLatticeLineSaysSampleOrEveryTetAndCertifyWhyNot) {
   report = FormatRefineReport(result, 0.02, /*certify=*/true);
   EXPECT_TRUE(absl::StrContains(report, "points in every one of the 200000 tets")) << report;
   EXPECT_TRUE(absl::StrContains(report, "Certified: lattice error at most 0.019000")) << report;
+  // What it is a maximum over (an outside review read it as a bound on the whole tet).
+  EXPECT_TRUE(absl::StrContains(report,
+                                "(n = 8: the maximum over each tet's 165 lattice points, not a "
+                                "bound between them)"))
+      << report;
   EXPECT_FALSE(absl::StrContains(report, "Not certified")) << report;
 
   result.certified_max_error = -1.0;

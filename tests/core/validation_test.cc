@@ -118,13 +118,20 @@ TEST(Validation, OptionLimitsNameTheFieldAndTheValue) {
        "options.lattice_max_tets: must be >= 0, got -1"},
       // Order 1 is the corners, where the discrepancy is 0: a certificate of nothing (found by a
       // sweep of the CLI: `--certify --lattice-n 1` reported a certified maximum of 0 below the
-      // result's own midpoint maximum).
+      // result's own midpoint maximum); orders 2 and 3 have no point inside a tet (an outside
+      // review, 2026-11-28).
       {[](RefineOptions& o, bool out) {
          o.certify = true;
-         o.lattice_n = out ? 1 : 2;
+         o.lattice_n = out ? 1 : 4;
        },
-       "options.lattice_n: certify needs a lattice with points inside the tets (lattice_n >= 2; "
-       "order 1 is the corners, where the discrepancy is always 0), got 1"},
+       "options.lattice_n: certify needs a lattice with points inside the tets (lattice_n >= 4; "
+       "orders 1-3 have points on the corners, edges and faces only), got 1"},
+      {[](RefineOptions& o, bool out) {
+         o.certify = true;
+         o.lattice_n = out ? 3 : 8;
+       },
+       "options.lattice_n: certify needs a lattice with points inside the tets (lattice_n >= 4; "
+       "orders 1-3 have points on the corners, edges and faces only), got 3"},
   };
   EXPECT_TRUE(ValidateRefineOptions(RefineOptions{}).ok());
   for (const Bound& b : bounds) {
@@ -166,6 +173,17 @@ TEST(Validation, ValuesFloat64CannotResolveAreRefused) {
   wide.norm_coeff = 1e16;
   EXPECT_TRUE(Refine(two_level(1e16, 1e16 + 2), mesh, wide).ok());
   EXPECT_TRUE(CheckValuePrecision(4096, {-1024, 3071}, 1e-6).ok());  // an int16 CT
+  // A tiny epsilon on an ordinary volume: the message ends with the smallest epsilon that
+  // passes, which does (it blamed the volume alone: an outside review, 2026-11-28).
+  const absl::Status small = CheckValuePrecision(4096, {-1024, 3071}, 1e-14);
+  ASSERT_EQ(small.code(), absl::StatusCode::kInvalidArgument);
+  const std::string text(small.message());
+  const std::string quoted = "or use an epsilon of at least ";
+  const size_t at = text.find(quoted);
+  ASSERT_NE(at, std::string::npos) << text;
+  const double least = std::stod(text.substr(at + quoted.size()));
+  EXPECT_TRUE(CheckValuePrecision(4096, {-1024, 3071}, least).ok()) << least;
+  EXPECT_FALSE(CheckValuePrecision(4096, {-1024, 3071}, least * 0.98).ok()) << least;
 }
 
 TEST(Validation, FaceInThreeTetsIsRefused) {

@@ -55,7 +55,7 @@ RequestOptions RandomOptions(std::mt19937_64& rng) {
   r.min_quality = 0.5 * unit(rng);
   if (coin()) r.quality_reference = 1.0 - unit(rng);
   r.scheme = coin() ? RefineScheme::kPaper : RefineScheme::kLongestEdge;
-  r.certify = r.lattice_n >= 2 && coin();  // certify needs points inside the tets
+  r.certify = r.lattice_n >= 4 && coin();  // certify needs points inside the tets
   r.track_parents = coin();
   o.stream_every_iteration = coin();
   o.skip_final_mesh = coin();
