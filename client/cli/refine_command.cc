@@ -694,6 +694,16 @@ int RunRefinement(const RefineSettings& s) {
   }
   absl::Status written = s.pvtu ? WritePiecesReported(s, progress, files, out_tets)
                                 : WriteMeshReported(s, progress, s.output_path, files[0]);
+  // Ctrl-C while writing: a regular file is finished rather than left half-written (written
+  // beside and renamed into place), a pipe's write fails; either way the run stops there, with
+  // 130 (it went on to exit 0, an outside review found).
+  if (g_interrupted != 0) {
+    return Fail(absl::StrCat("interrupted while writing ", s.output_path,
+                             written.ok() ? ", which was finished rather than left half-written"
+                                          : absl::StrCat(" (", written.message(), ")"),
+                             "; nothing else (series, statistics) was written"),
+                130);
+  }
   if (!written.ok()) return Fail(written, kExitUsage);
   const std::string series_path = s.every_iteration ? SeriesPath(s.output_path) : "";
   // No iteration ran (the input met epsilon): the series is the one mesh there is, the output,

@@ -3,14 +3,21 @@
 // independent reader (python3 meshio, VTK 9) read back with the same tets and labels; bad values
 // are refused naming the flag; refine reports every phase on stderr, in order, unless --quiet.
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
+#include <chrono>
+#include <csignal>
 #include <cstdint>
 #include <cstdlib>
+#include <memory>
+#include <optional>
 #include <random>
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -21,6 +28,7 @@
 #include "gtest/gtest.h"
 #include "tests/cli/cli_test_util.h"
 #include "tests/io/io_test_util.h"
+#include "tests/support/child_process.h"
 #include "tests/support/geometry.h"
 
 namespace tetrefine::clitest {
@@ -173,6 +181,35 @@ class CliOutput : public ::testing::Test {
   ScratchDir dir_;
   std::string volume_;
 };
+
+// Ctrl-C while the output is being written stops the run with 130 and nothing after it (the
+// statistics file here); it went on to exit 0 (an outside review, 2026-11-28). The output is a
+// FIFO nobody reads, so the write is still blocked when the signal comes.
+TEST_F(CliOutput, CtrlCWhileWritingExitsWith130) {
+  const std::string mesh = LabelledMesh(0);
+  const std::string out = dir_.File("fifo.vtu");
+  ASSERT_EQ(mkfifo(out.c_str(), 0600), 0);
+  const std::string stats = dir_.File("stats.json");
+  std::unique_ptr<testing::ChildProcess> cli =
+      testing::ChildProcess::Start({TetrefinePath(), "refine", "--volume", volume_, "--mesh", mesh,
+                                    "--epsilon", "0.05", "--output", out, "--stats-json", stats});
+  ASSERT_NE(cli, nullptr);
+  // The progress line "writing <out> ... " ends only when the write does: poll for its start.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!absl::StrContains(cli->Output(), "writing " + out) &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(absl::StrContains(cli->Output(), "writing " + out)) << cli->Output();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // into the blocked open
+  cli->Signal(SIGINT);
+  const std::optional<int> code = cli->WaitExit(std::chrono::seconds(30));
+  ASSERT_TRUE(code.has_value()) << cli->Output();
+  EXPECT_EQ(*code, 130) << cli->Output();
+  EXPECT_TRUE(absl::StrContains(cli->Output(), "interrupted while writing " + out))
+      << cli->Output();
+  EXPECT_FALSE(FileExists(stats));
+}
 
 // Every encoding, over several label patterns: our reader sees the same tets and labels as in
 // the default output; the file shows the encoding asked for. Each encoding is run on one of the

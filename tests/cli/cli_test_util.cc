@@ -15,9 +15,11 @@
 
 namespace tetrefine::clitest {
 
+std::string TetrefinePath() { return TETREFINE_CLI_PATH; }
+
 ProcessResult RunTetrefine(const std::vector<std::string>& args, const std::string& cwd,
                            double timeout_seconds) {
-  std::vector<std::string> argv = {TETREFINE_CLI_PATH};
+  std::vector<std::string> argv = {TetrefinePath()};
   argv.insert(argv.end(), args.begin(), args.end());
   return RunProcess(argv, cwd, timeout_seconds);
 }

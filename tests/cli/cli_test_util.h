@@ -18,6 +18,9 @@ using testing::RunProcess;
 using testing::ServerProcess;
 using testing::SplitLines;
 
+// The path of the tetrefine binary under test.
+std::string TetrefinePath();
+
 // The tetrefine binary under test with `args`.
 ProcessResult RunTetrefine(const std::vector<std::string>& args, const std::string& cwd = "",
                            double timeout_seconds = 120.0);
