@@ -63,6 +63,23 @@ TEST_F(CliMeshVerify, MeshThenVerifyRoundTrip) {
   }
 }
 
+// The lattice line says whether it covers every tet or a sample (verify checks a sample of
+// 200 000 tets of a larger mesh; its line read as the whole mesh's, an outside review found).
+TEST_F(CliMeshVerify, TheLatticeLineSaysWhenItIsASample) {
+  MakeMesh("grid.vtu", {"--block", "3"});
+  const ProcessResult every = Verify(dir_.File("grid.vtu"));
+  EXPECT_TRUE(absl::StrContains(every.out, "points in every one of the 120 tets")) << every.out;
+  io::MeshFile big;
+  big.mesh = testing::FiveTetMesh({-4.5, 0.5, 10.5}, {4.5, 11.5, 21.5}, {35, 35, 35});
+  ASSERT_GT(big.mesh.tets.size(), 200000u);
+  ASSERT_TRUE(io::WriteMesh(dir_.File("big.vtu"), big).ok());
+  const ProcessResult sampled = Verify(dir_.File("big.vtu"));
+  EXPECT_TRUE(absl::StrContains(
+      sampled.out, absl::StrCat("points in a sample of 200000 of the ", big.mesh.tets.size(),
+                                " tets (its max can be below the mesh's)")))
+      << sampled.out << sampled.err;
+}
+
 TEST_F(CliMeshVerify, MaskThresholdMeshesFewerCells) {
   const io::MeshFile all = MakeMesh("all.mesh", {});
   const io::MeshFile masked = MakeMesh("masked.mesh", {"--mask-threshold", "40"});
