@@ -125,8 +125,11 @@ class RefineResult:
                 none was split, and summary.final_max_error is above epsilon).
     lattice:    Record of the error sampled on the barycentric lattice inside the tets (n,
                 tets_sampled, points_sampled, max_error, mean_error, share_above_epsilon, ...).
+                With lattice_n=0 no check runs: n and tets_sampled are 0, and its errors (0)
+                are not measurements.
     summary:    Record of the whole Summary message (norm_coeff, initial_quality, final_quality,
-                final_max_error, timings, ...).
+                final_max_error, timings, ...), as the wire has it: its certified_max_error is
+                -1 where certified_max_error above is None.
     """
 
     def __init__(self, points, tets, values, iteration, quality, labels, iterations, summary,
