@@ -35,6 +35,7 @@
 #include "client/io/mesh_io.h"
 #include "client/io/pvd_writer.h"
 #include "client/io/pvtu_writer.h"
+#include "client/io/tetgen_format.h"
 #include "core/quality.h"
 #include "core/refine_options.h"
 #include "core/voxel_type.h"
@@ -409,7 +410,38 @@ absl::Status WritePiecesReported(const RefineSettings& s, Progress& progress,
   return absl::OkStatus();
 }
 
+// --stats-json must not be one of the other files the run writes: a TetGen output's .node, an
+// --every-iteration file or its .pvd, a .pvtu's piece. Only --output itself was checked, and
+// the statistics silently replaced the others (an outside review: exit 0, an unreadable
+// result).
+absl::Status CheckStatsJsonIsNoCompanion(const RefineSettings& s) {
+  if (s.stats_json_path.empty()) return absl::OkStatus();
+  std::vector<NamedPath> written;
+  if (absl::EndsWithIgnoreCase(s.output_path, ".ele")) {
+    written.push_back({"the .node file of --output", io::TetgenNodePath(s.output_path)});
+  }
+  if (s.every_iteration) {
+    for (int k = 1; k <= s.options.refine.max_iterations; ++k) {
+      written.push_back({absl::StrCat("--every-iteration's file of iteration ", k),
+                         IterationPath(s.output_path, k)});
+    }
+    if (!SeriesPath(s.output_path).empty()) {
+      written.push_back({"--every-iteration's series", SeriesPath(s.output_path)});
+    }
+  }
+  if (s.pvtu) {
+    for (int k = 0; k < s.shards; ++k) {
+      written.push_back(
+          {absl::StrCat("piece ", k, " of --output"), io::PvtuPiecePath(s.output_path, k)});
+    }
+  }
+  return CheckNotTheSameFile({"--stats-json", s.stats_json_path}, written);
+}
+
 int RunRefinement(const RefineSettings& s) {
+  if (absl::Status companion = CheckStatsJsonIsNoCompanion(s); !companion.ok()) {
+    return Fail(companion, kExitUsage);
+  }
   Progress progress(s.quiet);
   progress.Begin(absl::StrCat("reading volume ", s.volume_path));
   absl::StatusOr<io::VolumeFile> volume = LoadVolume(s.volume_path, "--volume");

@@ -208,6 +208,18 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"StatsDirectoryMissing",
                 Refine({"--epsilon", "0.1", "--stats-json", "$D/no/stats.json"}),
                 "$D/no/stats.json"},
+        // The other files the run writes (an outside review: exit 0, an unreadable result).
+        BadCase{"StatsJsonIsTheNodeFile",
+                RefineWith("--output", "$D/out.ele",
+                           {"--epsilon", "0.1", "--stats-json", "$D/out.node"}),
+                "$D/out.node: --stats-json names the same file as the .node file of --output"},
+        BadCase{
+            "StatsJsonIsAnIterationFile",
+            Refine({"--epsilon", "0.1", "--every-iteration", "--stats-json", "$D/out.iter02.vtu"}),
+            "--stats-json names the same file as --every-iteration's file of iteration 2"},
+        BadCase{"StatsJsonIsTheSeries",
+                Refine({"--epsilon", "0.1", "--every-iteration", "--stats-json", "$D/out.pvd"}),
+                "--stats-json names the same file as --every-iteration's series"},
         BadCase{"TlsWithoutServer", Refine({"--epsilon", "0.1", "--tls-ca", "$D/ca.pem"}),
                 "--tls-ca"},
         BadCase{"TlsCertWithoutKey",
