@@ -394,6 +394,13 @@ def test_the_servers_message_for_bad_input(server):
     (dict(spacing=np.array([1, 1, 1j])), "spacing: expected 3 real numbers"),
     (dict(volume=np.full((4, 4, 4), np.longdouble(1) + np.longdouble(2)**-60)),
      "volume: float128 values would round in float64"),
+    # An object where an array goes read as "got shape ()" (an outside review, 2026-11-28).
+    (dict(volume=tetrefine.VolumeGrid(np.zeros((4, 4, 4)), [1, 1, 1], [0, 0, 0])),
+     r"volume: expected an array of numbers, got a VolumeGrid \(pass grid.data"),
+    (dict(volume=nibabel.Nifti1Image(np.zeros((4, 4, 4), np.float32), np.eye(4))),
+     r"volume: expected an array of numbers, got a Nifti1Image \(volume_from_nibabel"),
+    (dict(points=meshio.Mesh(np.zeros((4, 3)), [("tetra", np.array([[0, 1, 2, 3]]))])),
+     r"points: expected an array of numbers, got a Mesh \(mesh_from_meshio"),
 ])
 def test_input_refused_before_sending(server, arguments, message):
     points, tets = box_mesh((1, 1, 1), (6, 6, 6), (1, 1, 1))

@@ -101,9 +101,22 @@ def as_array(name, value):
         raise invalid(name, "a masked array: its mask cannot be sent; fill the masked entries "
                       "first (e.g. value.filled(0))")
     try:
-        return np.asarray(value)
+        array = np.asarray(value)
     except (TypeError, ValueError) as error:
         raise invalid(name, f"not an array of numbers ({error})") from None
+    if array.dtype == object and array.ndim == 0:
+        # An object where an array goes (a nibabel image, a VolumeGrid, a meshio mesh) read as
+        # "got shape ()" (an outside review): name what came and what to pass.
+        hints = {"Nifti1Image": "volume_from_nibabel(image) gives the array as .data",
+                 "Nifti2Image": "volume_from_nibabel(image) gives the array as .data",
+                 "VolumeGrid": "pass grid.data, grid.spacing and grid.origin",
+                 "TetMesh": "pass mesh.points and mesh.tets",
+                 "Mesh": "mesh_from_meshio(mesh) gives .points and .tets"}
+        kind = type(value).__name__
+        hint = hints.get(kind)
+        raise invalid(name, f"expected an array of numbers, got a {kind}"
+                      + (f" ({hint})" if hint else ""))
+    return array
 
 
 def _vector3(name, value, positive=False):
