@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import tetrefine
-from conftest import EXAMPLE_MESH, EXAMPLE_VOLUME
+from conftest import EXAMPLE_MESH, EXAMPLE_VOLUME, Server
 from meshes import box_mesh, noise_volume, smooth_volume
 
 
@@ -319,6 +319,35 @@ def test_a_frozen_server_ends_the_call_without_a_timeout(own_server):
             own_server.process.send_signal(signal.SIGCONT)
     assert error.value.code == grpc.StatusCode.UNAVAILABLE, error.value
     assert started and time.monotonic() - started[0] < 90
+
+
+def test_a_server_restarted_with_a_smaller_message_limit_is_asked_again(server_binary):
+    # The client asks the limit once; every later call failed with "Received message larger
+    # than max" after a restart with a smaller one (an outside review).
+    import socket
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    volume = noise_volume((40, 40, 40))
+    points, tets = box_mesh((1, 1, 1), (38, 38, 38), (3, 3, 3))
+    first = Server(server_binary, [f"--listen=127.0.0.1:{port}"]).start()
+    try:
+        client = tetrefine.Client(first.target)
+        client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.5, max_iterations=1)
+    finally:
+        first.stop()
+    second = Server(server_binary, [f"--listen=127.0.0.1:{port}",
+                                    "--max_message_bytes=65536"]).start()
+    try:
+        with pytest.raises(tetrefine.TetrefineError) as error:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.5, max_iterations=1)
+        assert error.value.code == grpc.StatusCode.RESOURCE_EXHAUSTED
+        assert "the next call asks again" in error.value.details
+        result = client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.5, max_iterations=1)
+        assert len(result.tets) >= len(tets)
+        client.close()
+    finally:
+        second.stop()
 
 
 def test_a_deadline_ends_the_call_with_deadline_exceeded(own_server):

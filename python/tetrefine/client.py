@@ -320,6 +320,16 @@ class Client:
                     f"for {within} (limits.write_stall_seconds), and responses are read only "
                     "between callbacks: keep on_iteration and on_mesh short, or hand their "
                     "work to another thread"))
+            if (failure.code == grpc.StatusCode.RESOURCE_EXHAUSTED and
+                    "larger than max" in failure.details and self._chunk_bytes is not None):
+                # The chunk size comes from the server's limit, asked once: a server restarted
+                # with a smaller --max_message_bytes refused every later call of this client
+                # (an outside review). Ask again next time, and say so.
+                self._chunk_bytes = None
+                failure = TetrefineError(failure.code, (
+                    f"{failure.details}: the server's message limit is smaller than when this "
+                    "client asked for it (a restarted or different server?); the next call "
+                    "asks again"))
             raise failure from None
         except BaseException:
             # on_iteration or on_mesh raised, or KeyboardInterrupt: stop the server's work too.
