@@ -40,29 +40,36 @@ absl::Status NoCertificate(const char* flag, const std::string& path) {
 
 }  // namespace
 
+absl::Status CheckTlsFiles(const PemFile& cert_file, const PemFile& key_file,
+                           const PemFile& ca_file) {
+  if (!cert_file.path.empty()) {
+    std::unique_ptr<X509, X509Free> cert = FirstCertificate(cert_file.pem);
+    if (cert == nullptr) return NoCertificate(cert_file.flag.c_str(), cert_file.path);
+    auto bio = Reader(key_file.pem);
+    std::unique_ptr<EVP_PKEY, KeyFree> key(
+        bio ? PEM_read_bio_PrivateKey(bio.get(), nullptr, nullptr, nullptr) : nullptr);
+    if (key == nullptr) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(key_file.flag, ": ", key_file.path,
+                       " holds no unencrypted PEM private key (-----BEGIN PRIVATE KEY-----)"));
+    }
+    if (X509_check_private_key(cert.get(), key.get()) != 1) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(key_file.flag, ": ", key_file.path, " is not the private key of the ",
+                       cert_file.flag, " certificate in ", cert_file.path));
+    }
+  }
+  if (!ca_file.path.empty() && FirstCertificate(ca_file.pem) == nullptr) {
+    return NoCertificate(ca_file.flag.c_str(), ca_file.path);
+  }
+  return absl::OkStatus();
+}
+
 absl::Status CheckServerTlsFiles(const std::string& cert_pem, const std::string& cert_path,
                                  const std::string& key_pem, const std::string& key_path,
                                  const std::string& ca_pem, const std::string& ca_path) {
-  std::unique_ptr<X509, X509Free> cert = FirstCertificate(cert_pem);
-  if (cert == nullptr) return NoCertificate("--tls_cert", cert_path);
-  auto bio = Reader(key_pem);
-  std::unique_ptr<EVP_PKEY, KeyFree> key(
-      bio ? PEM_read_bio_PrivateKey(bio.get(), nullptr, nullptr, nullptr) : nullptr);
-  if (key == nullptr) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--tls_key: ", key_path,
-                     " holds no unencrypted PEM private key (-----BEGIN PRIVATE KEY-----)"));
-  }
-  if (X509_check_private_key(cert.get(), key.get()) != 1) {
-    return absl::InvalidArgumentError(absl::StrCat("--tls_key: ", key_path,
-                                                   " is not the private key of the --tls_cert "
-                                                   "certificate in ",
-                                                   cert_path));
-  }
-  if (!ca_path.empty() && FirstCertificate(ca_pem) == nullptr) {
-    return NoCertificate("--tls_client_ca", ca_path);
-  }
-  return absl::OkStatus();
+  return CheckTlsFiles({cert_pem, cert_path, "--tls_cert"}, {key_pem, key_path, "--tls_key"},
+                       {ca_pem, ca_path, "--tls_client_ca"});
 }
 
 }  // namespace tetrefine::server

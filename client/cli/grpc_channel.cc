@@ -11,6 +11,7 @@
 #include "client/io/file_bytes.h"
 #include "grpcpp/create_channel.h"
 #include "grpcpp/security/credentials.h"
+#include "server/tls_files.h"
 
 namespace tetrefine::cli {
 namespace {
@@ -159,6 +160,13 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& ad
   if (!cert.ok()) return cert.status();
   absl::StatusOr<std::string> key = ReadPem(tls.key, "--tls-key");
   if (!key.ok()) return key.status();
+  // gRPC's word for a swapped or mismatched pair, or a key given as the CA, was "empty address
+  // list": the files are checked here, naming the flag and the file.
+  if (absl::Status files = server::CheckTlsFiles(
+          {*cert, tls.cert, "--tls-cert"}, {*key, tls.key, "--tls-key"}, {*ca, tls.ca, "--tls-ca"});
+      !files.ok()) {
+    return files;
+  }
   options.pem_root_certs = *ca;
   options.pem_cert_chain = *cert;
   options.pem_private_key = *key;

@@ -64,6 +64,37 @@ class CliTls : public ::testing::Test {
   ScratchDir dir_;
 };
 
+// A swapped or mismatched pair, or a key given as the CA, was answered by gRPC with "empty
+// address list" (an outside review, 2026-11-28): the files are checked first, naming the flag.
+TEST_F(CliTls, WrongTlsFilesAreNamedBeforeConnecting) {
+  const std::string target = absl::StrCat("127.0.0.1:", ClosedPort());
+  const auto health = [&](const std::vector<std::string>& flags) {
+    std::vector<std::string> args = {"health", "--server", target};
+    args.insert(args.end(), flags.begin(), flags.end());
+    return RunTetrefine(args);
+  };
+  const struct {
+    std::vector<std::string> flags;
+    std::string message;
+  } cases[] = {
+      {{"--tls-ca", dir_.File("ca.pem"), "--tls-cert", dir_.File("client.key"), "--tls-key",
+        dir_.File("client.pem")},
+       "--tls-cert: " + dir_.File("client.key") + " holds no PEM certificate"},
+      {{"--tls-ca", dir_.File("ca.pem"), "--tls-cert", dir_.File("client.pem"), "--tls-key",
+        dir_.File("server.key")},
+       "--tls-key: " + dir_.File("server.key") +
+           " is not the private key of the --tls-cert certificate in " + dir_.File("client.pem")},
+      {{"--tls-ca", dir_.File("ca.key")},
+       "--tls-ca: " + dir_.File("ca.key") + " holds no PEM certificate"},
+  };
+  for (const auto& c : cases) {
+    const ProcessResult run = health(c.flags);
+    EXPECT_EQ(run.exit_code, 2) << run.err;
+    EXPECT_TRUE(absl::StrContains(run.err, c.message)) << run.err;
+    EXPECT_FALSE(absl::StrContains(run.err, "empty address list")) << run.err;
+  }
+}
+
 TEST_F(CliTls, HealthOverTlsAndMutualTls) {
   {
     absl::StatusOr<std::unique_ptr<ServerProcess>> started = ServerProcess::Start(
