@@ -214,9 +214,9 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
     }
     return absl::OkStatus();
   }
-  // Two tets on the bad face with the same four vertices are one element listed twice (Gmsh 2
-  // lists an element once per physical group it belongs to): said so, rather than as an overlap
-  // or a crowded face (found by a file-format sweep).
+  // Two tets on the bad face with the same four vertices are one element listed twice: said so,
+  // rather than as an overlap or a crowded face (found by a file-format sweep, on Gmsh 2 files,
+  // which list an element once per physical group; client/io's Gmsh reader now keeps one copy).
   const auto duplicate = [&](const std::vector<int64_t>& on) -> std::optional<absl::Status> {
     for (size_t i = 0; i < on.size(); ++i) {
       for (size_t j = i + 1; j < on.size(); ++j) {
@@ -224,11 +224,9 @@ absl::Status CheckFaces(const std::vector<Vec3>& points, const std::vector<Tet>&
         std::sort(a.begin(), a.end());
         std::sort(c.begin(), c.end());
         if (a != c) continue;
-        return absl::InvalidArgumentError(
-            absl::StrCat("mesh.tets[", on[i], "] and mesh.tets[", on[j],
-                         "] are the same tet (vertices ", a[0], ", ", a[1], ", ", a[2], ", ", a[3],
-                         "): an element listed twice, as Gmsh 2 files list "
-                         "an element once per physical group it belongs to"));
+        return absl::InvalidArgumentError(absl::StrCat(
+            "mesh.tets[", on[i], "] and mesh.tets[", on[j], "] are the same tet (vertices ", a[0],
+            ", ", a[1], ", ", a[2], ", ", a[3], "): an element listed twice"));
       }
     }
     return std::nullopt;

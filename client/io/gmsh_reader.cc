@@ -197,6 +197,9 @@ class GmshParser {
   absl::Status Nodes22();
   absl::Status Nodes41();
   absl::Status Elements22();
+  // MSH 2 lists an element once per physical group of its elementary entity; keeps the first
+  // copy of each tet (see the definition).
+  void DropPhysicalCopies22();
   absl::Status Elements41();
   absl::Status Data(bool node_data);
   absl::Status StartNodes(int64_t count);
@@ -230,7 +233,8 @@ class GmshParser {
   std::vector<Tet> tets_;
   std::vector<int64_t> tet_tags_;
   std::vector<int32_t> labels_;
-  TagMap tet_index_;  // built once the elements are read
+  std::vector<int64_t> entities22_;  // MSH 2: each tet's elementary entity (its second tag)
+  TagMap tet_index_;                 // built once the elements are read
   std::vector<double> values_;
   std::vector<double> iteration_;
   std::vector<double> quality_;
@@ -627,10 +631,12 @@ absl::Status GmshParser::Elements22() {
           if (absl::Status s = Element(Load<int32_t>(*data, at), type, nodes, physical); !s.ok()) {
             return s;
           }
+          entities22_.push_back(ntags > 1 ? Load<int32_t>(*data, at + 2) : 0);
         }
       }
       seen += in_block;
     }
+    DropPhysicalCopies22();
     return absl::OkStatus();
   }
   for (int64_t i = 0; i < *count; ++i) {
@@ -642,11 +648,12 @@ absl::Status GmshParser::Elements22() {
     if (nn == 0) return in_.Error(absl::StrCat("unknown element type ", *type));
     absl::StatusOr<int64_t> tags = in_.IntIn("an element's tag count", 0, 1 << 16);
     if (!tags.ok()) return tags.status();
-    int64_t physical = 0;
+    int64_t physical = 0, entity = 0;
     for (int64_t k = 0; k < *tags; ++k) {
       absl::StatusOr<int64_t> value = in_.Int("an element tag");
       if (!value.ok()) return value.status();
       if (k == 0) physical = *value;
+      if (k == 1) entity = *value;
     }
     for (int k = 0; k < nn; ++k) {
       absl::StatusOr<int64_t> node = in_.Int("an element node tag");
@@ -654,8 +661,70 @@ absl::Status GmshParser::Elements22() {
       nodes[k] = *node;
     }
     if (absl::Status s = Element(*tag, *type, nodes, physical); !s.ok()) return s;
+    if (*type == kGmshTet) entities22_.push_back(entity);
   }
+  DropPhysicalCopies22();
   return absl::OkStatus();
+}
+
+// Gmsh's MSH 2 writer repeats every element of an elementary entity that is in several physical
+// groups, once per group, under new element tags. Read as they are, such a file held each tet
+// twice: `info` reported twice the volume and an empty boundary, `refine` refused the copies as
+// repeated tets. Like a Gmsh 4 file, whose entity lists its groups once, a tet keeps its first
+// group's label and the other groups are named as not read. A copy is a later element of the
+// same entity on the same nodes with another physical tag; one with the same tag is a real repeat
+// and is left for the validation to name.
+void GmshParser::DropPhysicalCopies22() {
+  const size_t n = tets_.size();
+  // Most files have one group per entity: nothing to look for.
+  absl::flat_hash_map<int64_t, int32_t> entity_label;
+  bool several = false;
+  for (size_t i = 0; i < n && !several; ++i) {
+    const auto [it, inserted] = entity_label.try_emplace(entities22_[i], labels_[i]);
+    several = !inserted && it->second != labels_[i];
+  }
+  if (!several) return;
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  const auto key = [&](uint32_t i) {
+    Tet sorted = tets_[i];
+    std::sort(sorted.begin(), sorted.end());
+    return std::pair{entities22_[i], sorted};
+  };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const auto ka = key(a), kb = key(b);
+    return ka != kb ? ka < kb : a < b;
+  });
+  std::vector<bool> drop(n, false);
+  bool any = false;
+  for (size_t g = 0; g < n;) {
+    size_t end = g + 1;
+    const auto first = key(order[g]);
+    while (end < n && key(order[end]) == first) ++end;
+    for (size_t k = g + 1; k < end; ++k) {
+      const uint32_t copy = order[k];
+      if (labels_[copy] == labels_[order[g]]) continue;
+      drop[copy] = any = true;
+      const std::pair<int64_t, int64_t> group = {entities22_[copy], labels_[copy]};
+      if (std::find(other_groups_.begin(), other_groups_.end(), group) == other_groups_.end()) {
+        other_groups_.push_back(group);
+      }
+    }
+    g = end;
+  }
+  if (!any) return;
+  std::sort(other_groups_.begin(), other_groups_.end());
+  size_t kept = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (drop[i]) continue;
+    tets_[kept] = tets_[i];
+    tet_tags_[kept] = tet_tags_[i];
+    labels_[kept] = labels_[i];
+    ++kept;
+  }
+  tets_.resize(kept);
+  tet_tags_.resize(kept);
+  labels_.resize(kept);
 }
 
 absl::Status GmshParser::Elements41() {

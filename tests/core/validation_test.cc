@@ -198,7 +198,7 @@ TEST(Validation, FaceInThreeTetsIsRefused) {
       << r.status().message();
 }
 
-// One tet listed twice (Gmsh 2 lists an element once per physical group) is named as such, not
+// One tet listed twice is named as such, not
 // as an overlap or a face in three tets, whichever face check meets it first.
 TEST(Validation, ATetListedTwiceIsNamedAsSuch) {
   // A lone tet and its copy; a tet, its neighbour across a face, and the neighbour's copy.

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "absl/strings/match.h"
@@ -175,6 +176,39 @@ TEST(IoFixtureTest, GmshVolumesInTwoPhysicalGroupsNameTheGroupNotKept) {
   absl::StatusOr<MeshFile> plain = ReadMesh(FixturePath("gmsh_41_ascii.msh"));
   ASSERT_TRUE(plain.ok()) << plain.status();
   EXPECT_TRUE(plain->dropped_arrays.empty());
+}
+
+// A Gmsh 2 file lists an element once per physical group of its entity, under a new tag: the
+// copy is dropped and its group named (tests/io/independent_readers_test.cc has Gmsh's own
+// files). The same element twice in the same group is a repeat, not a copy: it is kept for the
+// validation to name ("an element listed twice").
+TEST(IoFixtureTest, Gmsh2CopiesOfAnElementInAnotherGroupAreDropped) {
+  std::ifstream in(FixturePath("gmsh_22_ascii.msh"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string first = "\n1 4 2 5 1 48 40 45 77\n";
+  ASSERT_NE(text.find(first), std::string::npos);
+  ASSERT_NE(text.find("$Elements\n200\n"), std::string::npos);
+  for (const auto& [copy, tets, dropped] : std::vector<std::tuple<std::string, size_t, bool>>{
+           {"201 4 2 9 1 77 45 40 48", 200, true}, {"201 4 2 5 1 77 45 40 48", 201, false}}) {
+    SCOPED_TRACE(copy);
+    std::string edited = text;
+    edited.replace(edited.find("$Elements\n200\n"), 14, "$Elements\n201\n");
+    edited.insert(edited.find(first) + first.size(), copy + "\n");
+    ScratchDir dir;
+    const std::string path = dir.File("copies.msh");
+    WriteBytes(path, edited);
+    absl::StatusOr<MeshFile> file = ReadMesh(path);
+    ASSERT_TRUE(file.ok()) << file.status();
+    EXPECT_EQ(file->mesh.tets.size(), tets);
+    if (dropped) {
+      EXPECT_EQ(file->dropped_arrays,
+                std::vector<std::string>{"physical group 9 of volume 1 (a tet keeps one label: "
+                                         "its volume's first physical group)"});
+      EXPECT_NEAR(RegionVolumes(*file).at(5), 1.0, 1e-12);
+    } else {
+      EXPECT_TRUE(file->dropped_arrays.empty());
+    }
+  }
 }
 
 // The same two cubes partitioned by Gmsh (-part 2): the elements name partitioned entities,
