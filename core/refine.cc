@@ -1,5 +1,6 @@
 #include "core/refine.h"
 
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -472,7 +473,12 @@ std::string_view StopReasonName(StopReason r) {
 absl::StatusOr<RefineResult> Refine(const Volume& volume, const Mesh& mesh,
                                     const RefineOptions& options) {
   if (absl::Status s = ValidateRefineOptions(options); !s.ok()) return s;
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  // More threads than TBB's default concurrency (the cores this process may use) gain nothing:
+  // TBB caps its workers there anyway, and said so on stderr ("TBB Warning: The number of workers
+  // is currently limited to ..."), a line in the middle of `refine --quiet`'s output (outside
+  // review, 2026-11-28). The output does not depend on the count.
+  const int threads = std::min(options.threads, tbb::info::default_concurrency());
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
   absl::StatusOr<RefineResult> result;
   arena.execute([&] { result = RefineInArena(volume, mesh, options); });
   return result;

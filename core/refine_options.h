@@ -73,7 +73,9 @@ struct RefineOptions {
   std::optional<double> norm_coeff;
   OutsidePolicy outside = OutsidePolicy::kReject;
   OrientationPolicy orientation = OrientationPolicy::kReject;
-  int threads = 0;  // >= 0; 0: all cores. The output does not depend on it.
+  // >= 0; 0: all cores; more than the cores run as many as the cores. The output does not depend
+  // on it.
+  int threads = 0;
   // Edges shorter than this (world units) are never split. Unset: 1/64 of the smallest voxel
   // spacing. Why: the paper's scheme splits only marked edges, so the edges joining a new
   // midpoint to far corners stay long; near a feature much sharper than the mesh, those are split

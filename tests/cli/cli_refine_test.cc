@@ -138,6 +138,27 @@ TEST_F(CliRefine, LabelsAndFrameOfTheInputReachTheOutput) {
   }
 }
 
+// More threads than cores: TBB capped them and printed its own warning in the middle of a
+// --quiet run (outside review, 2026-11-28). The result is the one-thread run's.
+TEST_F(CliRefine, MoreThreadsThanCoresRunQuietlyWithTheSameResult) {
+  std::string first;
+  for (const char* threads : {"1", "4096"}) {
+    SCOPED_TRACE(threads);
+    const std::string out = dir_.File(absl::StrCat("threads_", threads, ".vtu"));
+    const ProcessResult run =
+        RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.05",
+                      "--output", out, "--threads", threads, "--quiet"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_EQ(run.err, "");
+    const std::string bytes = io::iotest::ReadBytes(out);
+    if (first.empty()) {
+      first = bytes;
+    } else {
+      EXPECT_TRUE(bytes == first) << "the outputs differ";
+    }
+  }
+}
+
 TEST_F(CliRefine, StatsJsonParsesAndAgreesWithTheRun) {
   const std::string out = dir_.File("out.msh");
   const std::string stats = dir_.File("stats.json");
