@@ -616,6 +616,24 @@ def test_tls_with_a_client_certificate(server_binary, tmp_path):
     with pytest.raises(tetrefine.TetrefineError, match="tls\\['key'\\]: .*notakey.pem: not PEM"):
         tetrefine.Client("127.0.0.1:1", tls={"ca": ca[1], "cert": client_key[1],
                                              "key": tmp_path / "notakey.pem"})
+    # PEM, but the wrong PEM: named before connecting, as the CLI names them (gRPC said
+    # "UNAVAILABLE: empty address list").
+    for tls, message in [
+            ({"cert": client_key[0], "key": client_key[1]},
+             r"tls\['cert'\]: .*client.key holds no PEM certificate"),
+            ({"cert": client_key[1], "key": server_key[0]},
+             r"tls\['key'\]: .*server.key is not the private key of the tls\['cert'\] "
+             r"certificate in .*client.pem"),
+            ({"cert": client_key[1], "key": ca[1]},
+             r"tls\['key'\]: .*ca.pem holds no unencrypted PEM private key"),
+            ({"ca": ca[0]}, r"tls\['ca'\]: .*ca.key holds no PEM certificate"),
+            ({"ca": ca[0].read_bytes()}, r"tls\['ca'\]: \d+ bytes holds no PEM certificate"),
+            ({"cert": client_key[1].read_bytes(), "key": server_key[0].read_bytes()},
+             r"tls\['key'\]: \d+ bytes is not the private key of the tls\['cert'\] "
+             r"certificate in \d+ bytes")]:
+        with pytest.raises(tetrefine.TetrefineError, match=message) as error:
+            tetrefine.Client("127.0.0.1:1", tls=tls)
+        assert error.value.code == grpc.StatusCode.INVALID_ARGUMENT
 
 @pytest.mark.parametrize("callback", ["on_iteration", "on_mesh"])
 def test_a_non_callable_callback_is_refused_before_sending(server, callback):

@@ -1,6 +1,8 @@
 """tetrefine.Client: refine numpy arrays on a tetrefine_server."""
 
 import os
+import ssl
+import tempfile
 import time
 from collections.abc import Mapping
 
@@ -39,9 +41,50 @@ def _read_pem(name, value):
     same check as the CLI's --tls-ca (client/cli/grpc_channel.cc) names the entry instead."""
     data = _read_bytes(name, value)
     if data is not None and b"-----BEGIN" not in data:
-        source = f"{len(value)} bytes" if isinstance(value, bytes) else f"{value}"
-        raise invalid(f"tls[{name!r}]", f"{source}: not PEM (no \"-----BEGIN\" line)")
+        raise invalid(f"tls[{name!r}]", f"{_source(value)}: not PEM (no \"-----BEGIN\" line)")
     return data
+
+
+def _source(value):
+    return f"{len(value)} bytes" if isinstance(value, bytes) else f"{value}"
+
+
+def _check_tls_pair(tls, ca, cert, key):
+    """The CLI's check of its TLS files (server/tls_files.cc) with Python's OpenSSL: a swapped
+    cert and key, a key of another certificate or a key as the CA reached gRPC, which said only
+    "UNAVAILABLE: empty address list" when it connected (a review, 2026-11-28)."""
+    def holds_certificate(data):
+        try:
+            ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT).load_verify_locations(
+                cadata=data.decode("latin-1"))
+            return True
+        except (ssl.SSLError, ValueError):
+            return False
+
+    def no_certificate(name):
+        return invalid(f"tls[{name!r}]", f"{_source(tls[name])} holds no PEM certificate "
+                       "(-----BEGIN CERTIFICATE-----)")
+
+    if cert is not None:
+        if not holds_certificate(cert):
+            raise no_certificate("cert")
+        # load_cert_chain reads files only: the PEM bytes go to a private temporary directory.
+        with tempfile.TemporaryDirectory() as folder:
+            cert_path, key_path = os.path.join(folder, "cert.pem"), os.path.join(folder, "key.pem")
+            for path, data in ((cert_path, cert), (key_path, key)):
+                with open(os.open(path, os.O_WRONLY | os.O_CREAT, 0o600), "wb") as f:
+                    f.write(data)
+            try:
+                ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT).load_cert_chain(cert_path, key_path)
+            except ssl.SSLError as error:
+                if error.reason == "KEY_VALUES_MISMATCH":
+                    raise invalid("tls['key']", f"{_source(tls['key'])} is not the private key "
+                                  f"of the tls['cert'] certificate in {_source(tls['cert'])}"
+                                  ) from None
+                raise invalid("tls['key']", f"{_source(tls['key'])} holds no unencrypted PEM "
+                              "private key (-----BEGIN PRIVATE KEY-----)") from None
+    if ca is not None and not holds_certificate(ca):
+        raise no_certificate("ca")
 
 
 def _credentials(tls):
@@ -59,10 +102,10 @@ def _credentials(tls):
                           "server_name")
         if ("cert" in tls) != ("key" in tls):
             raise invalid("tls", "a client certificate needs both 'cert' and 'key'")
+        ca, key, cert = (_read_pem(name, tls.get(name)) for name in ("ca", "key", "cert"))
+        _check_tls_pair(tls, ca, cert, key)
         credentials = grpc.ssl_channel_credentials(
-            root_certificates=_read_pem("ca", tls.get("ca")),
-            private_key=_read_pem("key", tls.get("key")),
-            certificate_chain=_read_pem("cert", tls.get("cert")))
+            root_certificates=ca, private_key=key, certificate_chain=cert)
         options = []
         if tls.get("server_name"):
             options.append(("grpc.ssl_target_name_override", tls["server_name"]))
