@@ -54,16 +54,21 @@ struct MergedIteration {
   int64_t split_edges = 0;               // edges of `before` whose midpoint is a new vertex
   int64_t steiner_points = 0;            // new vertices that are no edge's midpoint (SP)
   ConfigurationCounts configurations{};  // tets by configuration, from their split edges
-  double worst_new_quality = 1.0;        // over the new tets: min mean ratio (-1: degenerate)
+  // Split tets cut by another tiling than Table 1's (IterationStats::other_tilings), with
+  // best_tilings; 0 without.
+  int64_t other_tilings = 0;
+  double worst_new_quality = 1.0;  // over the new tets: min mean ratio (-1: degenerate)
 };
 
 // `before` is the mesh the parts were cut from; results[p] the result of parts[p] after at most
-// one iteration (0 iterations: unchanged). New tets get iteration `iteration`. INTERNAL when a
+// one iteration (0 iterations: unchanged). New tets get iteration `iteration`. best_tilings: the
+// parts cut each tet by its best tiling (the longest-edge scheme), which the merge finds again
+// from the tet's corners and split edges to count other_tilings. INTERNAL when a
 // result does not start with its part's vertices, lacks per-tet parents, disagrees with
 // another part on a shared vertex's value, or leaves an owned tet without children.
 absl::StatusOr<MergedIteration> MergeOwnedChildren(const WholeMesh& before,
                                                    const std::vector<HaloPart>& parts,
                                                    const std::vector<const RefineResult*>& results,
-                                                   int iteration);
+                                                   int iteration, bool best_tilings = false);
 
 }  // namespace tetrefine::sharding

@@ -57,7 +57,7 @@ bool SameTets(const RefineResult& a, const RefineResult& b) {
 }
 
 void ExpectSameRefinement(const Mesh& input, const RefineResult& unsharded,
-                          const RefineResult& sharded) {
+                          const RefineResult& sharded, bool whole_mesh_statistics) {
   ASSERT_EQ(sharded.mesh.values.size(), sharded.mesh.points.size());
   ASSERT_EQ(sharded.tet_iteration.size(), sharded.mesh.tets.size());
   ASSERT_EQ(sharded.tet_quality.size(), sharded.mesh.tets.size());
@@ -114,9 +114,24 @@ void ExpectSameRefinement(const Mesh& input, const RefineResult& unsharded,
     EXPECT_EQ(Bits(a.max_error), Bits(e.max_error));
     EXPECT_EQ(Bits(a.quality.min), Bits(e.quality.min));
     EXPECT_EQ(a.quality.count, e.quality.count);
-    // Edges on part boundaries are counted once per part.
-    EXPECT_GE(a.edges, e.edges);
-    EXPECT_GE(a.split_edges, e.split_edges);
+    if (whole_mesh_statistics) {
+      EXPECT_EQ(a.edges, e.edges);
+      EXPECT_EQ(a.split_edges, e.split_edges);
+      EXPECT_EQ(a.other_tilings, e.other_tilings);
+      // The same edges and errors, summed in the merged mesh's order (numbered part by part).
+      EXPECT_NEAR(a.mean_error, e.mean_error, 1e-13 * e.mean_error);
+      if (i == 0) {
+        EXPECT_EQ(Bits(a.mean_error), Bits(e.mean_error));
+      }
+    } else {
+      // Edges on part boundaries are counted once per part.
+      EXPECT_GE(a.edges, e.edges);
+      EXPECT_GE(a.split_edges, e.split_edges);
+    }
+  }
+  if (whole_mesh_statistics) {
+    EXPECT_NEAR(sharded.final_mean_error, unsharded.final_mean_error,
+                1e-13 * unsharded.final_mean_error);
   }
 }
 

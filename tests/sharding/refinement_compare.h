@@ -11,8 +11,12 @@ namespace tetrefine::testing {
 // tets (corner positions in order, iteration, quality) after sorting both; input vertices at
 // their input indices; no duplicated vertex; and the statistics that sharding keeps exact (tet
 // counts and configurations per iteration, maxima, minima, stop reason, norm_coeff).
+// whole_mesh_statistics: the run went one iteration at a time with halos (the longest-edge
+// scheme, certify), whose client measures the merged mesh: edge counts, other tilings and the
+// edge-midpoint means are the unsharded run's too (the means to their sums' rounding: the merged
+// mesh is numbered part by part, so its edges are summed in another order).
 void ExpectSameRefinement(const Mesh& input, const RefineResult& unsharded,
-                          const RefineResult& sharded);
+                          const RefineResult& sharded, bool whole_mesh_statistics = false);
 
 // Whether the two results have the same tets (as ExpectSameRefinement compares them), for
 // tests that need a refinement to differ.
