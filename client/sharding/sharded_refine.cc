@@ -11,6 +11,7 @@
 #include <thread>
 #include <utility>
 
+#include "absl/numeric/int128.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/edge_statistics.h"
@@ -48,15 +49,47 @@ absl::Status Prefixed(int part, const absl::Status& status) {
   return absl::Status(status.code(), absl::StrCat("part ", part, ": ", status.message()));
 }
 
-// The lattice sample of each of `parts` parts: the caller's lattice_max_tets in all, split
-// evenly (parts are cut to equal tet counts). Each part sampled the whole budget, so a sharded
-// run sampled K times the tets of the unsharded one, past the user's bound on that work (found by
-// a sweep). 0, every tet, stays. Beyond the budget the sample is another one than the unsharded
-// run's (its tets are numbered part by part), so its statistics differ a little; within it
-// every tet is sampled either way, and they agree.
+// The lattice sample of each of `parts` parts whose final sizes are not known yet (the paper
+// scheme's parts refine to the end): the caller's lattice_max_tets split evenly, rounded up. Each
+// part sampled the whole budget, so a sharded run sampled K times the tets of the unsharded one,
+// past the user's bound on that work (found by a sweep). 0, every tet, stays. Beyond the budget the
+// sample is another one than the unsharded run's (its tets are numbered part by part), so its
+// statistics differ a little; within it every tet is sampled either way, and they agree.
 void SplitLatticeSample(RefineOptions& o, size_t parts) {
   const auto k = static_cast<int64_t>(parts);
   if (o.lattice_max_tets > 0 && k > 1) o.lattice_max_tets = (o.lattice_max_tets + k - 1) / k;
+}
+
+// The lattice sample of each of `parts` parts of known sizes: `total` tets in all (rounding each
+// part's share up sampled 200,001 of 200,000 at K = 3: an outside review, 2026-11-28), shared in
+// proportion to the parts' tets by largest remainder, ties to the lower part; every tet of a part
+// whose share covers it. 0 (every tet) stays 0. A share is at least 1, since 0 would mean every
+// tet: only when `total` is below the number of parts is the sum above it.
+std::vector<int64_t> LatticeShares(int64_t total, const std::vector<MeshPart>& parts) {
+  std::vector<int64_t> tets;
+  int64_t all = 0;
+  for (const MeshPart& part : parts) {
+    tets.push_back(static_cast<int64_t>(part.mesh.tets.size()));
+    all += tets.back();
+  }
+  if (total == 0 || all <= total) return std::vector<int64_t>(parts.size(), total == 0 ? 0 : total);
+  std::vector<int64_t> share(parts.size());
+  std::vector<std::pair<int64_t, size_t>> remainder;  // (-remainder, part): largest first
+  int64_t given = 0;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    const absl::uint128 scaled =
+        absl::uint128(static_cast<uint64_t>(total)) * absl::uint128(static_cast<uint64_t>(tets[p]));
+    share[p] = static_cast<int64_t>(scaled / absl::uint128(static_cast<uint64_t>(all)));
+    remainder.emplace_back(
+        -static_cast<int64_t>(scaled % absl::uint128(static_cast<uint64_t>(all))), p);
+    given += share[p];
+  }
+  std::sort(remainder.begin(), remainder.end());
+  for (size_t i = 0; given < total && i < remainder.size(); ++i, ++given) {
+    ++share[remainder[i].second];
+  }
+  for (int64_t& n : share) n = std::max<int64_t>(n, 1);
+  return share;
 }
 
 // Which targets have been found gone (UNAVAILABLE: refused, dead, or a connect timeout) during a
@@ -188,6 +221,12 @@ class PartRunner {
     }
   }
 
+  // From now on part p samples lattice_shares[p] tets for the lattice (one per part), whatever
+  // the options' lattice_max_tets.
+  void SetLatticeShares(std::vector<int64_t> lattice_shares) {
+    lattice_shares_ = std::move(lattice_shares);
+  }
+
   // Refines parts `which` with `options` into results[p] and reports[p]. The first failure
   // stops the others and is returned.
   absl::Status Run(const std::vector<int>& which, const client::RefineRequestOptions& options,
@@ -260,8 +299,15 @@ class PartRunner {
         if (Stopped()) return;
       }
       ++report.attempts;
+      client::RefineRequestOptions own;
+      const client::RefineRequestOptions* sent = &options;
+      if (!lattice_shares_.empty()) {
+        own = options;
+        own.refine.lattice_max_tets = lattice_shares_[p];
+        sent = &own;
+      }
       absl::StatusOr<client::ClientResult> reply =
-          client::RefineViaService(targets_[target], *slab, part.mesh, options, calls, shard_.call);
+          client::RefineViaService(targets_[target], *slab, part.mesh, *sent, calls, shard_.call);
       open_calls_[target]->release();
       if (reply.ok()) {
         report.target = target;
@@ -299,6 +345,7 @@ class PartRunner {
   const ShardOptions& shard_;
   const ShardCallbacks& callbacks_;
   const int max_attempts_;
+  std::vector<int64_t> lattice_shares_;
 
   std::atomic<bool> abort_{false};
   std::atomic<bool> user_cancelled_{false};
@@ -551,11 +598,11 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
   measure.refine.orientation = OrientationPolicy::kReject;
   measure.refine.max_iterations = 0;
   measure.refine.track_parents = false;
-  SplitLatticeSample(measure.refine, parts.size());
   measure.send_max_tets = false;
   measure.stream_every_iteration = false;
   measure.skip_final_mesh = true;
   PartRunner runner(targets, health, volume, parts, clamp, shard_options, callbacks);
+  runner.SetLatticeShares(LatticeShares(measure.refine.lattice_max_tets, parts));
   std::vector<std::optional<client::ClientResult>> replies(parts.size());
   std::vector<ShardReport> measured(parts.size());
   std::vector<int> all(parts.size());
