@@ -98,6 +98,9 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
     ASSERT_EQ(run.exit_code, 0) << run.err;
     EXPECT_TRUE(absl::StrContains(run.err, std::string(shards) + " shards over 2 servers"))
         << run.err;
+    EXPECT_TRUE(absl::StrContains(run.err, std::string("cutting the mesh into ") + shards +
+                                               " parts and sending each to its server"))
+        << run.err;
     absl::StatusOr<io::MeshFile> got = io::ReadMesh(sharded);
     ASSERT_TRUE(got.ok());
     EXPECT_EQ(testing::GeometricTets(got->mesh), testing::GeometricTets(want->mesh))
@@ -115,6 +118,12 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
                            dir_.File("sharded_default.vtu")});
   const ProcessResult run = RunTetrefine(args);
   ASSERT_EQ(run.exit_code, 0) << run.err;
+  // Its parts are cut anew each iteration, fewer where their halos would overlap (on this small
+  // mesh, one): the progress line said "into 2 parts" (an outside review, 2026-11-28).
+  EXPECT_TRUE(absl::StrContains(run.err,
+                                "cutting each iteration's mesh into up to 2 parts (fewer "
+                                "where their 27-ring halos would overlap"))
+      << run.err;
   absl::StatusOr<io::MeshFile> want_default = io::ReadMesh(dir_.File("embedded_default.vtu"));
   absl::StatusOr<io::MeshFile> got_default = io::ReadMesh(dir_.File("sharded_default.vtu"));
   ASSERT_TRUE(want_default.ok() && got_default.ok());
