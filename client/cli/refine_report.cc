@@ -135,9 +135,11 @@ std::string FormatRefineReport(const RefineResult& result, double epsilon, bool 
             : absl::StrFormat("in every one of the %d tets", l.tets_sampled);
     absl::StrAppend(&out,
                     absl::StrFormat("Lattice-sampled error (n = %d, %d points %s): max %.6f, mean "
-                                    "%.6f, %.4f%% of points above epsilon\n",
+                                    "%.6f, %.4f%% of points above epsilon; weighed by volume: "
+                                    "mean %.6f, %.4f%% of the volume above epsilon\n",
                                     l.n, l.points_sampled, where, l.max_error, l.mean_error,
-                                    100.0 * l.share_above_epsilon));
+                                    100.0 * l.share_above_epsilon, l.volume_mean_error,
+                                    100.0 * l.volume_share_above_epsilon));
   }
   absl::StrAppend(&out, absl::StrFormat("Edge-midpoint error of the result: max %.6f, mean %.6f\n",
                                         result.final_max_error, result.final_mean_error));

@@ -161,6 +161,12 @@ std::string RefineStatsJson(const RunDescription& run, const client::ClientResul
   json.Number(r.lattice.mean_error);
   json.Key("share_above_epsilon");
   json.Number(r.lattice.share_above_epsilon);
+  // Each tet's points weighed by its volume: what the field's error over the region is, where
+  // the per-point figures weigh the many small tets refinement packs where the error is.
+  json.Key("volume_mean_error");
+  json.Number(r.lattice.volume_mean_error);
+  json.Key("volume_share_above_epsilon");
+  json.Number(r.lattice.volume_share_above_epsilon);
   json.EndObject();
   json.Key("certified_max_error");  // null unless certify converged
   if (r.certified_max_error >= 0.0) {

@@ -180,6 +180,9 @@ TEST_F(CliRefine, StatsJsonParsesAndAgreesWithTheRun) {
       "assert set(its[0]['configurations']) == "
       "{'0','1','2a','2b','3a','3b','3c','4a','4b','5','6'}\n"
       "assert d['options']['epsilon'] == 0.05\n"
+      "l = d['lattice']\n"
+      "assert 0 < l['volume_mean_error'] <= l['max_error']\n"
+      "assert 0 <= l['volume_share_above_epsilon'] <= 1\n"
       "print(its[-1]['final_tets'], d['output_mesh']['tets'], d['stop_reason'],\n"
       "      d['quality']['final']['count'], d['lattice']['n'])\n";
   const ProcessResult check = RunProcess({"/usr/bin/python3", "-c", script, stats});
