@@ -222,7 +222,9 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   } else {
     result.norm_coeff = range[1] > range[0] ? range[1] - range[0] : 1.0;
   }
-  if (absl::Status s = CheckValuePrecision(result.norm_coeff, range, options.epsilon); !s.ok()) {
+  if (absl::Status s = CheckValuePrecision(result.norm_coeff, range, options.epsilon,
+                                           options.norm_coeff.has_value());
+      !s.ok()) {
     return s;
   }
   const bool clamp = options.outside == OutsidePolicy::kClamp;

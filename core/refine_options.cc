@@ -106,7 +106,7 @@ double RoundedUp(double x) {
 }  // namespace
 
 absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>& range,
-                                 double epsilon) {
+                                 double epsilon, bool norm_given) {
   constexpr double kSmallestNorm = 1e-290;
   if (norm_coeff < kSmallestNorm) {
     return absl::InvalidArgumentError(absl::StrCat(
@@ -116,6 +116,18 @@ absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>&
   }
   const double magnitude = std::max(std::abs(range[0]), std::abs(range[1]));
   const double noise = 16.0 * std::numeric_limits<double>::epsilon() * magnitude / norm_coeff;
+  if (!(noise <= 0.01 * epsilon) && norm_given) {
+    // A norm_coeff of 1e-12 for a volume that spans 13 was blamed on the volume, with remedies
+    // for the volume (an outside review of the service, 2026-11-28). The smallest that passes:
+    // noise = 16 eps M / norm <= epsilon / 100.
+    const double smallest = 1600.0 * std::numeric_limits<double>::epsilon() * magnitude / epsilon;
+    return absl::InvalidArgumentError(absl::StrCat(
+        "options.norm_coeff: ", norm_coeff, " is too small for this volume, whose values reach ",
+        magnitude, ": float64 rounding of the interpolation alone is about ", noise,
+        " of it, above a hundredth of epsilon ", epsilon,
+        ", so the errors would be rounding, not the data; use a norm_coeff of at least ",
+        RoundedUp(smallest), ", or none for the volume's value range (", range[1] - range[0], ")"));
+  }
   if (!(noise <= 0.01 * epsilon)) {
     // The remedies end with the smallest epsilon that would pass: a tiny epsilon on an ordinary
     // volume was blamed on the volume alone (an outside review, 2026-11-28). The CLI's

@@ -142,9 +142,11 @@ absl::Status CheckNormCoeffForRange(double norm_coeff, const std::array<double, 
 // rounding, not the data: a CLI sweep saw "lattice max 2.0" (impossible in exact arithmetic) and
 // refinement to the tet budget for values {1e16, 1e16 + 2}, and 32 M tets for {0, 5e-324}.
 // INVALID_ARGUMENT naming the values and what to do (subtract an offset, scale the volume);
-// every volume of ordinary data passes (int16 CT: noise 1e-15 of its range).
+// every volume of ordinary data passes (int16 CT: noise 1e-15 of its range). norm_given: the
+// caller's options.norm_coeff chose the normalisation, and the message names that field and the
+// smallest norm_coeff that passes instead of blaming the volume.
 absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>& range,
-                                 double epsilon);
+                                 double epsilon, bool norm_given = false);
 
 // OK, or INVALID_ARGUMENT naming the first offending field and its value, e.g.
 // "options.epsilon: must be finite and > 0, got 0". Refine checks its options with this; so does

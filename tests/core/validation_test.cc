@@ -184,6 +184,24 @@ TEST(Validation, ValuesFloat64CannotResolveAreRefused) {
   const double least = std::stod(text.substr(at + quoted.size()));
   EXPECT_TRUE(CheckValuePrecision(4096, {-1024, 3071}, least).ok()) << least;
   EXPECT_FALSE(CheckValuePrecision(4096, {-1024, 3071}, least * 0.98).ok()) << least;
+  // A norm_coeff the caller gave too small is named as such, with the smallest that passes,
+  // which does (it was blamed on the volume, with remedies for the volume: an outside review of
+  // the service, 2026-11-28).
+  RefineOptions narrow = options;
+  narrow.norm_coeff = 1e-12;
+  const absl::StatusOr<RefineResult> given = Refine(two_level(0, 13), mesh, narrow);
+  ASSERT_EQ(given.status().code(), absl::StatusCode::kInvalidArgument);
+  const std::string said(given.status().message());
+  EXPECT_EQ(said.rfind("options.norm_coeff: 1e-12 is too small for this volume", 0), 0u) << said;
+  EXPECT_EQ(said.find("subtract an offset"), std::string::npos) << said;
+  const std::string norm_quoted = "use a norm_coeff of at least ";
+  const size_t norm_at = said.find(norm_quoted);
+  ASSERT_NE(norm_at, std::string::npos) << said;
+  const double smallest = std::stod(said.substr(norm_at + norm_quoted.size()));
+  narrow.norm_coeff = smallest;
+  EXPECT_TRUE(Refine(two_level(0, 13), mesh, narrow).ok()) << smallest;
+  narrow.norm_coeff = smallest * 0.98;
+  EXPECT_FALSE(Refine(two_level(0, 13), mesh, narrow).ok()) << smallest;
 }
 
 TEST(Validation, FaceInThreeTetsIsRefused) {
