@@ -122,14 +122,15 @@ bool CallGate::FitsEver(int64_t bytes) const {
   return config_.memory_budget_bytes <= 0 || bytes <= config_.memory_budget_bytes;
 }
 
-uint64_t CallGate::Enqueue(Reservation* reservation, int64_t total_bytes,
-                           std::function<void()> start) {
+uint64_t CallGate::Enqueue(const std::string& identity, Reservation* reservation,
+                           int64_t total_bytes, std::function<void()> start) {
   std::vector<std::function<void()>> starts;
   uint64_t id;
   {
     std::lock_guard<std::mutex> lock(mu_);
     id = next_waiter_++;
     queue_.push_back(Waiter{.id = id,
+                            .identity = identity,
                             .reservation = reservation,
                             .total_bytes = total_bytes,
                             .start = std::move(start)});
@@ -150,32 +151,57 @@ bool CallGate::Withdraw(uint64_t id) {
   return false;
 }
 
-void CallGate::ReleaseSlot() {
+void CallGate::ReleaseSlot(const std::string& identity) {
   std::vector<std::function<void()>> starts;
   {
     std::lock_guard<std::mutex> lock(mu_);
     --running_;
+    if (auto it = running_per_identity_.find(identity);
+        it != running_per_identity_.end() && --it->second <= 0) {
+      running_per_identity_.erase(it);
+    }
     starts = Admit();
   }
   RunStarts(std::move(starts));
 }
 
+int CallGate::running(const std::string& identity) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  const auto it = running_per_identity_.find(identity);
+  return it == running_per_identity_.end() ? 0 : it->second;
+}
+
 std::vector<std::function<void()>> CallGate::Admit() {
   std::vector<std::function<void()>> starts;
   const int64_t budget = config_.memory_budget_bytes;
-  for (auto it = queue_.begin(); it != queue_.end() && running_ < config_.slots;) {
-    Reservation& r = *it->reservation;
-    const int64_t more = std::max<int64_t>(0, it->total_bytes - r.bytes_);
-    if (budget > 0 && reserved_ + more > budget) {
-      ++it;  // later, smaller calls may still fit
-      continue;
+  const auto held = [&](const std::string& identity) {
+    const auto it = running_per_identity_.find(identity);
+    return it == running_per_identity_.end() ? 0 : it->second;
+  };
+  while (running_ < config_.slots) {
+    // The waiter that fits and whose identity holds the fewest slots, the earliest among equals;
+    // a call whose memory does not fit yet does not hold back later ones that fit.
+    auto best = queue_.end();
+    int best_held = 0;
+    for (auto it = queue_.begin(); it != queue_.end(); ++it) {
+      const int h = held(it->identity);
+      if (config_.max_slots_per_identity > 0 && h >= config_.max_slots_per_identity) continue;
+      if (best != queue_.end() && h >= best_held) continue;
+      const int64_t more = std::max<int64_t>(0, it->total_bytes - it->reservation->bytes_);
+      if (budget > 0 && reserved_ + more > budget) continue;
+      best = it;
+      best_held = h;
     }
+    if (best == queue_.end()) break;
+    Reservation& r = *best->reservation;
+    const int64_t more = std::max<int64_t>(0, best->total_bytes - r.bytes_);
     reserved_ += more;
     r.bytes_ += more;
     ++running_;
+    ++running_per_identity_[best->identity];
     ++started_;
-    starts.push_back(std::move(it->start));
-    it = queue_.erase(it);
+    starts.push_back(std::move(best->start));
+    queue_.erase(best);
   }
   return starts;
 }

@@ -9,7 +9,11 @@
 //     tet budget), against memory_budget_bytes;
 //   - a refinement slot (one of max_concurrent_refinements) only from the moment its input is
 //     complete until its refinement's CPU work ends; a finished result waiting for a slow
-//     reader holds memory, not a slot.
+//     reader holds memory, not a slot. One identity holds at most max_slots_per_identity slots
+//     at once, and a freed slot goes to the waiting identity that holds the fewest: a client
+//     with four calls that stream every iteration and never read held all four slots of a
+//     server for a minute each, and every other client's call was refused (an outside review,
+//     2026-11-28).
 
 #include <chrono>
 #include <condition_variable>
@@ -30,6 +34,7 @@ class CallGate {
   struct Config {
     int slots = 4;                    // refinements at once, >= 1
     int max_calls_per_identity = 0;   // open calls of one identity; 0: no limit
+    int max_slots_per_identity = 0;   // slots one identity holds at once; 0: no limit
     int64_t memory_budget_bytes = 0;  // 0: memory is not budgeted
   };
   explicit CallGate(const Config& config) : config_(config) {}
@@ -94,11 +99,14 @@ class CallGate {
   // stay valid until `start` has run or Withdraw returned true. Returns an id for Withdraw.
   // A call that could never fit (total_bytes above the whole budget) is the caller's to refuse
   // first (see FitsEver).
-  uint64_t Enqueue(Reservation* reservation, int64_t total_bytes, std::function<void()> start);
+  // Among calls that fit, the one whose identity holds the fewest slots starts first (then
+  // arrival order), and none whose identity holds max_slots_per_identity.
+  uint64_t Enqueue(const std::string& identity, Reservation* reservation, int64_t total_bytes,
+                   std::function<void()> start);
   // Takes a queued call out: true if it had not started (its `start` will never run).
   bool Withdraw(uint64_t id);
-  // Frees the slot taken for a started call.
-  void ReleaseSlot();
+  // Frees the slot taken for a started call of `identity`.
+  void ReleaseSlot(const std::string& identity);
 
   // False when `bytes` exceed the whole budget.
   bool FitsEver(int64_t bytes) const;
@@ -110,7 +118,8 @@ class CallGate {
   bool WaitUntilIdle(std::chrono::steady_clock::time_point deadline);
 
   int open_calls() const;
-  int running() const;            // slots taken
+  int running() const;                             // slots taken
+  int running(const std::string& identity) const;  // slots taken by `identity`
   int64_t started_total() const;  // calls that have taken a slot since the gate was made
   int queued() const;
   int64_t reserved_bytes() const;
@@ -119,6 +128,7 @@ class CallGate {
  private:
   struct Waiter {
     uint64_t id;
+    std::string identity;
     Reservation* reservation;
     int64_t total_bytes;
     std::function<void()> start;
@@ -136,6 +146,7 @@ class CallGate {
   int open_ = 0;
   std::map<std::string, int> per_identity_;
   int running_ = 0;
+  std::map<std::string, int> running_per_identity_;
   int64_t started_ = 0;
   int64_t reserved_ = 0;
   std::list<Waiter> queue_;

@@ -164,9 +164,10 @@ int Run(ShutdownSignals& signals) {
       HumanBytes(l.memory_budget_bytes), l.bytes_per_output_tet, l.max_output_tets);
   spdlog::info(
       "calls: max_concurrent {}, queue {} s, input deadline {} s, idle timeout {} s, write stall "
-      "{} s, max {} s a call, {} open calls per client; auth: {}{}",
+      "{} s, max {} s a call, {} open calls and {} slots per client; auth: {}{}",
       l.max_concurrent_refinements, l.queue_seconds, l.input_deadline_seconds,
       l.idle_timeout_seconds, l.write_stall_seconds, l.max_call_seconds, l.max_calls_per_identity,
+      config.max_slots_per_identity,
       config.access.tokens.has_value()
           ? absl::StrCat(config.access.tokens->size(), " bearer tokens")
           : std::string("no tokens"),

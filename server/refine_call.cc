@@ -244,7 +244,7 @@ void RefineCall::Admit() {
     return;
   }
   std::weak_ptr<RefineCall> weak = weak_from_this();
-  const uint64_t waiter = env_.gate->Enqueue(&reservation_, total, [weak] {
+  const uint64_t waiter = env_.gate->Enqueue(identity_, &reservation_, total, [weak] {
     if (std::shared_ptr<RefineCall> call = weak.lock()) call->StartRefinement();
   });
   {
@@ -263,6 +263,13 @@ std::string RefineCall::WhyNotAdmitted() const {
   if (gate.running() >= gate.config().slots) {
     return absl::StrCat("all ", gate.config().slots,
                         " refinement slots of this server are busy (--max_concurrent)");
+  }
+  const int cap = gate.config().max_slots_per_identity;
+  if (const int held = gate.running(identity_); cap > 0 && held >= cap) {
+    return absl::StrCat("client ", identity_, " already holds ", held, " of the ",
+                        gate.config().slots,
+                        " refinement slots of this server, as many as one client may "
+                        "(--max_slots_per_identity), and the rest are kept for other clients");
   }
   // What this call needs and what would fit now (a service sweep saw small calls refused beside
   // a large one with only the other calls' total: nothing said the call's own default tet budget
@@ -348,7 +355,7 @@ grpc::Status RefineCall::Refine() {
     result = tetrefine::Refine(input_->volume, input_->mesh, options);
   }
   // The CPU work is done: the slot goes to the next call while this one writes its result.
-  env_.gate->ReleaseSlot();
+  env_.gate->ReleaseSlot(identity_);
   input_.reset();
   if (!result.ok()) return wire::ToGrpcStatus(result.status());
   iterations_ = static_cast<int>(result->iterations.size());

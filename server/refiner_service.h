@@ -17,7 +17,9 @@ struct ServiceConfig {
   // Sizes, caps, time limits, per-identity quota and memory budget (all advertised by
   // GetServerInfo). The defaults suit an embedded service: no time limits, no quota, no budget.
   wire::ServiceLimits limits;
-  int refine_threads = 0;                   // core worker threads per refinement; 0: all cores
+  int refine_threads = 0;  // core worker threads per refinement; 0: all cores
+  // Refinement slots one identity holds at once (server/call_gate.h); 0: no cap.
+  int max_slots_per_identity = 0;
   std::shared_ptr<ServiceMetrics> metrics;  // null: no metrics recorded
   AccessPolicy access;                      // tokens and certificate allow-list; none by default
 };

@@ -100,6 +100,10 @@ ABSL_FLAG(double, queue_seconds, 10,
 ABSL_FLAG(int, max_calls_per_identity, 16,
           "Open Refine calls of one client (its token identity, certificate common name, or "
           "else address); more are RESOURCE_EXHAUSTED. 0: no limit");
+ABSL_FLAG(int, max_slots_per_identity, 0,
+          "Refinement slots one client holds at once (0: --max_concurrent less one, at least 1), "
+          "and a freed slot goes to the waiting client that holds the fewest: one client cannot "
+          "take every slot");
 ABSL_FLAG(int64_t, memory_limit_bytes, 0,
           "Memory this server may use in all (0: the cgroup limit, memory.max or "
           "memory.limit_in_bytes, else the machine's physical memory)");
@@ -252,6 +256,7 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   l.write_stall_seconds = absl::GetFlag(FLAGS_write_stall_seconds);
   l.queue_seconds = absl::GetFlag(FLAGS_queue_seconds);
   l.max_calls_per_identity = absl::GetFlag(FLAGS_max_calls_per_identity);
+  service.max_slots_per_identity = absl::GetFlag(FLAGS_max_slots_per_identity);
   l.bytes_per_output_tet = absl::GetFlag(FLAGS_bytes_per_output_tet);
   // Each bound named on its own (one message listing nine flags left the operator to find
   // which was wrong).
@@ -264,10 +269,14 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
                                     {"max_iterations", l.max_iterations, 0},
                                     {"max_lattice_points", l.max_lattice_points, 0},
                                     {"max_calls_per_identity", l.max_calls_per_identity, 0},
+                                    {"max_slots_per_identity", service.max_slots_per_identity, 0},
                                     {"threads", service.refine_threads, 0}}) {
     if (value < least) {
       return Invalid(absl::StrCat("--", name, ": must be >= ", least, ", got ", value));
     }
+  }
+  if (service.max_slots_per_identity == 0) {
+    service.max_slots_per_identity = std::max(1, l.max_concurrent_refinements - 1);
   }
   if (l.max_lattice_n < 0 || l.max_lattice_n > 64) {
     return Invalid(absl::StrCat("--max_lattice_n: must be in [0, 64] (the core's bound), got ",

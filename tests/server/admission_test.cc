@@ -115,11 +115,13 @@ absl::Status RefineSmall(const std::shared_ptr<grpc::Channel>& channel,
 class HeavyCall {
  public:
   explicit HeavyCall(const std::shared_ptr<grpc::Channel>& channel,
-                     client::RefineRequestOptions options = Heavy().options) {
+                     client::RefineRequestOptions options = Heavy().options,
+                     client::CallOptions call = {}) {
     client::RefineCallbacks callbacks;
     callbacks.should_cancel = [this] { return stop_.load(); };
     result_ = std::async(std::launch::async, [=, this] {
-      return client::RefineViaService(channel, Heavy().volume, Heavy().mesh, options, callbacks)
+      return client::RefineViaService(channel, Heavy().volume, Heavy().mesh, options, callbacks,
+                                      call)
           .status();
     });
   }
@@ -529,6 +531,30 @@ TEST(AdmissionTest, BearerTokensIdentifyAndLimitClients) {
   EXPECT_THAT(second.message(), HasSubstr("client token:alice already has 1 Refine calls open"));
   EXPECT_TRUE(RefineSmall(server.NewChannel(), bob).ok());
   alices.context.TryCancel();
+}
+
+// One client may not hold every refinement slot (an outside review, 2026-11-28: four calls of
+// one client that streamed every iteration and never read held all four slots for a minute
+// each, and every other client was refused). Its next call is refused with that reason while
+// another client's call runs at once.
+TEST(AdmissionTest, OneClientCannotTakeEverySlot) {
+  server::ServiceConfig config = Config(2);
+  config.max_slots_per_identity = 1;
+  config.access.tokens = *server::TokenTable::FromText(
+      "alice token-of-alice-0123456789\nbob token-of-bob-0123456789\n", "tokens");
+  LoopbackServer server(config);
+  client::CallOptions alice, bob;
+  alice.bearer_token = "token-of-alice-0123456789";
+  bob.bearer_token = "token-of-bob-0123456789";
+  HeavyCall heavy(server.NewChannel(), Heavy().options, alice);
+  ASSERT_TRUE(Eventually([&] { return server.service().running_refinements() == 1; }));
+  const absl::Status second = RefineSmall(server.NewChannel(), alice);
+  EXPECT_EQ(second.code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(second.message(),
+              HasSubstr("client token:alice already holds 1 of the 2 refinement slots"));
+  EXPECT_THAT(second.message(), HasSubstr("--max_slots_per_identity"));
+  EXPECT_TRUE(RefineSmall(server.NewChannel(), bob).ok());
+  EXPECT_EQ(heavy.Stop().code(), absl::StatusCode::kCancelled);
 }
 
 // Opens the reflection stream and asks for the service list; the call's status.

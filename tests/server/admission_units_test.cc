@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "absl/strings/str_cat.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "server/call_gate.h"
@@ -69,28 +70,62 @@ TEST(CallGateTest, SlotsStartCallsInOrderAndFreeSlotsStartTheNext) {
   std::vector<int> started;
   std::vector<CallGate::Reservation> reservations(4);
   for (int i = 0; i < 4; ++i) {
-    gate.Enqueue(&reservations[i], 0, [&, i] { started.push_back(i); });
+    gate.Enqueue("a", &reservations[i], 0, [&, i] { started.push_back(i); });
   }
   EXPECT_EQ(started, (std::vector<int>{0, 1}));
   EXPECT_EQ(gate.running(), 2);
   EXPECT_EQ(gate.queued(), 2);
-  gate.ReleaseSlot();
+  gate.ReleaseSlot("a");
   EXPECT_EQ(started, (std::vector<int>{0, 1, 2}));
-  gate.ReleaseSlot();
-  gate.ReleaseSlot();
+  gate.ReleaseSlot("a");
+  gate.ReleaseSlot("a");
   EXPECT_EQ(started, (std::vector<int>{0, 1, 2, 3}));
   EXPECT_EQ(gate.running(), 1);
+}
+
+// One client's calls (four that stream every iteration and never read, each holding its slot
+// for the write stall's minute) held every slot, and the other clients' calls waited their
+// queue time and were refused (an outside review, 2026-11-28). An identity now holds at most
+// max_slots_per_identity slots, and a freed slot goes to the waiting identity holding fewest.
+TEST(CallGateTest, NoIdentityHoldsEverySlotAndAFreedSlotGoesToTheOneHoldingFewest) {
+  CallGate gate({.slots = 4, .max_slots_per_identity = 3});
+  std::vector<std::string> started;
+  std::vector<CallGate::Reservation> reservations(8);
+  int next = 0;
+  const auto enqueue = [&](const std::string& who) {
+    const int i = next++;
+    gate.Enqueue(who, &reservations[i], 0,
+                 [&, who, i] { started.push_back(absl::StrCat(who, i)); });
+  };
+  for (int i = 0; i < 5; ++i) enqueue("alice");
+  EXPECT_EQ(started, (std::vector<std::string>{"alice0", "alice1", "alice2"}));
+  EXPECT_EQ(gate.running(), 3) << "the fourth slot stays free for another client";
+  enqueue("bob");  // arrives after alice's queued calls, starts at once
+  EXPECT_EQ(started, (std::vector<std::string>{"alice0", "alice1", "alice2", "bob5"}));
+  enqueue("bob");
+  enqueue("carol");
+  // A slot freed by alice: carol (none running) before bob (one) and alice (two).
+  gate.ReleaseSlot("alice");
+  EXPECT_EQ(started.back(), "carol7");
+  // Alice and bob hold one each: the earlier call.
+  gate.ReleaseSlot("alice");
+  EXPECT_EQ(started.back(), "alice3");
+  // Bob holds none now, alice two.
+  gate.ReleaseSlot("bob");
+  EXPECT_EQ(started.back(), "bob6");
+  EXPECT_EQ(gate.queued(), 1);
+  EXPECT_EQ(gate.running(), 4);
 }
 
 TEST(CallGateTest, AWithdrawnCallNeverStarts) {
   CallGate gate({.slots = 1});
   CallGate::Reservation first, second;
   bool second_started = false;
-  gate.Enqueue(&first, 0, [] {});
-  const uint64_t id = gate.Enqueue(&second, 0, [&] { second_started = true; });
+  gate.Enqueue("a", &first, 0, [] {});
+  const uint64_t id = gate.Enqueue("a", &second, 0, [&] { second_started = true; });
   EXPECT_TRUE(gate.Withdraw(id));
   EXPECT_FALSE(gate.Withdraw(id));
-  gate.ReleaseSlot();
+  gate.ReleaseSlot("a");
   EXPECT_FALSE(second_started);
 }
 
@@ -100,13 +135,13 @@ TEST(CallGateTest, MemoryTheWorstCaseNeedsIsReservedBeforeStartAndLaterSmallerCa
   ASSERT_TRUE(big.ok());
   CallGate::Reservation large, small;
   std::vector<std::string> started;
-  gate.Enqueue(&*big, 700, [&] { started.push_back("big"); });
+  gate.Enqueue("a", &*big, 700, [&] { started.push_back("big"); });
   EXPECT_EQ(gate.reserved_bytes(), 700);
-  gate.Enqueue(&large, 600, [&] { started.push_back("large"); });  // 700 + 600 > 1000: waits
-  gate.Enqueue(&small, 200, [&] { started.push_back("small"); });  // fits: passes it
+  gate.Enqueue("a", &large, 600, [&] { started.push_back("large"); });  // 700 + 600 > 1000: waits
+  gate.Enqueue("a", &small, 200, [&] { started.push_back("small"); });  // fits: passes it
   EXPECT_EQ(started, (std::vector<std::string>{"big", "small"}));
   EXPECT_EQ(gate.reserved_bytes(), 900);
-  gate.ReleaseSlot();
+  gate.ReleaseSlot("a");
   big->Release();  // its memory frees: the large call fits now
   EXPECT_EQ(started, (std::vector<std::string>{"big", "small", "large"}));
   EXPECT_EQ(large.bytes(), 600);
