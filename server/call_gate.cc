@@ -36,6 +36,18 @@ absl::Status CallGate::Reservation::GrowTo(int64_t total, const std::string& wha
   return absl::OkStatus();
 }
 
+void CallGate::Reservation::ShrinkTo(int64_t total) {
+  if (gate_ == nullptr || total >= bytes_) return;
+  std::vector<std::function<void()>> starts;
+  {
+    std::lock_guard<std::mutex> lock(gate_->mu_);
+    gate_->reserved_ -= bytes_ - std::max<int64_t>(total, 0);
+    bytes_ = std::max<int64_t>(total, 0);
+    starts = gate_->Admit();
+  }
+  gate_->RunStarts(std::move(starts));
+}
+
 void CallGate::Reservation::Release() {
   if (gate_ == nullptr) return;
   std::vector<std::function<void()>> starts;

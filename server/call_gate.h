@@ -9,11 +9,11 @@
 //     tet budget), against memory_budget_bytes;
 //   - a refinement slot (one of max_concurrent_refinements) only from the moment its input is
 //     complete until its refinement's CPU work ends; a finished result waiting for a slow
-//     reader holds memory, not a slot. One identity holds at most max_slots_per_identity slots
-//     at once, and a freed slot goes to the waiting identity that holds the fewest: a client
-//     with four calls that stream every iteration and never read held all four slots of a
-//     server for a minute each, and every other client's call was refused (an outside review,
-//     2026-11-28).
+//     reader holds memory (its own size's, no longer its worst case's), not a slot. One identity
+//     holds at most max_slots_per_identity slots at once, and a freed slot goes to the waiting
+//     identity that holds the fewest: a client with four calls that stream every iteration and
+//     never read held all four slots of a server for a minute each, and every other client's call
+//     was refused (an outside review, 2026-11-28).
 
 #include <chrono>
 #include <condition_variable>
@@ -52,6 +52,9 @@ class CallGate {
     // RESOURCE_EXHAUSTED, saying how much is needed, held and free, when that does not fit now;
     // the reservation is then unchanged.
     absl::Status GrowTo(int64_t total, const std::string& what);
+    // Shrinks the reservation to `total` bytes (nothing if it holds no more), and starts the
+    // queued calls that fit now.
+    void ShrinkTo(int64_t total);
     int64_t bytes() const { return bytes_; }
     void Release();
 

@@ -360,6 +360,12 @@ grpc::Status RefineCall::Refine() {
   if (!result.ok()) return wire::ToGrpcStatus(result.status());
   iterations_ = static_cast<int>(result->iterations.size());
   tets_out_ = static_cast<int64_t>(result->mesh.tets.size());
+  // The worst case reserved at admission (the input, and up to max_tets output tets; by default
+  // 90% of the budget) is more than what the result holds while it is written: the input is
+  // gone, and the output has its real size. A finished call that a client did not read kept the
+  // worst case for the write stall's minute, and other clients were refused for memory (an
+  // outside review, 2026-11-28).
+  reservation_.ShrinkTo(tets_out_ * limits_.bytes_per_output_tet);
   if (result->stop_reason == StopReason::kCancelled || Interrupted()) {
     return InterruptedStatus(absl::StrCat("refinement, after ", iterations_, " iterations"));
   }
