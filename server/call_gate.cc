@@ -9,13 +9,20 @@
 namespace tetrefine::server {
 
 CallGate::Reservation::Reservation(Reservation&& other) noexcept
-    : gate_(std::exchange(other.gate_, nullptr)), bytes_(std::exchange(other.bytes_, 0)) {}
+    : gate_(std::exchange(other.gate_, nullptr)),
+      bytes_(std::exchange(other.bytes_, 0)),
+      identity_(std::move(other.identity_)),
+      input_bytes_(std::exchange(other.input_bytes_, 0)),
+      uploading_(std::exchange(other.uploading_, true)) {}
 
 CallGate::Reservation& CallGate::Reservation::operator=(Reservation&& other) noexcept {
   if (this != &other) {
     Release();
     gate_ = std::exchange(other.gate_, nullptr);
     bytes_ = std::exchange(other.bytes_, 0);
+    identity_ = std::move(other.identity_);
+    input_bytes_ = std::exchange(other.input_bytes_, 0);
+    uploading_ = std::exchange(other.uploading_, true);
   }
   return *this;
 }
@@ -29,6 +36,22 @@ absl::Status CallGate::Reservation::GrowTo(int64_t total, const std::string& wha
       return absl::ResourceExhaustedError(absl::StrCat(
           what, " needs ", HumanBytes(total), " of this server's memory budget and ", gate_->Free(),
           "; retry in a few seconds, when running calls have finished"));
+    }
+    const int64_t cap = gate_->config_.max_input_bytes_per_identity;
+    if (uploading_ && cap > 0) {
+      int64_t& held = gate_->uploading_per_identity_[identity_];
+      // A client's only upload may take what the budget has (a large volume); beside others of
+      // the same client, the sum stays within the cap.
+      const int64_t others = held - input_bytes_;
+      if (others > 0 && others + total > cap) {
+        if (held == 0) gate_->uploading_per_identity_.erase(identity_);
+        return absl::ResourceExhaustedError(absl::StrCat(
+            what, " needs ", HumanBytes(total), " of this server's memory budget, and client ",
+            identity_, "'s other uploads hold ", HumanBytes(others), " of the ", HumanBytes(cap),
+            " one client's uploads may hold (half the budget); retry when they have finished"));
+      }
+      held += total - input_bytes_;
+      input_bytes_ = total;
     }
     gate_->reserved_ += total - bytes_;
     bytes_ = total;
@@ -54,6 +77,7 @@ void CallGate::Reservation::Release() {
   {
     std::lock_guard<std::mutex> lock(gate_->mu_);
     gate_->reserved_ -= bytes_;
+    gate_->UncountUploadLocked(identity_, std::exchange(input_bytes_, 0));
     starts = gate_->Admit();
   }
   CallGate* gate = std::exchange(gate_, nullptr);
@@ -79,6 +103,14 @@ CallGate::Ticket& CallGate::Ticket::operator=(Ticket&& other) noexcept {
 void CallGate::UncountLocked(const std::string& identity) {
   if (auto it = per_identity_.find(identity); it != per_identity_.end() && --it->second == 0) {
     per_identity_.erase(it);
+  }
+}
+
+void CallGate::UncountUploadLocked(const std::string& identity, int64_t bytes) {
+  if (bytes == 0) return;
+  if (auto it = uploading_per_identity_.find(identity); it != uploading_per_identity_.end()) {
+    it->second -= bytes;
+    if (it->second <= 0) uploading_per_identity_.erase(it);
   }
 }
 
@@ -119,9 +151,11 @@ absl::StatusOr<CallGate::Ticket> CallGate::Open(const std::string& identity) {
   return ticket;
 }
 
-absl::StatusOr<CallGate::Reservation> CallGate::Reserve(int64_t bytes, const std::string& what) {
+absl::StatusOr<CallGate::Reservation> CallGate::Reserve(int64_t bytes, const std::string& what,
+                                                        const std::string& identity) {
   Reservation reservation;
   reservation.gate_ = this;
+  reservation.identity_ = identity;
   absl::Status status = reservation.GrowTo(bytes, what);
   if (!status.ok()) {
     reservation.gate_ = nullptr;
@@ -209,6 +243,9 @@ std::vector<std::function<void()>> CallGate::Admit() {
     const int64_t more = std::max<int64_t>(0, best->total_bytes - r.bytes_);
     reserved_ += more;
     r.bytes_ += more;
+    // Admitted: no longer an upload.
+    UncountUploadLocked(r.identity_, std::exchange(r.input_bytes_, 0));
+    r.uploading_ = false;
     ++running_;
     ++running_per_identity_[best->identity];
     ++started_;

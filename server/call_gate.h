@@ -32,9 +32,13 @@ namespace tetrefine::server {
 class CallGate {
  public:
   struct Config {
-    int slots = 4;                    // refinements at once, >= 1
-    int max_calls_per_identity = 0;   // open calls of one identity; 0: no limit
-    int max_slots_per_identity = 0;   // slots one identity holds at once; 0: no limit
+    int slots = 4;                   // refinements at once, >= 1
+    int max_calls_per_identity = 0;  // open calls of one identity; 0: no limit
+    int max_slots_per_identity = 0;  // slots one identity holds at once; 0: no limit
+    // Memory one identity's calls may hold while they upload (before they are admitted to
+    // refine), unless it is one call's alone; 0: no limit. Many slow uploads of one client filled
+    // the budget and every other client was refused for memory (an outside review, 2026-11-28).
+    int64_t max_input_bytes_per_identity = 0;
     int64_t memory_budget_bytes = 0;  // 0: memory is not budgeted
   };
   explicit CallGate(const Config& config) : config_(config) {}
@@ -62,6 +66,9 @@ class CallGate {
     friend class CallGate;
     CallGate* gate_ = nullptr;
     int64_t bytes_ = 0;
+    std::string identity_;     // whose upload this is, for max_input_bytes_per_identity
+    int64_t input_bytes_ = 0;  // of bytes_, counted as identity_'s upload (until admitted)
+    bool uploading_ = true;    // not admitted to refine yet
   };
 
   // One open call of an identity; released when destroyed.
@@ -91,8 +98,11 @@ class CallGate {
   // max_calls_per_identity calls open.
   absl::StatusOr<Ticket> Open(const std::string& identity);
 
-  // A reservation of `bytes` for a new call (RESOURCE_EXHAUSTED if they do not fit).
-  absl::StatusOr<Reservation> Reserve(int64_t bytes, const std::string& what);
+  // A reservation of `bytes` for a new call of `identity` (RESOURCE_EXHAUSTED if they do not
+  // fit, or its uploads would hold more than max_input_bytes_per_identity). Until the call is
+  // admitted to refine, what it grows to counts as its identity's upload.
+  absl::StatusOr<Reservation> Reserve(int64_t bytes, const std::string& what,
+                                      const std::string& identity = "");
 
   // Queues a call whose input is complete. As soon as a slot is free and `total_bytes` fit
   // (counting what `reservation` already holds), grows the reservation to them, takes the slot
@@ -141,6 +151,8 @@ class CallGate {
   void RunStarts(std::vector<std::function<void()>> starts);
   std::string Free() const;                         // "X free of Y" for messages (under mu_)
   void UncountLocked(const std::string& identity);  // one call fewer for `identity` (under mu_)
+  // Takes `bytes` off `identity`'s uploads (under mu_).
+  void UncountUploadLocked(const std::string& identity, int64_t bytes);
 
   const Config config_;
   mutable std::mutex mu_;
@@ -150,6 +162,7 @@ class CallGate {
   std::map<std::string, int> per_identity_;
   int running_ = 0;
   std::map<std::string, int> running_per_identity_;
+  std::map<std::string, int64_t> uploading_per_identity_;  // Reservation::input_bytes_ summed
   int64_t started_ = 0;
   int64_t reserved_ = 0;
   std::list<Waiter> queue_;

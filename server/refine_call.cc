@@ -68,7 +68,8 @@ void RefineCall::Begin() {
     absl::StatusOr<CallGate::Ticket> ticket = env_.gate->Open(identity_);
     absl::StatusOr<CallGate::Reservation> reservation;
     if (ticket.ok()) {
-      reservation = env_.gate->Reserve(OpenCallBytes(limits_.max_message_bytes), "a new call");
+      reservation =
+          env_.gate->Reserve(OpenCallBytes(limits_.max_message_bytes), "a new call", identity_);
     }
     if (!ticket.ok() || !reservation.ok()) {
       const absl::Status& status = !ticket.ok() ? ticket.status() : reservation.status();

@@ -312,6 +312,9 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
                                 " exceeds the memory limit of ", s.memory_limit_bytes, " (",
                                 s.memory_source, ")"));
   }
+  // Half the budget for one client's uploads (server/call_gate.h), so that one client's slow
+  // uploads cannot keep every other client's calls out.
+  service.max_input_bytes_per_identity = l.memory_budget_bytes / 2;
   const int64_t call_floor = OpenCallBytes(l.max_message_bytes);
   if (l.memory_budget_bytes < call_floor) {
     return Invalid(absl::StrCat("the memory budget (", HumanBytes(l.memory_budget_bytes),

@@ -171,6 +171,33 @@ TEST(CallGateTest, AShrunkReservationStartsTheCallsThatFitNow) {
   EXPECT_EQ(gate.reserved_bytes(), 500);
 }
 
+// Sixteen slow uploads of one client held the whole memory budget, and every other client's
+// call was refused for memory (an outside review, 2026-11-28). One client's uploads now hold at
+// most max_input_bytes_per_identity together, unless one upload is all it has.
+TEST(CallGateTest, OneClientsUploadsHoldAtMostTheirShare) {
+  CallGate gate({.slots = 4, .max_input_bytes_per_identity = 500, .memory_budget_bytes = 1000});
+  absl::StatusOr<CallGate::Reservation> first = gate.Reserve(300, "alice's first", "alice");
+  ASSERT_TRUE(first.ok());
+  const absl::StatusOr<CallGate::Reservation> second = gate.Reserve(300, "alice's second", "alice");
+  ASSERT_EQ(second.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(second.status().message(),
+              HasSubstr("client alice's other uploads hold 300 B of the 500 B one client's "
+                        "uploads may hold"));
+  absl::StatusOr<CallGate::Reservation> bobs = gate.Reserve(300, "bob's", "bob");
+  ASSERT_TRUE(bobs.ok()) << "another client is not affected";
+  bobs->Release();
+  // Alone, one upload may grow past the share (a large volume), within the budget.
+  EXPECT_TRUE(first->GrowTo(800, "alice's first").ok());
+  EXPECT_EQ(gate.Reserve(100, "alice's second", "alice").status().code(),
+            absl::StatusCode::kResourceExhausted);
+  // Admitted to refine, it is no upload any more: alice may upload again.
+  bool started = false;
+  gate.Enqueue("alice", &*first, 800, [&] { started = true; });
+  ASSERT_TRUE(started);
+  absl::StatusOr<CallGate::Reservation> again = gate.Reserve(100, "alice's next", "alice");
+  EXPECT_TRUE(again.ok()) << again.status();
+}
+
 TEST(CallGateTest, AReservationThatDoesNotFitSaysHowMuchIsFree) {
   CallGate gate({.slots = 1, .memory_budget_bytes = 4 << 20});
   absl::StatusOr<CallGate::Reservation> a = gate.Reserve(3 << 20, "call a");
