@@ -124,7 +124,9 @@ class RefineResult:
                 "min_edge_length" (every edge above epsilon is shorter than min_edge_length:
                 none was split, and summary.final_max_error is above epsilon).
     lattice:    Record of the error sampled on the barycentric lattice inside the tets (n,
-                tets_sampled, points_sampled, max_error, mean_error, share_above_epsilon, ...).
+                tets_sampled, points_sampled, max_error, mean_error, share_above_epsilon, and
+                volume_mean_error, volume_share_above_epsilon: each tet's points weighed by its
+                volume, the figures to judge a result by; see the README).
                 With lattice_n=0 no check runs: n and tets_sampled are 0, and its errors (0)
                 are not measurements.
     summary:    Record of the whole Summary message (norm_coeff, initial_quality, final_quality,
