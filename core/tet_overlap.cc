@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -755,11 +756,23 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
     }
   });
   std::vector<std::vector<Overlap>> found(BlockCount(num_tets));
+  // The box test's pairs are few per tet on a mesh (tens near a boundary), but a valid mesh can
+  // make them quadratic: 20,000 slivers around one edge, whose boxes all meet, took 6 s here and
+  // 60,000 took a minute (an outside review, 2026-11-28), a way for one request to hold a
+  // server's core. Past kMaxCrowdedPairsPerItem per tet on average (and a floor for small
+  // meshes), the mesh is refused. Whether the count passes the bound does not depend on the thread
+  // count: blocks stop early only once their sum, which only grows, has passed it.
+  const int64_t max_pairs = kCrowdedPairFloor + kMaxCrowdedPairsPerItem * num_tets;
+  std::atomic<int64_t> pairs{0};
   // Every tet against the faces `index` finds for its box; `may_meet` (from the tet) and
   // `near` (from its box) pass over the tets that cannot meet any.
   auto scan = [&](const auto& index, const auto& may_meet, const auto& near) {
     ForEachBlock(num_tets, [&](int64_t block, int64_t begin, int64_t end) {
+      int64_t mine_pairs = 0;
       for (int64_t t = begin; t < end; ++t) {
+        if (mine_pairs >= 4096) {
+          if (pairs.fetch_add(std::exchange(mine_pairs, 0)) > max_pairs) return;
+        }
         if (!may_meet(tets[t])) continue;
         const std::array<Vec3, 4> p = Corners(points, tets[t]);
         const Box box = BoxOf(std::array<const Vec3*, 4>{&p[0], &p[1], &p[2], &p[3]}, 0.0);
@@ -767,6 +780,7 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
         TetAxes mine;
         bool have_mine = false;
         index.ForEachMeeting(box, [&](uint32_t f) {
+          ++mine_pairs;
           const int64_t owner = faces[f].tet;
           if (owner == t) return;
           std::array<const Vec3*, 3> in_plane{};
@@ -788,6 +802,7 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
           }
         });
       }
+      pairs.fetch_add(mine_pairs);
     });
   };
   // The index, by the spread of face sizes: the uniform grid where they are alike, the tree
@@ -819,6 +834,10 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
     scan(
         tree, [](const Tet&) { return true; },
         [&](const Box& box) { return occupancy.Touches(box); });
+  }
+  if (pairs.load() > max_pairs) {
+    return CrowdedMeshError(tets, "tet and a boundary face meet within their bounding boxes",
+                            max_pairs);
   }
   const Overlap* first = nullptr;
   for (const std::vector<Overlap>& f : found) {
@@ -854,6 +873,37 @@ double TetOverlapDepth(const std::array<Vec3, 4>& a, const std::array<Vec3, 4>& 
 absl::Status CheckNoOverlappingTets(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                                     const std::vector<OwnedFace>& faces) {
   return tet_overlap_internal::CheckOverlaps(points, tets, faces);
+}
+
+// Off the normal path: its cost does not matter.
+absl::Status CrowdedMeshError(const std::vector<Tet>& tets, const std::string& pair,
+                              int64_t max_pairs) {
+  std::vector<uint64_t> edges;
+  edges.reserve(tets.size() * 6);
+  for (const Tet& t : tets) {
+    for (int a = 0; a < 4; ++a) {
+      for (int b = a + 1; b < 4; ++b) {
+        edges.push_back((uint64_t{std::min(t[a], t[b])} << 32) | std::max(t[a], t[b]));
+      }
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  uint64_t most = 0;
+  int64_t most_count = 0;
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (static_cast<int64_t>(j - i) > most_count) {
+      most_count = static_cast<int64_t>(j - i);
+      most = edges[i];
+    }
+    i = j;
+  }
+  return absl::InvalidArgumentError(absl::StrCat(
+      "mesh is too crowded to check in bounded time: more than ", max_pairs, " pairs of a ", pair,
+      " (at most ", kMaxCrowdedPairsPerItem, " per item are expected); the most crowded edge, (",
+      most >> 32, ", ", most & 0xffffffffu, "), is shared by ", most_count,
+      " tets (a mesh of a volume has tens): split or remesh the slivers around it"));
 }
 
 }  // namespace tetrefine

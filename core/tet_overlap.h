@@ -14,6 +14,7 @@
 // and tets far from the boundary are never tested against each other.
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -56,5 +57,19 @@ double TetOverlapDepth(const std::array<Vec3, 4>& a, const std::array<Vec3, 4>& 
 // tets whose boxes all meet), as any box test's is.
 absl::Status CheckNoOverlappingTets(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                                     const std::vector<OwnedFace>& faces);
+
+// The bound of the geometric checks' candidate pairs (a tet or a boundary vertex against the
+// boundary faces near it): tens per item on meshes of volumes, quadratic on valid meshes whose
+// thin elements all meet near each other (thousands of slivers around one edge), which would let
+// one request hold a core for minutes. A check refuses the mesh past kCrowdedPairFloor +
+// kMaxCrowdedPairsPerItem x its items.
+inline constexpr int64_t kMaxCrowdedPairsPerItem = 256;
+inline constexpr int64_t kCrowdedPairFloor = int64_t{1} << 24;
+
+// InvalidArgument: the mesh is too crowded for a check to run in bounded time: more than
+// `max_pairs` pairs (each a `pair`, e.g. "tet and a boundary face meet within their bounding
+// boxes"), naming the edge shared by the most tets (ties: smallest ids).
+absl::Status CrowdedMeshError(const std::vector<Tet>& tets, const std::string& pair,
+                              int64_t max_pairs);
 
 }  // namespace tetrefine

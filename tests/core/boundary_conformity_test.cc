@@ -492,3 +492,49 @@ TEST(BoundaryConformity, RefineRefusesTetsOverlappingAcrossATwistedQuad) {
 
 }  // namespace
 }  // namespace tetrefine
+
+namespace tetrefine {
+namespace {
+
+// n thin tets around one edge (0, 1): a valid, conformal mesh whose every boundary face and tet
+// meet near the others, as in the review's fan.
+Mesh FanAroundAnEdge(int n) {
+  Mesh m;
+  m.points = {{0, 0, -10}, {0, 0, 25}};
+  for (int k = 0; k < n; ++k) {
+    const double a = 2.0 * M_PI * k / n;
+    m.points.push_back({20.0 * std::cos(a), 20.0 * std::sin(a), 0.0});
+  }
+  for (int k = 0; k < n; ++k) {
+    Tet t = {0, 1, static_cast<uint32_t>(2 + k), static_cast<uint32_t>(2 + (k + 1) % n)};
+    const auto& p = m.points;
+    if (SignedVolume6(p[t[0]], p[t[1]], p[t[2]], p[t[3]]) < 0) std::swap(t[0], t[1]);
+    m.tets.push_back(t);
+  }
+  return m;
+}
+
+// 20,000 slivers around one edge took 6 s in `info` and 60,000 a minute (quadratic in the
+// geometric checks: an outside review, 2026-11-28). Such a mesh is refused at once, naming the
+// edge, with the same message at any thread count; a fan of a few hundred still passes.
+TEST(BoundaryConformity, ACrowdedMeshIsRefusedInBoundedTimeNamingItsEdge) {
+  EXPECT_TRUE(CheckConformity(FanAroundAnEdge(300).points, FanAroundAnEdge(300).tets).ok());
+  const Mesh fan = FanAroundAnEdge(40000);
+  std::string messages[2];
+  for (int threads : {1, 2}) {
+    tbb::task_arena arena(threads);
+    absl::Status s;
+    arena.execute([&] { s = CheckConformity(fan.points, fan.tets); });
+    ASSERT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << s;
+    messages[threads - 1] = std::string(s.message());
+  }
+  EXPECT_EQ(messages[0], messages[1]);
+  EXPECT_NE(messages[0].find("mesh is too crowded to check in bounded time"), std::string::npos)
+      << messages[0];
+  EXPECT_NE(messages[0].find("the most crowded edge, (0, 1), is shared by 40000 tets"),
+            std::string::npos)
+      << messages[0];
+}
+
+}  // namespace
+}  // namespace tetrefine
