@@ -85,8 +85,10 @@ std::optional<Vec3> RasSigns(absl::string_view space) {
   if (s == "right-anterior-superior" || s == "ras") return Vec3{1, 1, 1};
   if (s == "left-anterior-superior" || s == "las") return Vec3{-1, 1, 1};
   if (s == "left-posterior-superior" || s == "lps") return Vec3{-1, -1, 1};
-  // No anatomical meaning stated: keep the coordinates as they are.
-  if (s == "scanner-xyz" || s == "3d-right-handed" || s == "3d-left-handed") return Vec3{1, 1, 1};
+  // No anatomical meaning stated: read as ITK reads them (and so 3D Slicer), as its LPS physical
+  // coordinates, like a MetaImage's. They were kept as RAS, so the same grid read from an .mhd
+  // and from such a .nrrd lay mirrored in x and y (an outside review, 2026-11-28).
+  if (s == "scanner-xyz" || s == "3d-right-handed" || s == "3d-left-handed") return Vec3{-1, -1, 1};
   return std::nullopt;
 }
 
@@ -355,7 +357,8 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
   std::array<Vec3, 3> axes{};
   std::vector<std::string> spacing_warnings;
   Vec3 origin{0, 0, 0};
-  Vec3 signs{1, 1, 1};
+  // Without "space" too, as ITK reads such a file: LPS (see RasSigns).
+  Vec3 signs{-1, -1, 1};
   if (const absl::string_view space = Field(*fields, "space"); !space.empty()) {
     const std::optional<Vec3> ras = RasSigns(space);
     if (!ras.has_value()) {
@@ -394,6 +397,22 @@ absl::StatusOr<VolumeFile> ReadNrrd(const std::string& path) {
         step = 1.0;
       }
       axes[a][a] = step;
+    }
+    // "axis mins" place the grid, as ITK's reader (NrrdIO's nrrdOriginCalculate) places it: the
+    // first sample at the min for node-centred axes, half a sample in for cell-centred ones (the
+    // default when "centers" does not say). They were ignored: every such grid began at 0.
+    const std::vector<absl::string_view> mins = Words(Field(*fields, "axis mins"));
+    const std::vector<absl::string_view> centers = Words(Field(*fields, "centers"));
+    // A "nan" (NRRD's unknown) leaves the grid at 0, as ITK leaves it.
+    std::array<double, 3> min{};
+    bool known = mins.size() == 3;
+    for (int a = 0; a < 3 && known; ++a) {
+      known = ParseDouble(mins[a], min[a]) && std::isfinite(min[a]);
+    }
+    for (int a = 0; a < 3 && known; ++a) {
+      const bool node =
+          a < static_cast<int>(centers.size()) && absl::AsciiStrToLower(centers[a]) == "node";
+      origin[a] = node ? min[a] : min[a] + 0.5 * axes[a][a];
     }
   }
   Affine affine = AffineFromAxes(axes, origin);

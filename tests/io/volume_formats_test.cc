@@ -169,6 +169,53 @@ TEST(IoNrrdTest, TeemsOtherFieldSpellingsAreRead) {
               HasSubstr("twice.nrrd:12: field \"byte skip\" is given twice"));
 }
 
+// A NRRD without an anatomical space is read as ITK (and so 3D Slicer) reads it: its
+// coordinates are LPS, like a MetaImage's, and "axis mins" place the grid, half a sample in on
+// cell-centred axes. Such files were read as RAS with the grid at 0, mirrored in x and y against
+// the same grid as a .mhd (an outside review, 2026-11-28).
+TEST(IoNrrdTest, FilesWithoutAnAnatomicalSpaceAreReadAsItkReadsThem) {
+  ScratchDir dir;
+  const std::string samples = Int16Samples(Ramp(), false);
+  const std::string start =
+      absl::StrCat("NRRD0004\ntype: short\ndimension: 3\nsizes: ", kNx, " ", kNy, " ", kNz, "\n");
+  const std::string tail = "endian: little\nencoding: raw\n\n" + samples;
+  // The same grid, first sample at LPS (10, -20, 30), 2 x 3 x 4 mm, six ways.
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"lps.nrrd", start +
+                       "space: left-posterior-superior\nspace directions: (2,0,0) (0,3,0) "
+                       "(0,0,4)\nspace origin: (10,-20,30)\n" +
+                       tail},
+      {"scanner.nrrd", start +
+                           "space: scanner-xyz\nspace directions: (2,0,0) (0,3,0) (0,0,4)\n"
+                           "space origin: (10,-20,30)\n" +
+                           tail},
+      {"handed.nrrd", start +
+                          "space dimension: 3\nspace directions: (2,0,0) (0,3,0) (0,0,4)\n"
+                          "space origin: (10,-20,30)\n" +
+                          tail},
+      {"node.nrrd",
+       start + "spacings: 2 3 4\naxis mins: 10 -20 30\ncenters: node node node\n" + tail},
+      {"cell.nrrd", start + "spacings: 2 3 4\naxis mins: 9 -21.5 28\n" + tail},
+      {"same.mhd", ""}};
+  WriteBytes(dir.File("same.raw"), samples);
+  WriteBytes(dir.File("same.mhd"),
+             absl::StrCat("ObjectType = Image\nNDims = 3\nDimSize = ", kNx, " ", kNy, " ", kNz,
+                          "\nElementSpacing = 2 3 4\nOffset = 10 -20 30\nElementType = "
+                          "MET_SHORT\nElementByteOrderMSB = False\nElementDataFile = same.raw\n"));
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    if (!text.empty()) WriteBytes(dir.File(name), text);
+    absl::StatusOr<VolumeFile> file = ReadVolume(dir.File(name));
+    ASSERT_TRUE(file.ok()) << file.status();
+    ExpectLpsVoxelsAtRasPoints(*file, {10, -20, 30});
+  }
+  // No mins (or an unknown one): the grid starts at 0, as ITK starts it.
+  WriteBytes(dir.File("nomin.nrrd"), start + "spacings: 2 3 4\naxis mins: nan 0 0\n" + tail);
+  absl::StatusOr<VolumeFile> nomin = ReadVolume(dir.File("nomin.nrrd"));
+  ASSERT_TRUE(nomin.ok()) << nomin.status();
+  ExpectLpsVoxelsAtRasPoints(*nomin, {0, 0, 0});
+}
+
 // A 4D file whose extra axis holds one sample and is not in space is the 3D volume pynrrd and
 // 3D Slicer write for a one-component vector volume; two components are refused.
 TEST(IoNrrdTest, OneSampleListAxisIsA3dVolume) {
