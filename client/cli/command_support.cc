@@ -45,7 +45,17 @@ absl::StatusOr<io::MeshFile> LoadMesh(const std::string& path, const std::string
         absl::StrCat(path, ": is a volume, but ", flag,
                      " takes a mesh (.vtu, .pvtu, .vtk, .msh, .mesh, .meshb, .ele, .inp)"));
   }
-  return io::ReadMesh(path);
+  absl::StatusOr<io::MeshFile> file = io::ReadMesh(path);
+  // A file that reads but holds no tet (an empty .inp, a .msh or .vtk without cells, a .mesh
+  // with "Tetrahedra 0") was reported by `info` as a tetrahedral mesh of 0 tets in [0, 0]^3, and
+  // refused only later, one command at a time, by the others (an outside review, 2026-11-28).
+  if (file.ok() && file->mesh.tets.empty()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ": no tetrahedra (", file->mesh.points.size(),
+                     file->mesh.points.size() == 1 ? " vertex" : " vertices",
+                     "): not a volume mesh (tetrefine reads linear tetrahedra)"));
+  }
+  return file;
 }
 
 absl::Status CheckNormCoeffFlag(double norm, const Volume& volume, double epsilon,

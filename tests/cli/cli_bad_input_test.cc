@@ -78,6 +78,7 @@ class CliBadInput : public ::testing::TestWithParam<BadCase> {
     Mesh no_tets;
     no_tets.points = grid.points;
     WriteMeshFile(dir_->File("no_tets.vtu"), no_tets);
+    WriteBytes(dir_->File("empty.inp"), "");
     std::filesystem::create_directory(dir_->File("adir.vtu"));
   }
   static void TearDownTestSuite() {
@@ -201,6 +202,12 @@ INSTANTIATE_TEST_SUITE_P(
                 "no tet uses it: remove the unused vertices"},
         BadCase{"MeshInverted", RefineWith("--mesh", "$D/inverted.vtu"), "--fix-orientation"},
         BadCase{"MeshWithoutTets", RefineWith("--mesh", "$D/no_tets.vtu"), "$D/no_tets.vtu"},
+        // info reported such files as tetrahedral meshes of 0 tets (an outside review,
+        // 2026-11-28); every command now refuses them alike.
+        BadCase{"InfoOfMeshWithoutTets",
+                {"info", "$D/no_tets.vtu"},
+                "$D/no_tets.vtu: no tetrahedra (27 vertices): not a volume mesh"},
+        BadCase{"InfoOfAnEmptyInp", {"info", "$D/empty.inp"}, "$D/empty.inp: no tetrahedra"},
         BadCase{"OutputUnknownExtension", RefineWith("--output", "$D/out.obj"), "$D/out.obj"},
         BadCase{"OutputDirectoryMissing", RefineWith("--output", "$D/no/such/out.vtu"),
                 "$D/no/such/out.vtu"},
