@@ -16,6 +16,7 @@
 #include "client/io/header_lines.h"
 #include "client/io/io_error.h"
 #include "client/io/number_text.h"
+#include "client/io/text_scanner.h"
 #include "client/io/voxel_decode.h"
 #include "client/io/world_frame.h"
 #include "client/io/zlib_codec.h"
@@ -60,7 +61,8 @@ absl::StatusOr<MetaHeader> ParseMetaHeader(absl::string_view bytes, const std::s
     if (equals == absl::string_view::npos) {
       return FileLineError(
           path, lines.line_number(),
-          absl::StrCat("expected \"Key = Value\", got \"", trimmed.substr(0, 60), "\""));
+          // Quoted as tokens are: binary bytes went into the line raw (an outside review).
+          absl::StrCat("expected \"Key = Value\", got ", QuoteToken(trimmed)));
     }
     const std::string key =
         absl::AsciiStrToLower(absl::StripAsciiWhitespace(trimmed.substr(0, equals)));

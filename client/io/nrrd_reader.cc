@@ -21,6 +21,7 @@
 #include "client/io/header_lines.h"
 #include "client/io/io_error.h"
 #include "client/io/number_text.h"
+#include "client/io/text_scanner.h"
 #include "client/io/voxel_decode.h"
 #include "client/io/world_frame.h"
 #include "client/io/zlib_codec.h"
@@ -179,7 +180,7 @@ absl::StatusOr<NrrdFields> ParseNrrdHeader(absl::string_view bytes, const std::s
     const size_t colon = line.find(": ");
     if (colon == absl::string_view::npos) {
       return FileLineError(path, lines.line_number(),
-                           absl::StrCat("expected \"field: value\", got \"", line, "\""));
+                           absl::StrCat("expected \"field: value\", got ", QuoteToken(line)));
     }
     const std::string written = absl::AsciiStrToLower(line.substr(0, colon));
     const std::string name(CanonicalFieldName(written));

@@ -146,4 +146,8 @@ absl::Status TextScanner::Error(absl::string_view problem) const {
   return FileLineError(path_, line_, problem);
 }
 
+absl::Status TextScanner::ErrorAt(int64_t line, absl::string_view problem) const {
+  return FileLineError(path_, line, problem);
+}
+
 }  // namespace tetrefine::io

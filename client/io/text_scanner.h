@@ -54,6 +54,8 @@ class TextScanner {
 
   // "<path>:<line>: <problem>" at the current line.
   absl::Status Error(absl::string_view problem) const;
+  // The same at `line` (one a RestOfLine has already passed).
+  absl::Status ErrorAt(int64_t line, absl::string_view problem) const;
 
   int64_t line() const { return line_; }
   size_t remaining() const { return text_.size() - pos_; }

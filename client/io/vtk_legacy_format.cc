@@ -550,20 +550,25 @@ absl::Status LegacyParser::ReadImageGeometry(const std::string& keyword) {
 }
 
 absl::Status LegacyParser::Parse() {
+  // The three header lines are read whole, which moves the scanner to the next line: errors
+  // name the line read (they named the one after it: an outside review, 2026-11-28).
+  const int64_t first_line = in_.line();
   absl::string_view header = in_.RestOfLine();
   if (!absl::ConsumePrefix(&header, "# vtk DataFile Version ")) {
-    return in_.Error("not a legacy VTK file: first line is not \"# vtk DataFile Version x.y\"");
+    return in_.ErrorAt(first_line,
+                       "not a legacy VTK file: first line is not \"# vtk DataFile Version x.y\"");
   }
   if (header.empty() || !absl::ascii_isdigit(header[0])) {
-    return in_.Error("bad legacy VTK version");
+    return in_.ErrorAt(first_line, "bad legacy VTK version");
   }
   major_version_ = header[0] - '0';
   frame_ = FrameFromHeader(in_.RestOfLine());  // the title
+  const int64_t format_line = in_.line();
   const std::string format = absl::AsciiStrToUpper(absl::StripAsciiWhitespace(in_.RestOfLine()));
   if (format == "BINARY") {
     binary_ = true;
   } else if (format != "ASCII") {
-    return in_.Error("third line must be ASCII or BINARY");
+    return in_.ErrorAt(format_line, "third line must be ASCII or BINARY");
   }
 
   int64_t section_size = -1;  // tuples in the current POINT_DATA / CELL_DATA section

@@ -205,6 +205,20 @@ TEST_P(IoMeshBadContentTest, ClearError) {
   EXPECT_THAT(std::string(status.message()), HasSubstr(edit.message));
 }
 
+// A legacy VTK file's three header lines are named by their own line numbers (they were named one
+// line too late: an outside review, 2026-11-28).
+TEST(IoMeshTest, LegacyVtkHeaderErrorsNameTheirLine) {
+  ScratchDir dir;
+  for (const auto& [text, message] : std::vector<std::pair<std::string, std::string>>{
+           {"hello\nworld\n", "bad.vtk:1: not a legacy VTK file"},
+           {"# vtk DataFile Version x\ntitle\nASCII\n", "bad.vtk:1: bad legacy VTK version"},
+           {"# vtk DataFile Version 3.0\ntitle\nASCIX\nDATASET UNSTRUCTURED_GRID\n",
+            "bad.vtk:3: third line must be ASCII or BINARY"}}) {
+    WriteBytes(dir.File("bad.vtk"), text);
+    EXPECT_THAT(std::string(ReadMesh(dir.File("bad.vtk")).status().message()), HasSubstr(message));
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     IoEdits, IoMeshBadContentTest,
     ::testing::Values(
