@@ -202,6 +202,13 @@ absl::StatusOr<ConvergenceRun> FromJson(const Json& root) {
       return FieldError("final_max_error",
                         absl::StrCat("must be >= 0, got ", final_error->get<double>()));
     }
+    // "converged" means no edge-midpoint error above epsilon: a file that says both was drawn
+    // (with an axis up to 1e300: an outside review, 2026-11-28).
+    if (run.stop_reason == "converged" && final_error->get<double>() > run.epsilon) {
+      return FieldError("final_max_error",
+                        absl::StrCat(final_error->get<double>(), " is above options.epsilon ",
+                                     run.epsilon, ", but stop_reason is \"converged\""));
+    }
     run.max_error.push_back(final_error->get<double>());
   }
   return run;

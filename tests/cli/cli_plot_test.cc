@@ -477,6 +477,10 @@ class CliPlotBadInput : public ::testing::TestWithParam<BadCase> {
     WriteBytes(dir_->File("a.json"), RunA());
     WriteBytes(dir_->File("bad.json"), "{\"options\": {\"epsilon\": 0.1}, \"iterations\": [\n");
     WriteBytes(dir_->File("empty.json"), StatsJson("paper", 0.1, {}, 0.05, "converged"));
+    // "converged" with a final error above epsilon (an outside review drew such a file, its
+    // axis up to 1e300, 2026-11-28).
+    WriteBytes(dir_->File("contradiction.json"),
+               StatsJson("paper", 0.1, {{1000, 3000, 0.5}}, 1e300, "converged"));
     WriteBytes(dir_->File("no_eps.json"), R"({"options": {"scheme": "paper"}, "iterations": []})");
   }
   static void TearDownTestSuite() {
@@ -520,6 +524,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"no_iterations_no_input", Plot("$D/empty.json"),
                 "$D/empty.json: input: missing: with no iteration"},
         BadCase{"no_epsilon", Plot("$D/no_eps.json"), "$D/no_eps.json: options.epsilon: missing"},
+        BadCase{"converged_above_epsilon", Plot("$D/contradiction.json"),
+                "$D/contradiction.json: final_max_error: 1e+300 is above options.epsilon 0.1, but "
+                "stop_reason is \"converged\""},
         BadCase{"second_file_bad", Plot("$D/a.json", {"--stats-json", "$D/bad.json"}),
                 "$D/bad.json: not valid JSON"},
         BadCase{"not_png",
