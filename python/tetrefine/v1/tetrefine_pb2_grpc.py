@@ -39,11 +39,15 @@ class RefinerServicer(object):
         bad or oversized header is answered before the data it announces is sent.
         The server refines once the input is complete and the stream closed: only then does the call
         take one of the server's refinement slots and reserve memory for its worst case (volume,
-        input, and the output at its tet budget); it waits for both up to queue_seconds.
+        input, and the output at its tet budget; cut to the output's size once refined); it waits
+        for both up to queue_seconds.
         Time limits (GetServerInfo): the input must be complete within input_deadline_seconds of the
         call's start, with no pause longer than idle_timeout_seconds; every response message must be
-        taken by the client within write_stall_seconds; the whole call ends by max_call_seconds (or
-        the client's own deadline, if earlier).
+        taken by the client within write_stall_seconds of the server starting to write it; the
+        transport buffers little, so a message also waits for the client to take every message
+        before it: read the stream as it comes. The whole call ends by max_call_seconds (or the
+        client's own deadline, if earlier). A stalled call is cancelled: the client sees CANCELLED,
+        since no status can pass the messages it has not read.
         Response stream: for each iteration an iteration_stats (and, when requested, that
         iteration's mesh), then the final mesh (unless skipped), then a summary. A mesh is a
         mesh_header (a ResultMeshHeader) followed by its chunks.
