@@ -268,12 +268,11 @@ absl::Status CheckNoVertexOnFace(const std::vector<Vec3>& points, const std::vec
   // mesh, but quadratic on a valid one whose thin faces all meet near each other (20,000
   // slivers around one edge: 40,000 boundary faces, 1.7 s of a 2 s check; an outside review,
   // 2026-11-28). Past the bound the mesh is refused, the same whatever the thread count.
-  const int64_t max_pairs = kCrowdedPairFloor + kMaxCrowdedPairsPerItem * n;
-  std::atomic<int64_t> pairs{0};
+  CrowdedPairBudget pairs(n);
   ForEachBlock(n, [&](int64_t block, int64_t begin, int64_t end) {
     int64_t mine_pairs = 0;
     for (int64_t i = begin; i < end; ++i) {
-      if (mine_pairs >= 4096 && pairs.fetch_add(std::exchange(mine_pairs, 0)) > max_pairs) return;
+      if (!pairs.Flush(mine_pairs)) return;
       const uint32_t w = vertices[i];
       const Vec3& p = points[w];
       grid.ForEachNear(p, [&](uint32_t f) {
@@ -288,10 +287,10 @@ absl::Status CheckNoVertexOnFace(const std::vector<Vec3>& points, const std::vec
         if (d2 <= b.tolerance * b.tolerance) found[block].push_back({w, f});
       });
     }
-    pairs.fetch_add(mine_pairs);
+    pairs.Finish(mine_pairs);
   });
-  if (pairs.load() > max_pairs) {
-    return CrowdedMeshError(tets, "vertex and a boundary face meet near each other", max_pairs);
+  if (pairs.Exceeded()) {
+    return CrowdedMeshError(tets, "vertex and a boundary face meet near each other", pairs.max());
   }
   std::vector<Hit> hits;
   for (const std::vector<Hit>& h : found) hits.insert(hits.end(), h.begin(), h.end());

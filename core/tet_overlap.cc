@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -760,19 +759,15 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
   // make them quadratic: 20,000 slivers around one edge, whose boxes all meet, took 6 s here and
   // 60,000 took a minute (an outside review, 2026-11-28), a way for one request to hold a
   // server's core. Past kMaxCrowdedPairsPerItem per tet on average (and a floor for small
-  // meshes), the mesh is refused. Whether the count passes the bound does not depend on the thread
-  // count: blocks stop early only once their sum, which only grows, has passed it.
-  const int64_t max_pairs = kCrowdedPairFloor + kMaxCrowdedPairsPerItem * num_tets;
-  std::atomic<int64_t> pairs{0};
+  // meshes), the mesh is refused (CrowdedPairBudget).
+  CrowdedPairBudget pairs(num_tets);
   // Every tet against the faces `index` finds for its box; `may_meet` (from the tet) and
   // `near` (from its box) pass over the tets that cannot meet any.
   auto scan = [&](const auto& index, const auto& may_meet, const auto& near) {
     ForEachBlock(num_tets, [&](int64_t block, int64_t begin, int64_t end) {
       int64_t mine_pairs = 0;
       for (int64_t t = begin; t < end; ++t) {
-        if (mine_pairs >= 4096) {
-          if (pairs.fetch_add(std::exchange(mine_pairs, 0)) > max_pairs) return;
-        }
+        if (!pairs.Flush(mine_pairs)) return;
         if (!may_meet(tets[t])) continue;
         const std::array<Vec3, 4> p = Corners(points, tets[t]);
         const Box box = BoxOf(std::array<const Vec3*, 4>{&p[0], &p[1], &p[2], &p[3]}, 0.0);
@@ -802,7 +797,7 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
           }
         });
       }
-      pairs.fetch_add(mine_pairs);
+      pairs.Finish(mine_pairs);
     });
   };
   // The index, by the spread of face sizes: the uniform grid where they are alike, the tree
@@ -835,9 +830,9 @@ absl::Status CheckOverlaps(const std::vector<Vec3>& points, const std::vector<Te
         tree, [](const Tet&) { return true; },
         [&](const Box& box) { return occupancy.Touches(box); });
   }
-  if (pairs.load() > max_pairs) {
+  if (pairs.Exceeded()) {
     return CrowdedMeshError(tets, "tet and a boundary face meet within their bounding boxes",
-                            max_pairs);
+                            pairs.max());
   }
   const Overlap* first = nullptr;
   for (const std::vector<Overlap>& f : found) {

@@ -13,8 +13,10 @@
 // triangulated differently, a mesh nested inside another, a flap folded back into the mesh),
 // and tets far from the boundary are never tested against each other.
 
+#include <atomic>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "absl/status/status.h"
@@ -65,6 +67,28 @@ absl::Status CheckNoOverlappingTets(const std::vector<Vec3>& points, const std::
 // kMaxCrowdedPairsPerItem x its items.
 inline constexpr int64_t kMaxCrowdedPairsPerItem = 256;
 inline constexpr int64_t kCrowdedPairFloor = int64_t{1} << 24;
+
+// The count a check keeps against that bound, shared by its parallel blocks. Whether the total
+// passes the bound does not depend on the thread count: a block stops early only once the sum,
+// which only grows, is past it.
+class CrowdedPairBudget {
+ public:
+  explicit CrowdedPairBudget(int64_t items)
+      : max_(kCrowdedPairFloor + kMaxCrowdedPairsPerItem * items) {}
+  // Moves a block's `pending` pairs to the total once there are 4096 of them; false when the
+  // total is past the bound (the block may stop).
+  bool Flush(int64_t& pending) {
+    return pending < 4096 || total_.fetch_add(std::exchange(pending, 0)) <= max_;
+  }
+  // A block's last pairs.
+  void Finish(int64_t pending) { total_.fetch_add(pending); }
+  bool Exceeded() const { return total_.load() > max_; }
+  int64_t max() const { return max_; }
+
+ private:
+  const int64_t max_;
+  std::atomic<int64_t> total_{0};
+};
 
 // InvalidArgument: the mesh is too crowded for a check to run in bounded time: more than
 // `max_pairs` pairs (each a `pair`, e.g. "tet and a boundary face meet within their bounding

@@ -213,6 +213,10 @@ void CallGate::ReleaseSlot(const std::string& identity) {
 
 int CallGate::running(const std::string& identity) const {
   std::lock_guard<std::mutex> lock(mu_);
+  return RunningLocked(identity);
+}
+
+int CallGate::RunningLocked(const std::string& identity) const {
   const auto it = running_per_identity_.find(identity);
   return it == running_per_identity_.end() ? 0 : it->second;
 }
@@ -220,17 +224,13 @@ int CallGate::running(const std::string& identity) const {
 std::vector<std::function<void()>> CallGate::Admit() {
   std::vector<std::function<void()>> starts;
   const int64_t budget = config_.memory_budget_bytes;
-  const auto held = [&](const std::string& identity) {
-    const auto it = running_per_identity_.find(identity);
-    return it == running_per_identity_.end() ? 0 : it->second;
-  };
   while (running_ < config_.slots) {
     // The waiter that fits and whose identity holds the fewest slots, the earliest among equals;
     // a call whose memory does not fit yet does not hold back later ones that fit.
     auto best = queue_.end();
     int best_held = 0;
     for (auto it = queue_.begin(); it != queue_.end(); ++it) {
-      const int h = held(it->identity);
+      const int h = RunningLocked(it->identity);
       if (config_.max_slots_per_identity > 0 && h >= config_.max_slots_per_identity) continue;
       if (best != queue_.end() && h >= best_held) continue;
       const int64_t more = std::max<int64_t>(0, it->total_bytes - it->reservation->bytes_);

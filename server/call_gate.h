@@ -148,6 +148,7 @@ class CallGate {
   };
   // Starts every waiter that fits now; their start functions, to run unlocked.
   std::vector<std::function<void()>> Admit();
+  int RunningLocked(const std::string& identity) const;  // slots `identity` holds (under mu_)
   void RunStarts(std::vector<std::function<void()>> starts);
   std::string Free() const;                         // "X free of Y" for messages (under mu_)
   void UncountLocked(const std::string& identity);  // one call fewer for `identity` (under mu_)

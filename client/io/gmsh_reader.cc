@@ -684,22 +684,22 @@ void GmshParser::DropPhysicalCopies22() {
     several = !inserted && it->second != labels_[i];
   }
   if (!several) return;
+  // Each tet's key (entity, sorted nodes), made once rather than in every comparison.
+  std::vector<std::pair<int64_t, Tet>> keys(n);
+  for (size_t i = 0; i < n; ++i) {
+    keys[i] = {entities22_[i], tets_[i]};
+    std::sort(keys[i].second.begin(), keys[i].second.end());
+  }
+  const auto key = [&](uint32_t i) -> const std::pair<int64_t, Tet>& { return keys[i]; };
   std::vector<uint32_t> order(n);
   std::iota(order.begin(), order.end(), 0u);
-  const auto key = [&](uint32_t i) {
-    Tet sorted = tets_[i];
-    std::sort(sorted.begin(), sorted.end());
-    return std::pair{entities22_[i], sorted};
-  };
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const auto ka = key(a), kb = key(b);
-    return ka != kb ? ka < kb : a < b;
-  });
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return key(a) != key(b) ? key(a) < key(b) : a < b; });
   std::vector<bool> drop(n, false);
   bool any = false;
   for (size_t g = 0; g < n;) {
     size_t end = g + 1;
-    const auto first = key(order[g]);
+    const auto& first = key(order[g]);
     while (end < n && key(order[end]) == first) ++end;
     for (size_t k = g + 1; k < end; ++k) {
       const uint32_t copy = order[k];
