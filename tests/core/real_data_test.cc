@@ -13,6 +13,7 @@
 // epsilon too. Runs end on max_iterations, the tet budget or the quality floor.
 #include <gtest/gtest.h>
 
+#include <ostream>
 #include <string>
 
 #include "client/io/read_volume.h"
@@ -37,6 +38,10 @@ struct Case {
   const char* file;
   int block;  // cells per structured block, per axis
 };
+
+// In test names: GoogleTest would print the struct's bytes (a pointer among them, so the name
+// changed from one build to the next), and ctest appends them.
+void PrintTo(const Case& c, std::ostream* os) { *os << c.file << ", blocks of " << c.block; }
 
 class RealData : public ::testing::TestWithParam<Case> {};
 

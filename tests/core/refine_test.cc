@@ -14,6 +14,7 @@
 
 #include "tests/support/geometry.h"
 #include "tests/support/mesh_checks.h"
+#include "tests/support/scheme_printer.h"
 
 namespace tetrefine {
 namespace {

@@ -15,6 +15,7 @@
 #include "tests/support/mesh_checks.h"
 #include "tests/support/pinned_cases.h"
 #include "tests/support/result_fingerprint.h"
+#include "tests/support/scheme_printer.h"
 
 namespace tetrefine {
 namespace {

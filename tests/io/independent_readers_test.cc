@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <ostream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -168,6 +169,9 @@ struct Case {
   std::string extension;
   MeshWriteOptions options;
 };
+
+// By name in test names: GoogleTest would print the struct's bytes, and ctest appends them.
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
 
 std::vector<Case> Cases() {
   using Layout = VtuWriteOptions::Layout;

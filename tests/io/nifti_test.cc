@@ -4,6 +4,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <ostream>
 #include <random>
 #include <sstream>
 #include <string>
@@ -41,6 +42,10 @@ struct RealVolume {
   Vec3 voxel_mm;
   bool oblique;  // sform rotates or permutes axes
 };
+
+// In test names: GoogleTest would print the struct's bytes (a pointer among them, so the name
+// changed from one build to the next), and ctest appends them.
+void PrintTo(const RealVolume& v, std::ostream* os) { *os << v.file; }
 
 // Grid and voxel size from ../shared/data/README.md.
 class IoNiftiRealTest : public ::testing::TestWithParam<RealVolume> {};
