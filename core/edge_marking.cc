@@ -143,9 +143,15 @@ bool LongerEdges(uint32_t a, uint32_t b, const EdgeOrder& order) {
     if ((a & EdgeBit(k)) != 0) ea[na++] = k;
     if ((b & EdgeBit(k)) != 0) eb[nb++] = k;
   }
-  const auto longer = [&](int x, int y) { return order.Longer(x, y); };
-  std::sort(ea.begin(), ea.begin() + na, longer);
-  std::sort(eb.begin(), eb.begin() + nb, longer);
+  // Insertion sorts: at most six entries (std::sort inlined here tripped GCC 12's
+  // -Warray-bounds on its 16-entry insertion threshold).
+  const auto sort_longest_first = [&](std::array<int, 6>& e, int n) {
+    for (int i = 1; i < n; ++i) {
+      for (int j = i; j > 0 && order.Longer(e[j], e[j - 1]); --j) std::swap(e[j], e[j - 1]);
+    }
+  };
+  sort_longest_first(ea, na);
+  sort_longest_first(eb, nb);
   for (int i = 0; i < na && i < nb; ++i) {
     if (ea[i] != eb[i]) return order.Longer(ea[i], eb[i]);
   }
@@ -426,6 +432,115 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
                          const EdgeTable& edges, double ratio, double floor, bool best_tiling,
                          FillLater<uint8_t>& split, CancelFlag& cancel) {
   return GuardPass(points, tets, edges, ratio, floor, best_tiling, split, cancel, nullptr, nullptr);
+}
+
+double WorstChildOf(uint32_t pattern, const std::array<Vec3, 4>& corners) {
+  if (pattern == 0) return MeanRatio(corners[0], corners[1], corners[2], corners[3]);
+  std::array<Vec3, 10> p;
+  for (int c = 0; c < 4; ++c) p[c] = corners[c];
+  for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+  return ChooseTiling(SubdivisionKey(pattern, p), corners).worst;
+}
+
+GuardRemedy SparingGuardEdges(uint32_t pattern, const std::array<Vec3, 4>& corners,
+                              double threshold, absl::FunctionRef<bool(uint32_t add)> spares) {
+  const EdgeOrder order(corners);
+  std::array<Vec3, 10> p;
+  for (int c = 0; c < 4; ++c) p[c] = corners[c];
+  for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+  const uint32_t unsplit = 63u & ~pattern;
+  GuardRemedy best{pattern, kUnknownTiling};
+  double best_worst = -1.0;
+  // By the number of added edges, all of them (regular 1:8 refinement) included: the first size
+  // with a remedy gives the answer. The neighbours are asked last, for the candidates that would
+  // win on their own merits.
+  for (int size = 1; size <= std::popcount(unsplit); ++size) {
+    for (uint32_t add = unsplit; add != 0; add = (add - 1) & unsplit) {
+      if (std::popcount(add) != size) continue;
+      const TilingChoice choice = ChooseTiling(SubdivisionKey(pattern | add, p), corners);
+      if (choice.worst < threshold) continue;
+      const bool better =
+          choice.worst > best_worst ||
+          (choice.worst == best_worst && LongerEdges(add, best.pattern & ~pattern, order));
+      if (!better || !spares(add)) continue;
+      best.pattern = pattern | add;
+      best.tiling = choice.tiling;
+      best_worst = choice.worst;
+    }
+    if (best.pattern != pattern) break;
+  }
+  return best;
+}
+
+int64_t FinalGuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                       const EdgeTable& edges, const TetsAround& around, double ratio, double floor,
+                       FillLater<uint8_t>& split, CancelFlag& cancel,
+                       const std::vector<uint32_t>* visit, std::vector<uint32_t>* fresh,
+                       FillLater<uint16_t>* tilings) {
+  const auto corners_of = [&](uint32_t t) {
+    const Tet& tet = tets[t];
+    return std::array<Vec3, 4>{points[tet[0]], points[tet[1]], points[tet[2]], points[tet[3]]};
+  };
+  const auto pattern_of = [&](uint32_t t) {
+    const auto& te = edges.tet_edges[t];
+    uint32_t pattern = 0;
+    for (int k = 0; k < 6; ++k) pattern |= split[te[k]] ? EdgeBit(k) : 0u;
+    return pattern;
+  };
+  const auto threshold_of = [&](const std::array<Vec3, 4>& c) {
+    return std::max(ratio * MeanRatio(c[0], c[1], c[2], c[3]), floor);
+  };
+  PendingMarks next(PassSize(static_cast<int64_t>(tets.size()), visit));
+  const auto rule = [&](int64_t b, int64_t t) {
+    const uint32_t pattern = pattern_of(static_cast<uint32_t>(t));
+    if (pattern == 0 || pattern == 63) return;
+    const std::array<Vec3, 4> corners = corners_of(static_cast<uint32_t>(t));
+    std::array<Vec3, 10> p;
+    for (int c = 0; c < 4; ++c) p[c] = corners[c];
+    for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+    const TilingChoice choice = ChooseTiling(SubdivisionKey(pattern, p), corners);
+    // Only this block writes tilings[t]: a visit list names a tet once.
+    if (tilings != nullptr) (*tilings)[t] = static_cast<uint16_t>(choice.tiling);
+    const double threshold = threshold_of(corners);
+    if (choice.worst >= threshold) return;
+    const auto& te = edges.tet_edges[t];
+    const Tet& tet = tets[t];
+    std::vector<uint32_t> neighbours;
+    const auto spares = [&](uint32_t add) {
+      neighbours.clear();
+      for (int k = 0; k < 6; ++k) {
+        if ((add & EdgeBit(k)) == 0) continue;
+        around.ForEachOnEdge(tet[kTetEdges[k][0]], tet[kTetEdges[k][1]], tets, [&](uint32_t s) {
+          if (s != static_cast<uint32_t>(t)) neighbours.push_back(s);
+        });
+      }
+      std::sort(neighbours.begin(), neighbours.end());
+      neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
+      for (uint32_t s : neighbours) {
+        const uint32_t before = pattern_of(s);
+        uint32_t after = before;
+        for (int j = 0; j < 6; ++j) {
+          for (int k = 0; k < 6; ++k) {
+            if ((add & EdgeBit(k)) != 0 && edges.tet_edges[s][j] == te[k]) after |= EdgeBit(j);
+          }
+        }
+        if (after == before) continue;
+        const std::array<Vec3, 4> c = corners_of(s);
+        const double worst_after = WorstChildOf(after, c);
+        if (worst_after < threshold_of(c) && worst_after < WorstChildOf(before, c)) return false;
+      }
+      return true;
+    };
+    const GuardRemedy remedy = SparingGuardEdges(pattern, corners, threshold, spares);
+    if (remedy.pattern == pattern) return;
+    if (tilings != nullptr) (*tilings)[t] = static_cast<uint16_t>(remedy.tiling);
+    for (int k = 0; k < 6; ++k) {
+      if ((remedy.pattern & ~pattern & EdgeBit(k)) != 0) next.Add(b, te[k]);
+    }
+  };
+  ForEachVisitedTet(static_cast<int64_t>(tets.size()), visit, rule, cancel);
+  if (cancel.IsSet()) return 0;
+  return next.Apply(split, fresh);
 }
 
 int64_t MarkFailingTets(const Volume& volume, State& state, const EdgeTable& edges, int n,

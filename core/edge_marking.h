@@ -8,10 +8,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "absl/functional/function_ref.h"
 #include "core/alternative_tilings.h"
 #include "core/edge_table.h"
 #include "core/fill_later.h"
 #include "core/refine_state.h"
+#include "core/tets_around.h"
 #include "core/volume.h"
 
 namespace tetrefine::refine_internal {
@@ -140,6 +142,41 @@ int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
                   const EdgeTable& edges, double ratio, double floor, bool best_tiling,
                   FillLater<uint8_t>& split, CancelFlag& cancel, const std::vector<uint32_t>* visit,
                   std::vector<uint32_t>* fresh, FillLater<uint16_t>* tilings = nullptr);
+
+// The guard's last look, after the iteration's last closure (MarkingRules::final_guard). The
+// closure that follows each guard pass completes patterns no guard pass sees again: on the
+// reproduction those were the worst tets of the runs below 0.5x of the input's worst tet. A
+// plain guard pass there does not help, because its edges make new unguarded splits around the
+// tets it fixes (docs/schemes.md, "A floor under the guard"). So this pass takes a remedy only
+// if it spares the neighbours: for a tet whose split has a child below `threshold`, the fewest
+// more split edges (any of its unsplit edges: no closure follows) such that
+//   - its best tiling's worst child is at or above `threshold`, and
+//   - spares(add) holds: the caller checks that no tet around the added edges (local edges
+//     `add`, EdgeBit) gets a split below both its own threshold and its split before;
+// among sets of one size the best worst child, then the longer added edges (as
+// FewestGuardEdges), so the choice depends on geometry only. Returns the pattern with the
+// remedy (a superset of `pattern`, maybe 63), or `pattern` itself when no set qualifies: the tet
+// is then cut as its marks say.
+GuardRemedy SparingGuardEdges(uint32_t pattern, const std::array<Vec3, 4>& corners,
+                              double threshold, absl::FunctionRef<bool(uint32_t add)> spares);
+
+// The worst child of the tet with corners `corners` cut by split pattern `pattern` (EdgeBit of
+// local edges) in its best tiling: ChooseTiling's worst; for pattern 0 the tet's own quality.
+double WorstChildOf(uint32_t pattern, const std::array<Vec3, 4>& corners);
+
+// One pass of the guard's last look over the tets in `visit` (all when null): each tet whose
+// split (by its best tiling) has a child below max(`ratio` times its own quality, `floor`) gets
+// SparingGuardEdges' remedy, where a neighbour is spared when its new split's worst child is at
+// or above its own threshold or at or above its split's before (`around` finds the tets of an
+// edge). Every tet reads the marks as they were before the pass, so the result does not depend
+// on the order of visits; two remedies applied together may still meet in a neighbour.
+// `tilings` (T entries, or null) as GuardPass fills it. Returns the edges added; appends them to
+// `fresh` when not null. Polls `cancel` as CloseToLongestEdges does.
+int64_t FinalGuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
+                       const EdgeTable& edges, const TetsAround& around, double ratio, double floor,
+                       FillLater<uint8_t>& split, CancelFlag& cancel,
+                       const std::vector<uint32_t>* visit, std::vector<uint32_t>* fresh,
+                       FillLater<uint16_t>* tilings = nullptr);
 
 // Certified mode: samples every tet not sampled yet on the lattice of order n (the paper's 165
 // points for n = 8) and keeps its discrepancy in state.tet_lattice_error (final until the tet is

@@ -17,6 +17,9 @@ struct MarkingRules {
   double guard_floor = 0.0;  // absolute mean ratio (PromoteBadSplits); 0: none
   int guard_rounds = 0;      // guard passes, each followed by a closure call
   bool best_tiling = false;
+  // After the last closure, one FinalGuardPass (core/edge_marking.h) with the guard's ratio and
+  // floor; needs best_tiling and guard_rounds > 0.
+  bool final_guard = false;
 };
 
 struct MarkingCounts {
@@ -28,7 +31,9 @@ struct MarkingCounts {
 //   CloseToLongestEdges(closure_rounds);
 //   guard_rounds times: PromoteBadSplits(guard_ratio, guard_floor, best_tiling);
 //                       CloseToLongestEdges(...)
+//   with final_guard: FinalGuardPass(guard_ratio, guard_floor)
 // (a closure call only when closure_rounds > 0), on `split` (E entries), given edges.tet_edges.
+// The last pass's edges count as the guard's.
 //
 // Both rules read a tet's split pattern and its corners only, and marks are only ever added, so
 // a tet whose pattern has not changed since a rule last visited it adds nothing new. After a

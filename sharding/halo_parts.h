@@ -14,14 +14,15 @@
 
 namespace tetrefine::sharding {
 
-// Rings of vertex-adjacent tets a part carries around the tets it owns. Why 27: in one
+// Rings of vertex-adjacent tets a part carries around the tets it owns. Why 29: in one
 // iteration a split flag travels at most one ring per closure round and per guard round (a
 // closure round marks edges of the tet, or of a face of it, whose marks it read; the edge test
-// and the certify lattice test read one edge or one tet), 8 + 2 * (1 + 8) = 26 rings for the
-// longest-edge scheme (SchemeRules in core/refine.cc), so a tet 26 rings out is the farthest
-// whose edges can change an owned tet's pattern; one more ring for margin.
+// and the certify lattice test read one edge or one tet), and two in the guard's last look (it
+// marks edges of a tet from the marks of the tets around them), 8 + 2 * (1 + 8) + 2 = 28 rings
+// for the longest-edge scheme (SchemeRules in core/refine.cc), so a tet 28 rings out is the
+// farthest whose edges can change an owned tet's pattern; one more ring for margin.
 // tests/sharding/halo_parts_test.cc shows that too narrow a halo changes the result.
-inline constexpr int kHaloRings = 27;
+inline constexpr int kHaloRings = 29;
 
 // A part with a halo: mesh.tets are the owned tets and the halo tets in ascending whole-mesh
 // order; owned[t] says which are the part's own. input_vertex / input_tet map to the whole mesh.

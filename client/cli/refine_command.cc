@@ -39,6 +39,7 @@
 #include "core/quality.h"
 #include "core/refine_options.h"
 #include "core/voxel_type.h"
+#include "sharding/halo_parts.h"
 #include "wire/service_limits.h"
 
 namespace tetrefine::cli {
@@ -595,8 +596,9 @@ int RunRefinement(const RefineSettings& s) {
   const bool halos = s.options.refine.scheme != RefineScheme::kPaper || s.options.refine.certify;
   progress.Line(s.shards == 0 ? std::string("sending the input ...")
                 : halos       ? absl::StrCat("cutting each iteration's mesh into up to ", s.shards,
-                                             " parts (fewer where their 27-ring halos would overlap, for "
-                                                   "the same result) and sending each to its server ...")
+                                             " parts (fewer where their ", sharding::kHaloRings,
+                                             "-ring halos would overlap, for the same result) and "
+                                                   "sending each to its server ...")
                               : absl::StrCat("cutting the mesh into ", s.shards,
                                              " parts and sending each to its server ..."));
   // Whether the server took the whole input: a connection failure after that is not the TLS

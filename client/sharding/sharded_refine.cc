@@ -377,9 +377,9 @@ size_t LargestPart(const std::vector<HaloPart>& parts) {
 // The parts a mesh of `tets` tets is cut into for `shards` under the halo schemes, when fewer
 // parts are allowed (ShardOptions::fewer_parts_when_halos_overlap): at most as many as the
 // servers take at once (kMaxOpenCallsPerTarget each; more only queue), and at most one per
-// kMinTetsPerPart tets. Every part is a call with a 27-ring halo to extract and send, most of
-// its tets around a small part: `--shards 256` over two servers, a 5-tet mesh refined to 137 k
-// tets, took 18-31 s against 0.3 s unsharded, and 1024 over a minute (found by a sweep); 16
+// kMinTetsPerPart tets. Every part is a call with a halo of kHaloRings rings to extract and send,
+// most of its tets around a small part: `--shards 256` over two servers, a 5-tet mesh refined to
+// 137 k tets, took 18-31 s against 0.3 s unsharded, and 1024 over a minute (found by a sweep); 16
 // parts took 2 s. The result is the same for any cut.
 constexpr int64_t kMinTetsPerPart = 64;
 int PartsFor(size_t tets, int shards, size_t targets, bool allow_fewer) {

@@ -7,8 +7,10 @@
 #include <vector>
 
 #include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
 #include "client/io/mesh_io.h"
 #include "gtest/gtest.h"
+#include "sharding/halo_parts.h"
 #include "tests/cli/cli_test_util.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/geometry.h"
@@ -120,9 +122,10 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   // Its parts are cut anew each iteration, fewer where their halos would overlap (on this small
   // mesh, one): the progress line said "into 2 parts" (an outside review, 2026-11-28).
-  EXPECT_TRUE(absl::StrContains(run.err,
-                                "cutting each iteration's mesh into up to 2 parts (fewer "
-                                "where their 27-ring halos would overlap"))
+  EXPECT_TRUE(
+      absl::StrContains(run.err, absl::StrCat("cutting each iteration's mesh into up to 2 "
+                                              "parts (fewer where their ",
+                                              sharding::kHaloRings, "-ring halos would overlap")))
       << run.err;
   absl::StatusOr<io::MeshFile> want_default = io::ReadMesh(dir_.File("embedded_default.vtu"));
   absl::StatusOr<io::MeshFile> got_default = io::ReadMesh(dir_.File("sharded_default.vtu"));

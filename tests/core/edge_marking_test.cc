@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "core/edge_table.h"
+#include "core/quality.h"
 #include "core/tet_topology.h"
+#include "core/tets_around.h"
 #include "core/vec3_ops.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
@@ -84,6 +86,26 @@ TEST(EdgeMarkingTest, ClosureAndGuardMarkNothingOnceCancelled) {
   EXPECT_EQ(
       PromoteBadSplits(m.mesh.points, m.mesh.tets, m.edges, 0.99, 0.0, false, m.split, cancelled),
       0);
+  // The guard's last look, on a jittered box with many marks (on the plain box with one mark
+  // the neighbours refuse every remedy).
+  Lcg next{7};
+  const Jittered box = JitteredBox({6.0, 5.0, 4.0}, {6, 5, 4}, next);
+  FillLater<uint8_t> split(static_cast<size_t>(box.edges.size()), 0);
+  for (int64_t e = 0; e < box.edges.size(); ++e) split[e] = next() < 0.15 ? 1 : 0;
+  const TetsAround around(box.mesh.tets, static_cast<int64_t>(box.mesh.points.size()));
+  {
+    FillLater<uint8_t> marks = split;
+    CancelFlag running(never);
+    EXPECT_GT(FinalGuardPass(box.mesh.points, box.mesh.tets, box.edges, around, 0.6, 0.3, marks,
+                             running, nullptr, nullptr),
+              0)
+        << "the case gives the guard's last look nothing to do";
+  }
+  FillLater<uint8_t> marks = split;
+  EXPECT_EQ(FinalGuardPass(box.mesh.points, box.mesh.tets, box.edges, around, 0.6, 0.3, marks,
+                           cancelled, nullptr, nullptr),
+            0);
+  EXPECT_TRUE(marks == split);
   EXPECT_TRUE(cancelled.IsSet());
   EXPECT_TRUE(m.split == before);
 }
@@ -246,6 +268,88 @@ TEST(EdgeMarkingTest, ClosureMarksWhatEveryTetRoundByRoundMarks) {
     }
   }
   EXPECT_GT(multi_round_cases, 20) << "the later rounds were never exercised";
+}
+
+}  // namespace
+}  // namespace tetrefine::refine_internal
+
+namespace tetrefine::refine_internal {
+namespace {
+
+uint32_t PatternOf(const Jittered& box, const FillLater<uint8_t>& split, uint32_t t) {
+  uint32_t pattern = 0;
+  for (int k = 0; k < 6; ++k) pattern |= split[box.edges.tet_edges[t][k]] != 0 ? EdgeBit(k) : 0u;
+  return pattern;
+}
+
+std::array<Vec3, 4> CornersOf(const Mesh& mesh, uint32_t t) {
+  const Tet& tet = mesh.tets[t];
+  return {mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]], mesh.points[tet[3]]};
+}
+
+// The guard's last look, one flagged tet at a time (a visit list of one): its remedy gives it a
+// split at its threshold, and every tet around the added edges keeps a split at its own threshold
+// or no worse than before. Over all flagged tets at once there are fewer bad splits after the
+// pass than before.
+TEST(EdgeMarkingTest, FinalGuardPassRemediesSpareTheNeighbours) {
+  constexpr double kRatio = 0.6, kFloor = 0.3;
+  const std::function<bool()> never = [] { return false; };
+  CancelFlag running(never);
+  int remedied = 0, refused = 0, neighbours_changed = 0, fewer_after = 0;
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    Lcg next{seed};
+    const Jittered box = JitteredBox({6.0, 5.0, 4.0}, {6, 5, 4}, next);
+    const auto& tets = box.mesh.tets;
+    const TetsAround around(tets, static_cast<int64_t>(box.mesh.points.size()));
+    for (double density : {0.03, 0.15}) {
+      FillLater<uint8_t> start(static_cast<size_t>(box.edges.size()), 0);
+      for (int64_t e = 0; e < box.edges.size(); ++e) start[e] = next() < density ? 1 : 0;
+      const auto threshold_of = [&](uint32_t t) {
+        const auto c = CornersOf(box.mesh, t);
+        return std::max(kRatio * MeanRatio(c[0], c[1], c[2], c[3]), kFloor);
+      };
+      const auto worst_of = [&](const FillLater<uint8_t>& split, uint32_t t) {
+        return WorstChildOf(PatternOf(box, split, t), CornersOf(box.mesh, t));
+      };
+      const auto is_bad = [&](const FillLater<uint8_t>& split, uint32_t t) {
+        const uint32_t q = PatternOf(box, split, t);
+        return q != 0 && q != 63 && worst_of(split, t) < threshold_of(t);
+      };
+      int bad_before = 0;
+      for (uint32_t t = 0; t < tets.size(); ++t) {
+        if (!is_bad(start, t)) continue;
+        ++bad_before;
+        FillLater<uint8_t> split = start;
+        const std::vector<uint32_t> visit = {t};
+        if (FinalGuardPass(box.mesh.points, tets, box.edges, around, kRatio, kFloor, split, running,
+                           &visit, nullptr) == 0) {
+          ++refused;
+          continue;
+        }
+        ++remedied;
+        EXPECT_GE(worst_of(split, t), threshold_of(t)) << "tet " << t;
+        for (uint32_t s = 0; s < tets.size(); ++s) {
+          if (s == t || PatternOf(box, split, s) == PatternOf(box, start, s)) continue;
+          ++neighbours_changed;
+          const double after = worst_of(split, s);
+          EXPECT_TRUE(after >= threshold_of(s) || after >= worst_of(start, s))
+              << "tet " << t << "'s remedy made neighbour " << s << "'s split worse: " << after;
+        }
+      }
+      FillLater<uint8_t> all = start;
+      FinalGuardPass(box.mesh.points, tets, box.edges, around, kRatio, kFloor, all, running,
+                     nullptr, nullptr);
+      int bad_after = 0;
+      for (uint32_t t = 0; t < tets.size(); ++t) bad_after += is_bad(all, t);
+      EXPECT_LE(bad_after, bad_before) << "seed " << seed << ", density " << density;
+      fewer_after += bad_after < bad_before;
+    }
+  }
+  // Not a formality: both outcomes, and remedies that reach other tets.
+  EXPECT_GT(remedied, 50);
+  EXPECT_GT(refused, 5);
+  EXPECT_GT(neighbours_changed, 100);
+  EXPECT_GE(fewer_after, 4);
 }
 
 }  // namespace

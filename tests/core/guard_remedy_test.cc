@@ -1,6 +1,7 @@
 // The quality guard's remedy (FewestGuardEdges): the smallest closed superset of a tet's split
 // pattern whose best tiling keeps every child at the threshold, all six edges when none does,
-// chosen by geometry only.
+// chosen by geometry only. And the remedy of the guard's last look (SparingGuardEdges): the
+// smallest superset with a good split that the neighbours accept, or none.
 
 #include <algorithm>
 #include <array>
@@ -75,16 +76,19 @@ std::vector<double> LengthsOf(const std::array<Vec3, 4>& c, uint32_t set) {
   return lengths;
 }
 
-// Every superset of `pattern` by brute force: the fewest added edges, then the best worst child
-// (the worst child is often a child the added edges do not touch: exact ties are common), then
-// the longer added edges.
-uint32_t ReferenceRemedy(const std::array<Vec3, 4>& c, uint32_t pattern, double threshold) {
+// The supersets q of `pattern` up to `last` (62: not all six; 63: all six too) that
+// `acceptable(q)` accepts, by brute force: the fewest added edges, then the best worst child (the
+// worst child is often a child the added edges do not touch: exact ties are common), then the
+// longer added edges; `none` when no set qualifies.
+template <typename Acceptable>
+uint32_t BruteForceRemedy(const std::array<Vec3, 4>& c, uint32_t pattern, double threshold,
+                          uint32_t last, uint32_t none, Acceptable acceptable) {
   const auto p = TenPoints(c);
-  uint32_t best = 63;
+  uint32_t best = none;
   int best_size = 7;
   double best_worst = -1.0;
-  for (uint32_t q = 1; q < 63; ++q) {
-    if ((q & pattern) != pattern || q == pattern || !PlainlyClosed(c, q)) continue;
+  for (uint32_t q = 1; q <= last; ++q) {
+    if ((q & pattern) != pattern || q == pattern || !acceptable(q)) continue;
     const double worst = ChooseTiling(SubdivisionKey(q, p), c).worst;
     if (worst < threshold) continue;
     const int size = std::popcount(q & ~pattern);
@@ -100,6 +104,12 @@ uint32_t ReferenceRemedy(const std::array<Vec3, 4>& c, uint32_t pattern, double 
     }
   }
   return best;
+}
+
+// FewestGuardEdges' rule: closed sets short of all six, all six when none qualifies.
+uint32_t ReferenceRemedy(const std::array<Vec3, 4>& c, uint32_t pattern, double threshold) {
+  return BruteForceRemedy(c, pattern, threshold, 62, 63,
+                          [&](uint32_t q) { return PlainlyClosed(c, q); });
 }
 
 TEST(GuardRemedyTest, IsTheSmallestClosedSupersetWithAGoodSplit) {
@@ -138,10 +148,8 @@ TEST(GuardRemedyTest, IsTheSmallestClosedSupersetWithAGoodSplit) {
 
 using GeometricEdge = std::pair<Vec3, Vec3>;
 
-// The remedy's edges as point pairs: what a renumbering of the corners must not change.
-std::set<GeometricEdge> RemedyEdges(const std::array<Vec3, 4>& c, uint32_t pattern,
-                                    double threshold) {
-  const uint32_t q = FewestGuardEdges(pattern, c, threshold).pattern;
+// The edges of split pattern q as point pairs: what a renumbering of the corners must not change.
+std::set<GeometricEdge> EdgesOf(const std::array<Vec3, 4>& c, uint32_t q) {
   std::set<GeometricEdge> edges;
   for (int k = 0; k < 6; ++k) {
     if ((q & EdgeBit(k)) == 0) continue;
@@ -154,14 +162,14 @@ std::set<GeometricEdge> RemedyEdges(const std::array<Vec3, 4>& c, uint32_t patte
 
 // Every positively oriented renumbering of the corners gives the same edges: random tets, and
 // grid-cell tets, whose equal edges and right angles make exact ties between candidates.
-void ExpectSameRemedyUnderEveryNumbering(std::array<Vec3, 4> corners, double ratio) {
+// remedy(c, pattern) is the split pattern a rule gives the tet with corners c.
+template <typename Remedy>
+void ExpectSameRemedyUnderEveryNumbering(std::array<Vec3, 4> corners, Remedy remedy) {
   if (SignedVolume6(corners[0], corners[1], corners[2], corners[3]) < 0) {
     std::swap(corners[2], corners[3]);
   }
-  // One threshold for every numbering: the guard's own is the parent's quality times the ratio.
-  const double threshold = ratio * MeanRatio(corners[0], corners[1], corners[2], corners[3]);
   for (uint32_t pattern = 1; pattern < 63; ++pattern) {
-    const auto expected = RemedyEdges(corners, pattern, threshold);
+    const auto expected = EdgesOf(corners, remedy(corners, pattern));
     std::array<int, 4> perm = {0, 1, 2, 3};
     while (std::next_permutation(perm.begin(), perm.end())) {
       std::array<Vec3, 4> c{};
@@ -172,23 +180,106 @@ void ExpectSameRemedyUnderEveryNumbering(std::array<Vec3, 4> corners, double rat
         const int a = perm[kTetEdges[e][0]], b = perm[kTetEdges[e][1]];
         if ((pattern & EdgeBit(EdgeIndex(a, b))) != 0) renumbered |= EdgeBit(e);
       }
-      EXPECT_EQ(RemedyEdges(c, renumbered, threshold), expected) << "pattern " << pattern;
+      EXPECT_EQ(EdgesOf(c, remedy(c, renumbered)), expected) << "pattern " << pattern;
     }
   }
+}
+
+// FewestGuardEdges at `ratio` of the tet's quality: one threshold for every numbering.
+void ExpectSameFewestEdgesUnderEveryNumbering(const std::array<Vec3, 4>& corners, double ratio) {
+  const double threshold = ratio * MeanRatio(corners[0], corners[1], corners[2], corners[3]);
+  ExpectSameRemedyUnderEveryNumbering(corners, [&](const std::array<Vec3, 4>& c, uint32_t q) {
+    return FewestGuardEdges(q, c, threshold).pattern;
+  });
 }
 
 TEST(GuardRemedyTest, IgnoresTheNumbering) {
   std::mt19937_64 rng(11);
   for (int trial = 0; trial < 10; ++trial) {
-    ExpectSameRemedyUnderEveryNumbering(testing::RandomTet(rng, 0.2), 0.6);
+    ExpectSameFewestEdgesUnderEveryNumbering(testing::RandomTet(rng, 0.2), 0.6);
   }
   for (double ratio : {0.5, 0.6, 0.7}) {
     // A grid cell's corner tet, its middle tet (the five-tet split of a unit cube), a stretched
     // corner tet.
-    ExpectSameRemedyUnderEveryNumbering({{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}, ratio);
-    ExpectSameRemedyUnderEveryNumbering({{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}}}, ratio);
-    ExpectSameRemedyUnderEveryNumbering({{{0, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 0, 1}}}, ratio);
+    ExpectSameFewestEdgesUnderEveryNumbering({{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}, ratio);
+    ExpectSameFewestEdgesUnderEveryNumbering({{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}}}, ratio);
+    ExpectSameFewestEdgesUnderEveryNumbering({{{0, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 0, 1}}}, ratio);
   }
+}
+
+// SparingGuardEdges' rule: any superset, all six included, that spares the neighbours;
+// `pattern` itself when none qualifies.
+template <typename Spares>
+uint32_t ReferenceSparingRemedy(const std::array<Vec3, 4>& c, uint32_t pattern, double threshold,
+                                Spares spares) {
+  return BruteForceRemedy(c, pattern, threshold, 63, pattern,
+                          [&](uint32_t q) { return spares(q & ~pattern); });
+}
+
+TEST(SparingGuardEdgesTest, IsTheSmallestSupersetWithAGoodSplitThatSparesTheNeighbours) {
+  int remedies = 0, none = 0, held_back = 0;
+  for (uint64_t seed : testing::Seeds(3)) {
+    std::mt19937_64 rng(seed);
+    for (int trial = 0; trial < 30; ++trial) {
+      const std::array<Vec3, 4> c = testing::RandomTet(rng, 0.2);
+      const double own = MeanRatio(c[0], c[1], c[2], c[3]);
+      const auto p = TenPoints(c);
+      // The neighbours' answer, arbitrary but fixed per trial: about a third of the sets are
+      // refused.
+      const uint64_t salt = rng();
+      const auto spares = [&](uint32_t add) {
+        return std::mt19937_64(salt ^ (uint64_t{add} * 0x9E3779B97F4A7C15ull))() % 3 != 0;
+      };
+      for (double ratio : {0.5, 0.6, 0.7}) {
+        for (uint32_t pattern = 1; pattern < 63; ++pattern) {
+          const double threshold = ratio * own;
+          const GuardRemedy r = SparingGuardEdges(pattern, c, threshold, spares);
+          ASSERT_EQ(r.pattern, ReferenceSparingRemedy(c, pattern, threshold, spares))
+              << "seed " << seed << ", trial " << trial << ", pattern " << pattern;
+          if (r.pattern == pattern) {
+            ++none;
+            continue;
+          }
+          ++remedies;
+          EXPECT_TRUE(spares(r.pattern & ~pattern));
+          EXPECT_EQ(r.tiling, BestTiling(SubdivisionKey(r.pattern, p), c));
+          EXPECT_GE(ChooseTiling(SubdivisionKey(r.pattern, p), c).worst, threshold);
+          const auto all_spared = [](uint32_t) { return true; };
+          held_back += SparingGuardEdges(pattern, c, threshold, all_spared).pattern != r.pattern;
+        }
+      }
+    }
+  }
+  // Not a formality: remedies are found, some tets get none, and the neighbours change answers.
+  EXPECT_GT(remedies, 1000);
+  EXPECT_GT(none, 10);
+  EXPECT_GT(held_back, 100);
+}
+
+TEST(SparingGuardEdgesTest, IgnoresTheNumbering) {
+  // Neighbours that refuse long additions: a rule of geometry, as the real one is.
+  const auto check = [](const std::array<Vec3, 4>& corners) {
+    const double threshold = 0.6 * MeanRatio(corners[0], corners[1], corners[2], corners[3]);
+    ExpectSameRemedyUnderEveryNumbering(corners, [&](const std::array<Vec3, 4>& c, uint32_t q) {
+      const auto squared_lengths = [&](uint32_t set) {
+        double sum = 0.0;
+        for (int k = 0; k < 6; ++k) {
+          if ((set & EdgeBit(k)) != 0)
+            sum += SquaredDistance(c[kTetEdges[k][0]], c[kTetEdges[k][1]]);
+        }
+        return sum;
+      };
+      const auto spares = [&](uint32_t add) {
+        return squared_lengths(add) <= 0.4 * squared_lengths(63);
+      };
+      return SparingGuardEdges(q, c, threshold, spares).pattern;
+    });
+  };
+  std::mt19937_64 rng(12);
+  for (int trial = 0; trial < 5; ++trial) check(testing::RandomTet(rng, 0.2));
+  check({{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}});
+  check({{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}}});
+  check({{{0, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 0, 1}}});
 }
 
 }  // namespace

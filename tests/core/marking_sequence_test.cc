@@ -20,6 +20,7 @@
 #include "core/refine_state.h"
 #include "core/subdivision_table.h"
 #include "core/tet_topology.h"
+#include "core/tets_around.h"
 #include "gtest/gtest.h"
 #include "tests/support/geometry.h"
 
@@ -92,11 +93,17 @@ MarkingCounts FullPasses(const Case& c, const MarkingRules& rules, FillLater<uin
           CloseToLongestEdges(p, t, c.edges, rules.closure_rounds, split, cancel, &targets);
     }
   }
+  if (rules.final_guard && rules.best_tiling && rules.guard_rounds > 0) {
+    const TetsAround around(t, static_cast<int64_t>(p.size()));
+    counts.guard_edges += FinalGuardPass(p, t, c.edges, around, rules.guard_ratio,
+                                         rules.guard_floor, split, cancel, nullptr, nullptr);
+  }
   return counts;
 }
 
-void ExpectSameMarks(const Case& c, const FillLater<uint8_t>& start, const MarkingRules& rules,
-                     const std::string& what, int* passes_with_work) {
+// Returns the guard's edges.
+int64_t ExpectSameMarks(const Case& c, const FillLater<uint8_t>& start, const MarkingRules& rules,
+                        const std::string& what, int* passes_with_work) {
   const std::function<bool()> never = [] { return false; };
   CancelFlag running(never);
   FillLater<uint8_t> expected = start;
@@ -112,6 +119,7 @@ void ExpectSameMarks(const Case& c, const FillLater<uint8_t>& start, const Marki
     EXPECT_TRUE(got == expected) << what << ", " << threads << " threads";
   }
   if (want.guard_edges > 0 && want.closure_edges > 0) ++*passes_with_work;
+  return want.guard_edges;
 }
 
 TEST(MarkingSequenceTest, MarksWhatTheFullPassesMark) {
@@ -120,6 +128,9 @@ TEST(MarkingSequenceTest, MarksWhatTheFullPassesMark) {
   for (int i = 0; i < 3; ++i) cases.push_back(JitteredBox(rng));
   cases.push_back(RefinedBox());
   int with_work = 0;
+  // Settings where the guard's last look added edges to what the passes before it marked.
+  int final_guard_work = 0;
+  int64_t guard_edges_before = 0;
   for (size_t k = 0; k < cases.size(); ++k) {
     for (double density : {0.002, 0.02, 0.1}) {
       const FillLater<uint8_t> start = RandomMarks(cases[k], density, rng);
@@ -127,7 +138,11 @@ TEST(MarkingSequenceTest, MarksWhatTheFullPassesMark) {
         for (int guard_rounds : {0, 1, 2, 3}) {
           // The default scheme's ratio, and a stricter one that promotes more (alternating).
           for (double ratio : {k % 2 == 0 ? 0.6 : 0.9}) {
-            for (bool best_tiling : {false, true}) {
+            for (int variant = 0; variant < 3; ++variant) {
+              // Without the better tilings; with them; with them and the guard's last look.
+              const bool best_tiling = variant > 0;
+              const bool final_guard = variant == 2;
+              if (final_guard && guard_rounds == 0) continue;
               MarkingRules rules;
               rules.closure_rounds = closure_rounds;
               rules.guard_rounds = guard_rounds;
@@ -135,13 +150,17 @@ TEST(MarkingSequenceTest, MarksWhatTheFullPassesMark) {
               // A floor on every other case: the default scheme's is half the input's worst tet.
               rules.guard_floor = k % 2 == 1 ? 0.0 : 0.4;
               rules.best_tiling = best_tiling;
-              ExpectSameMarks(cases[k], start, rules,
-                              "case " + std::to_string(k) + ", density " + std::to_string(density) +
-                                  ", closure " + std::to_string(closure_rounds) + ", guard " +
-                                  std::to_string(guard_rounds) + " x " + std::to_string(ratio) +
-                                  ", floor " + std::to_string(rules.guard_floor) +
-                                  (best_tiling ? ", best tiling" : ""),
-                              &with_work);
+              rules.final_guard = final_guard;
+              const int64_t guard_edges = ExpectSameMarks(
+                  cases[k], start, rules,
+                  "case " + std::to_string(k) + ", density " + std::to_string(density) +
+                      ", closure " + std::to_string(closure_rounds) + ", guard " +
+                      std::to_string(guard_rounds) + " x " + std::to_string(ratio) + ", floor " +
+                      std::to_string(rules.guard_floor) + (best_tiling ? ", best tiling" : "") +
+                      (final_guard ? ", final guard" : ""),
+                  &with_work);
+              if (final_guard && guard_edges > guard_edges_before) ++final_guard_work;
+              guard_edges_before = guard_edges;
             }
           }
         }
@@ -150,6 +169,7 @@ TEST(MarkingSequenceTest, MarksWhatTheFullPassesMark) {
   }
   // The comparison means something only where both rules marked edges after the first pass.
   EXPECT_GT(with_work, 100);
+  EXPECT_GT(final_guard_work, 50);
 }
 
 // The tilings the guard leaves for the subdivision are BestTiling's answers for their own keys,
@@ -159,34 +179,38 @@ TEST(MarkingSequenceTest, GuardTilingsAreBestTilingsAnswers) {
   const std::function<bool()> never = [] { return false; };
   std::mt19937_64 rng(99);
   for (Case c : {JitteredBox(rng), RefinedBox()}) {
-    FillLater<uint8_t> split = RandomMarks(c, 0.02, rng);
-    MarkingRules rules;
-    rules.closure_rounds = 8;
-    rules.guard_rounds = 2;
-    rules.guard_ratio = 0.6;
-    rules.best_tiling = true;
-    FillLater<uint16_t> tilings;
-    CancelFlag running(never);
-    CloseAndGuard(c.mesh.points, c.mesh.tets, c.edges, rules, split, running, &tilings);
-    ASSERT_EQ(tilings.size(), c.mesh.tets.size());
-    int64_t known = 0, current = 0;
-    for (size_t t = 0; t < c.mesh.tets.size(); ++t) {
-      if (tilings[t] == kUnknownTiling) continue;
-      ++known;
-      const Tet& tet = c.mesh.tets[t];
-      std::array<Vec3, 10> p;
-      for (int k = 0; k < 4; ++k) p[k] = c.mesh.points[tet[k]];
-      for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
-      const uint32_t key = tilings[t] & (kNumSubdivisionKeys - 1);
-      EXPECT_EQ(BestTiling(key, {p[0], p[1], p[2], p[3]}), tilings[t]) << "tet " << t;
-      uint32_t pattern = 0;
-      for (int k = 0; k < 6; ++k) pattern |= split[c.edges.tet_edges[t][k]] != 0 ? EdgeBit(k) : 0u;
-      // The guard saw a pattern the marks only grew from.
-      EXPECT_EQ(key & 63u & ~pattern, 0u) << "tet " << t;
-      current += SubdivisionKey(pattern, p) == key;
+    for (bool final_guard : {false, true}) {
+      FillLater<uint8_t> split = RandomMarks(c, 0.02, rng);
+      MarkingRules rules;
+      rules.closure_rounds = 8;
+      rules.guard_rounds = 2;
+      rules.guard_ratio = 0.6;
+      rules.best_tiling = true;
+      rules.final_guard = final_guard;
+      FillLater<uint16_t> tilings;
+      CancelFlag running(never);
+      CloseAndGuard(c.mesh.points, c.mesh.tets, c.edges, rules, split, running, &tilings);
+      ASSERT_EQ(tilings.size(), c.mesh.tets.size());
+      int64_t known = 0, current = 0;
+      for (size_t t = 0; t < c.mesh.tets.size(); ++t) {
+        if (tilings[t] == kUnknownTiling) continue;
+        ++known;
+        const Tet& tet = c.mesh.tets[t];
+        std::array<Vec3, 10> p;
+        for (int k = 0; k < 4; ++k) p[k] = c.mesh.points[tet[k]];
+        for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+        const uint32_t key = tilings[t] & (kNumSubdivisionKeys - 1);
+        EXPECT_EQ(BestTiling(key, {p[0], p[1], p[2], p[3]}), tilings[t]) << "tet " << t;
+        uint32_t pattern = 0;
+        for (int k = 0; k < 6; ++k)
+          pattern |= split[c.edges.tet_edges[t][k]] != 0 ? EdgeBit(k) : 0u;
+        // The guard saw a pattern the marks only grew from.
+        EXPECT_EQ(key & 63u & ~pattern, 0u) << "tet " << t;
+        current += SubdivisionKey(pattern, p) == key;
+      }
+      EXPECT_GT(known, 0);
+      EXPECT_GT(current, known / 2) << "the subdivision would reuse few of them";
     }
-    EXPECT_GT(known, 0);
-    EXPECT_GT(current, known / 2) << "the subdivision would reuse few of them";
   }
   MarkingRules no_guard;
   no_guard.closure_rounds = 8;

@@ -639,7 +639,7 @@ TEST_F(ShardedRefineTest, OverlappingHalosAreSentAsFewerPartsWithTheSameResult) 
         sharding::ShardedRefine(channels_, cube.volume, cube.mesh, options, shard, callbacks);
     ASSERT_TRUE(r.ok()) << r.status();
     ExpectSameRefinement(cube.mesh, whole.result, r->reply.result);
-    // 1782 tets of a cube 10 tets across: 27 rings reach everything from any part.
+    // 1782 tets of a cube 10 tets across: 29 rings reach everything from any part.
     const std::vector<int> expected_parts(3, fewer ? 1 : 4);
     EXPECT_EQ(r->parts_per_iteration, expected_parts);
     EXPECT_EQ(r->shards.size(), 4u) << "the measuring round keeps the requested parts";
@@ -649,8 +649,8 @@ TEST_F(ShardedRefineTest, OverlappingHalosAreSentAsFewerPartsWithTheSameResult) 
     }
   }
 
-  // 200 x 2 x 2 cells (4000 tets): two halves plus 27 rings each hold about 64% of the mesh, and
-  // four quarters 52%; neither is within 10% of a coarser cut.
+  // 200 x 2 x 2 cells (4000 tets): two halves plus 29 rings each hold about two thirds of the mesh,
+  // and four quarters about half; neither is within 10% of a coarser cut.
   const Volume volume = TestVolume({202, 4, 4}, VoxelType::kInt16);
   const Mesh mesh = FiveTetMesh({0.5, 0.5, 0.5}, {200.5, 2.5, 2.5}, {200, 2, 2});
   client::RefineRequestOptions one = Options(0.05, 1);
