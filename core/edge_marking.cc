@@ -158,15 +158,22 @@ bool LongerEdges(uint32_t a, uint32_t b, const EdgeOrder& order) {
   return false;
 }
 
+// The ten points SubdivisionKey reads: the corners, then the midpoints of the six edges in
+// kTetEdges order.
+std::array<Vec3, 10> CornersAndMidpoints(const std::array<Vec3, 4>& corners) {
+  std::array<Vec3, 10> p;
+  for (int c = 0; c < 4; ++c) p[c] = corners[c];
+  for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+  return p;
+}
+
 }  // namespace
 
 GuardRemedy FewestGuardEdges(uint32_t pattern, const std::array<Vec3, 4>& corners,
                              double threshold) {
   const EdgeOrder order(corners);
   const uint32_t targets = ClosureTargets(corners);
-  std::array<Vec3, 10> p;
-  for (int c = 0; c < 4; ++c) p[c] = corners[c];
-  for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+  const std::array<Vec3, 10> p = CornersAndMidpoints(corners);
   const uint32_t unsplit = 63u & ~pattern;
   GuardRemedy best;
   double best_worst = -1.0;
@@ -391,9 +398,7 @@ int64_t GuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& tets,
     const Tet& tet = tets[t];
     const std::array<Vec3, 4> corners = {points[tet[0]], points[tet[1]], points[tet[2]],
                                          points[tet[3]]};
-    std::array<Vec3, 10> p;
-    for (int c = 0; c < 4; ++c) p[c] = corners[c];
-    for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+    const std::array<Vec3, 10> p = CornersAndMidpoints(corners);
     const uint32_t key = SubdivisionKey(pattern, p);
     // The tiling Subdivide will cut the tet by.
     const uint32_t tiling = best_tiling ? BestTiling(key, corners) : key;
@@ -436,18 +441,13 @@ int64_t PromoteBadSplits(const std::vector<Vec3>& points, const std::vector<Tet>
 
 double WorstChildOf(uint32_t pattern, const std::array<Vec3, 4>& corners) {
   if (pattern == 0) return MeanRatio(corners[0], corners[1], corners[2], corners[3]);
-  std::array<Vec3, 10> p;
-  for (int c = 0; c < 4; ++c) p[c] = corners[c];
-  for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
-  return ChooseTiling(SubdivisionKey(pattern, p), corners).worst;
+  return ChooseTiling(SubdivisionKey(pattern, CornersAndMidpoints(corners)), corners).worst;
 }
 
 GuardRemedy SparingGuardEdges(uint32_t pattern, const std::array<Vec3, 4>& corners,
                               double threshold, absl::FunctionRef<bool(uint32_t add)> spares) {
   const EdgeOrder order(corners);
-  std::array<Vec3, 10> p;
-  for (int c = 0; c < 4; ++c) p[c] = corners[c];
-  for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+  const std::array<Vec3, 10> p = CornersAndMidpoints(corners);
   const uint32_t unsplit = 63u & ~pattern;
   GuardRemedy best{pattern, kUnknownTiling};
   double best_worst = -1.0;
@@ -495,9 +495,7 @@ int64_t FinalGuardPass(const std::vector<Vec3>& points, const std::vector<Tet>& 
     const uint32_t pattern = pattern_of(static_cast<uint32_t>(t));
     if (pattern == 0 || pattern == 63) return;
     const std::array<Vec3, 4> corners = corners_of(static_cast<uint32_t>(t));
-    std::array<Vec3, 10> p;
-    for (int c = 0; c < 4; ++c) p[c] = corners[c];
-    for (int k = 0; k < 6; ++k) p[4 + k] = Midpoint(p[kTetEdges[k][0]], p[kTetEdges[k][1]]);
+    const std::array<Vec3, 10> p = CornersAndMidpoints(corners);
     const TilingChoice choice = ChooseTiling(SubdivisionKey(pattern, p), corners);
     // Only this block writes tilings[t]: a visit list names a tet once.
     if (tilings != nullptr) (*tilings)[t] = static_cast<uint16_t>(choice.tiling);
