@@ -19,6 +19,7 @@
 #include "client/cli/file_kind.h"
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_report.h"
+#include "client/io/axis_codes.h"
 #include "client/io/dicom_series.h"
 #include "client/io/mesh_io.h"
 #include "client/io/vtk_legacy_format.h"
@@ -58,18 +59,35 @@ int VolumeInfo(const std::string& path) {
       {"world box", absl::StrCat(FormatBox(VolumeWorldBox(v)), " mm")},
       {"value range", absl::StrCat("[", range[0], ", ", range[1], "]")},
   };
+  // A grid whose axes are only flipped or swapped is not oblique: say so. (A file's diagonal
+  // flips are undone when it is read, so such a grid has a permutation left.)
   if (v.axis_aligned()) {
     rows.push_back({"direction", "identity (axis-aligned)"});
   } else {
-    // Columns are the world directions of index axes i, j, k (the oblique frame).
+    const char* kind =
+        io::AxisCodesOf(g.direction).exact ? "axes flipped or swapped, not oblique" : "oblique";
     for (int r = 0; r < 3; ++r) {
       const double* d = g.direction.data() + 3 * r;
       rows.push_back(
           {r == 0 ? "direction" : "",
-           absl::StrFormat("[%12.6g %12.6g %12.6g]%s", d[0], d[1], d[2],
-                           r == 0 ? "  (columns: world axes of i, j, k; oblique)" : "")});
+           absl::StrFormat(
+               "[%12.6g %12.6g %12.6g]%s", d[0] + 0.0, d[1] + 0.0, d[2] + 0.0,
+               r == 0 ? absl::StrCat("  (columns: world axes of i, j, k; ", kind, ")") : "")});
     }
   }
+  // The file's storage order as imaging tools name it (nibabel's aff2axcodes, Slicer's RAS/LPS):
+  // what a user compares with their other tools, whatever order the grid was read into.
+  Mat3 file_axes;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) file_axes[3 * r + c] = file->affine[r][c];
+  }
+  const io::AxisCodes codes = io::AxisCodesOf(file_axes);
+  std::vector<std::string> words;
+  for (char c : codes.codes) words.push_back(io::AxisCodeWord(c));
+  rows.push_back(
+      {"orientation", absl::StrCat(codes.exact ? "" : "oblique, closest to ", codes.codes,
+                                   " (the file's i, j, k run ", codes.exact ? "" : "nearest ",
+                                   "to ", absl::StrJoin(words, ", "), ")")});
   // The file's storage-order index to world, in RAS (an LPS file's NRRD or MetaImage matrix has
   // x and y negated). "+ 0.0" turns the -0 of a negated zero into 0 (a sweep saw "-0" entries).
   for (int r = 0; r < 4; ++r) {

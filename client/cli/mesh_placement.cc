@@ -4,6 +4,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "client/io/axis_codes.h"
 
 namespace tetrefine::cli {
 
@@ -70,9 +71,13 @@ std::string FormatBox(const Box& box) {
                       box[0][2], ", ", box[1][2], "]");
 }
 
+bool GridFillsItsWorldBox(const Volume& volume) {
+  return volume.axis_aligned() || io::AxisCodesOf(volume.grid().direction).exact;
+}
+
 std::string WhereOutside(const Volume& volume, const Vec3& p) {
   const std::string at = absl::StrFormat("at (%g, %g, %g) mm", p[0], p[1], p[2]);
-  if (volume.axis_aligned()) {
+  if (GridFillsItsWorldBox(volume)) {
     return absl::StrCat(at, "; the volume spans ", FormatBox(VolumeWorldBox(volume)), " mm");
   }
   const Vec3 u = volume.ContinuousIndex(p);

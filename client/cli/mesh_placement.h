@@ -22,6 +22,11 @@ std::string FormatBox(const Box& box);
 // Index of the first vertex outside the volume's sampled box (with the core's tolerance), or -1.
 int64_t FirstVertexOutside(const Volume& volume, const Mesh& mesh);
 
+// True when the volume's grid fills its world bounding box: its axes are the world's, maybe
+// flipped or swapped (most scanners' files), not rotated. Only then is a point inside the box
+// inside the grid.
+bool GridFillsItsWorldBox(const Volume& volume);
+
 // Where world point `p`, outside the volume, is, for messages: "at (x, y, z) mm; the volume
 // spans [..] x [..] x [..] mm", and for an oblique volume, whose world bounding box can hold
 // points outside its grid, "at (x, y, z) mm, grid index (i, j, k); the volume's oblique grid

@@ -256,7 +256,7 @@ absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const
       // A rotated grid fills only part of its world box: a vertex inside the box can still be
       // outside, and the grid index says where.
       std::string where = absl::StrCat("world box ", FormatBox(VolumeWorldBox(volume)));
-      if (!volume.axis_aligned()) {
+      if (!GridFillsItsWorldBox(volume)) {
         const Vec3 u = volume.ContinuousIndex(p);
         const Index3& d = volume.grid().dims;
         where = absl::StrFormat(

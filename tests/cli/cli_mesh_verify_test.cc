@@ -293,7 +293,8 @@ TEST_F(CliMeshVerify, ObliqueVolumeMeshesRefinesAndSlicesInItsFrame) {
   const ProcessResult info = RunTetrefine({"info", volume_});
   ASSERT_EQ(info.exit_code, 0) << info.err;
   EXPECT_EQ(info.err, "");
-  for (const char* text : {"direction", "oblique", "0.8", "-0.6"}) {
+  for (const char* text :
+       {"direction", "oblique", "0.8", "-0.6", "orientation        oblique, closest to RAI"}) {
     EXPECT_TRUE(absl::StrContains(info.out, text)) << text << " missing from\n" << info.out;
   }
 
@@ -338,6 +339,42 @@ TEST_F(CliMeshVerify, ObliqueVolumeMeshesRefinesAndSlicesInItsFrame) {
                                             dir_.File("grid.vtu"), "--output", dir_.File("s.png")});
   EXPECT_EQ(slice.exit_code, 0) << slice.err;
   EXPECT_TRUE(FileExists(dir_.File("s.png")));
+}
+
+// A grid whose axes are only flipped and swapped, as the shipped T1 volume's (i to the left, j
+// up, k to the front): info names it by its axis codes, not as oblique, and a vertex outside it
+// is told against its world box, which the grid fills (the message had called it oblique).
+TEST_F(CliMeshVerify, FlippedAndSwappedAxesAreNotOblique) {
+  const Volume bump = BumpVolume({11, 9, 7}, {-5.0, 0.0, 10.0}, {1.0, 1.5, 2.0});
+  GridGeometry g = bump.grid();
+  g.direction = {-1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0};
+  absl::StatusOr<Volume> swapped = Volume::CreateWhole(g, bump.type(), bump.data());
+  ASSERT_TRUE(swapped.ok()) << swapped.status();
+  volume_ = dir_.File("lsa.nii");
+  WriteVolume(volume_, *swapped);
+
+  const ProcessResult info = RunTetrefine({"info", volume_});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  for (const char* text :
+       {"axes flipped or swapped, not oblique",
+        "orientation        LSA (the file's i, j, k run to left, superior, anterior)"}) {
+    EXPECT_TRUE(absl::StrContains(info.out, text)) << text << " missing from\n" << info.out;
+  }
+
+  // World box [-15, -5] x [0, 12] x [10, 22]: (0, 5, 15) lies beyond its x maximum.
+  io::MeshFile outside;
+  outside.mesh.points = {{0.0, 5.0, 15.0}, {-6.0, 5.0, 15.0}, {-6.0, 6.0, 15.0}, {-6.0, 5.0, 16.0}};
+  outside.mesh.tets = {{0, 1, 2, 3}};
+  ASSERT_TRUE(io::WriteMesh(dir_.File("outside.vtu"), outside).ok());
+  const ProcessResult refine =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", dir_.File("outside.vtu"), "--epsilon",
+                    "0.1", "--output", dir_.File("outside_out.vtu")});
+  EXPECT_EQ(refine.exit_code, 2) << refine.err;
+  EXPECT_TRUE(absl::StrContains(refine.err, "outside.vtu: vertex 0 at (0, 5, 15) lies outside"))
+      << refine.err;
+  EXPECT_TRUE(absl::StrContains(refine.err, "world box [-15, -5] x [0, 12] x [10, 22]"))
+      << refine.err;
+  EXPECT_FALSE(absl::StrContains(refine.err, "oblique")) << refine.err;
 }
 
 TEST_F(CliMeshVerify, InfoOnAMesh) {
