@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "client/io/io_error.h"
 
 namespace tetrefine::io {
@@ -53,21 +54,39 @@ absl::Status CheckFiniteInFileOrder(absl::string_view path, const Index3& dims, 
                                     const std::vector<std::byte>& data) {
   if (type != VoxelType::kFloat32 && type != VoxelType::kFloat64) return absl::OkStatus();
   const int64_t count = dims[0] * dims[1] * dims[2];
-  for (int64_t i = 0; i < count; ++i) {
-    double value = 0.0;
+  auto value_at = [&](int64_t i) {
     if (type == VoxelType::kFloat32) {
       float f = 0.0f;
       std::memcpy(&f, data.data() + i * 4, 4);
-      value = f;
-    } else {
-      std::memcpy(&value, data.data() + i * 8, 8);
+      return static_cast<double>(f);
     }
-    if (std::isfinite(value)) continue;
-    return FileError(
-        path, absl::StrCat("voxel (", i % dims[0], ", ", (i / dims[0]) % dims[1], ", ",
-                           i / (dims[0] * dims[1]), ") of the file is not finite (", value, ")"));
+    double value = 0.0;
+    std::memcpy(&value, data.data() + i * 8, 8);
+    return value;
+  };
+  int64_t first = -1, non_finite = 0;
+  for (int64_t i = 0; i < count; ++i) {
+    if (std::isfinite(value_at(i))) continue;
+    if (first < 0) first = i;
+    ++non_finite;
   }
-  return absl::OkStatus();
+  if (first < 0) return absl::OkStatus();
+  // Masked float maps (FSL's and SPM's, perfusion and PET maps) put NaN outside the tissue: say
+  // how many there are and what to do, not only where the first is.
+  const std::string others =
+      non_finite > 1
+          ? absl::StrCat(", and so are ", non_finite - 1, " other voxels (",
+                         absl::StrFormat("%.3g", 100.0 * static_cast<double>(non_finite) /
+                                                     static_cast<double>(count)),
+                         "% of the volume)")
+          : "";
+  return FileError(
+      path,
+      absl::StrCat("voxel (", first % dims[0], ", ", (first / dims[0]) % dims[1], ", ",
+                   first / (dims[0] * dims[1]), ") of the file is not finite (", value_at(first),
+                   ")", others,
+                   "; tetrefine needs a finite value at every voxel: replace NaN and Inf first "
+                   "(e.g. numpy.nan_to_num, or fslmaths IN -nan OUT)"));
 }
 
 }  // namespace
@@ -126,6 +145,12 @@ absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& aff
       }
     }
   }
+  // Named by the file's own index (the core would name it by its grid index, which after a flip
+  // is not the file's: (22, 10, 10) for the file's (10, 10, 10), found by a file-format sweep),
+  // with how many there are and what to do.
+  if (absl::Status finite = CheckFiniteInFileOrder(path, dims, type, data); !finite.ok()) {
+    return finite;
+  }
   VolumeFile result;
   result.affine = affine;
   GridGeometry grid;
@@ -144,14 +169,7 @@ absl::StatusOr<VolumeFile> PlaceOnGrid(absl::string_view path, const Affine& aff
         grid.origin[row] += affine[row][column] * static_cast<double>(first[column]);
       }
     }
-    if (flip[0] || flip[1] || flip[2]) {
-      // The core names a non-finite sample by its grid index, which after a flip is not the
-      // file's: (22, 10, 10) for the file's (10, 10, 10) (found by a file-format sweep).
-      if (absl::Status finite = CheckFiniteInFileOrder(path, dims, type, data); !finite.ok()) {
-        return finite;
-      }
-      data = Flip(data, dims, VoxelSize(type), flip);
-    }
+    if (flip[0] || flip[1] || flip[2]) data = Flip(data, dims, VoxelSize(type), flip);
   } else {
     // Oblique: the samples stay in storage order and the rotation/shear/permutation goes into
     // the grid's direction, so volume.Sample(p) is the file's value at world point p.

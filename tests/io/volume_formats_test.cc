@@ -1,5 +1,6 @@
 // NRRD and MetaImage (LPS files converted to RAS) and ReadVolume's dispatch.
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -647,7 +648,30 @@ TEST(IoReadVolumeTest, ANonFiniteVoxelIsNamedByTheFilesIndex) {
     EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument) << path;
     EXPECT_THAT(std::string(status.message()), HasSubstr("(1, 1, 1)")) << status.message();
     EXPECT_THAT(std::string(status.message()), HasSubstr("is not finite (nan)"));
+    EXPECT_THAT(std::string(status.message()), HasSubstr("replace NaN and Inf first"));
   }
+}
+
+// A masked map with NaN outside the tissue: the message counts them, not only the first.
+TEST(IoReadVolumeTest, NonFiniteVoxelsAreCounted) {
+  ScratchDir dir;
+  iotest::NiftiSpec spec;
+  spec.dim = {3, 4, 2, 2, 1, 1, 1, 1};
+  spec.sform_code = 1;
+  spec.srow = {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}};
+  std::vector<float> samples(16, 1.f);
+  samples[3] = std::nanf("");
+  samples[7] = std::numeric_limits<float>::infinity();
+  samples[12] = -std::numeric_limits<float>::infinity();
+  samples[15] = std::nanf("");
+  const std::string path = dir.File("masked.nii");
+  WriteBytes(path, iotest::NiftiHeaderBytes(spec) + FloatSamples(samples, false));
+  const absl::Status status = ReadVolume(path).status();
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(status.message()),
+              HasSubstr("voxel (3, 0, 0) of the file is not finite (nan), and so are 3 other "
+                        "voxels (25% of the volume)"))
+      << status.message();
 }
 
 TEST(IoReadVolumeTest, ExtensionsAreCaseInsensitive) {
