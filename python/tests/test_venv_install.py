@@ -18,7 +18,8 @@ from test_refine import run_cli
 DEMO = os.path.join(ROOT, "examples", "python", "refine_demo.py")
 
 
-def test_pip_install_and_the_ten_line_script_match_the_cli(server, cli_binary, tmp_path):
+def test_pip_install_and_the_ten_line_script_match_the_cli(server, server_binary, cli_binary,
+                                                           tmp_path):
     with open(DEMO) as f:
         assert len(f.read().splitlines()) <= 12, "the demo script is meant to stay that short"
     # Debian's interpreter, whatever runs pytest: the venv is made over its packages.
@@ -47,6 +48,15 @@ def test_pip_install_and_the_ten_line_script_match_the_cli(server, cli_binary, t
                           capture_output=True, text=True, timeout=300)
     assert demo.returncode == 0, demo.stdout + demo.stderr
     assert demo.stdout.splitlines()[0].startswith("1 "), demo.stdout  # iteration 1's line
+
+    # The installed package runs a server of its own too (tetrefine.LocalServer).
+    local = subprocess.run(
+        [str(venv / "bin" / "python"), "-c",
+         "import sys, tetrefine\n"
+         "with tetrefine.LocalServer(sys.argv[1]) as s, s.client() as c:\n"
+         "    print(c.server_info().version)", server_binary],
+        cwd=tmp_path, env=offline, capture_output=True, text=True, timeout=120)
+    assert local.returncode == 0 and local.stdout.strip(), local.stdout + local.stderr
 
     run_cli(cli_binary, "refine", "--server", server.target, "--volume", EXAMPLE_VOLUME,
             "--mesh", EXAMPLE_MESH, "--fit-mesh-to-volume", "--epsilon", "0.1", "--quiet",
