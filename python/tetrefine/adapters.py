@@ -275,7 +275,8 @@ class TetMesh:
 # the CLI's list (client/io/label_names.cc), so that a file gives the same labels through
 # meshio as through `tetrefine refine` (tests/test_adapters.py checks the two agree).
 LABEL_NAMES = ("gmsh:physical", "medit:ref", "tetgen:ref", "CellEntityIds", "region", "regions",
-               "labels", "label", "MaterialIds", "material", "materials", "subdomain")
+               "labels", "label", "MaterialIds", "material", "materials", "subdomain",
+               "cell_scalars")
 
 
 # meshio's volume cell types other than "tetra" (tetra10, hexahedron, hexahedron27, wedge,

@@ -149,6 +149,18 @@ TEST(IoTetgenTest, TetgenMeshesAreReadAndOursAreReadByTetgen) {
   EXPECT_NEAR(volume.at(1), 2.0, 1e-12);
   EXPECT_NEAR(volume.at(2), 2.0, 1e-12);
 
+  // With -k TetGen also writes a legacy .vtk, its regions as "cell_scalars": read as labels,
+  // the same tets and regions as the .ele's.
+  const testing::ProcessResult vtk =
+      testing::RunProcess({kTetgen, "-pq1.2a0.05AkQ", dir.File("boxes.poly")});
+  ASSERT_EQ(vtk.exit_code, 0) << vtk.out << vtk.err;
+  absl::StatusOr<MeshFile> legacy = ReadMesh(dir.File("boxes.1.vtk"));
+  ASSERT_TRUE(legacy.ok()) << legacy.status();
+  EXPECT_EQ(legacy->label_name, "cell_scalars");
+  EXPECT_EQ(legacy->mesh.tets, file->mesh.tets);
+  EXPECT_EQ(legacy->mesh.labels, file->mesh.labels);
+  EXPECT_TRUE(legacy->dropped_arrays.empty());
+
   // Ours, read back by TetGen: the same number of points and tets.
   const std::string ours = dir.File("ours.ele");
   ASSERT_TRUE(WriteMesh(ours, *file).ok());
