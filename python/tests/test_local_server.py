@@ -2,6 +2,8 @@
 
 import os
 import stat
+import threading
+import time
 
 import grpc
 import meshio
@@ -11,7 +13,7 @@ import pytest
 
 import tetrefine
 from conftest import EXAMPLE_MESH, EXAMPLE_VOLUME
-from test_refine import assert_same_as_cli_output, run_cli
+from test_refine import _heavy_input, assert_same_as_cli_output, run_cli
 
 
 def test_refines_as_the_cli_does_with_its_embedded_service(server_binary, cli_binary, tmp_path):
@@ -127,3 +129,32 @@ def test_numpy_results_survive_the_server(server_binary):
                                epsilon=0.05)
     assert result.tets.shape[1] == 4 and len(result.tets) > 1
     assert result.points.shape == (len(result.values), 3)
+
+
+def test_closing_with_a_call_in_flight_ends_it_promptly(server_binary):
+    # The pipeline is done (or interrupted) while its server still refines: close() cancels
+    # the call after the 2 s drain instead of the server's default 30 s.
+    volume, points, tets = _heavy_input()
+    server = tetrefine.LocalServer(server_binary)
+    client = server.client()
+    started, outcome = threading.Event(), []
+
+    def call():
+        try:
+            client.refine(volume, (1, 1, 1), (0, 0, 0), points, tets, 0.001, max_iterations=30,
+                          on_iteration=lambda s: started.set())
+            outcome.append("finished")
+        except tetrefine.TetrefineError as error:
+            outcome.append(error.code)
+
+    worker = threading.Thread(target=call)
+    worker.start()
+    assert started.wait(60)
+    begun = time.monotonic()
+    server.close()
+    closed = time.monotonic() - begun
+    worker.join(60)
+    client.close()
+    assert not server.running
+    assert closed < 15, closed
+    assert outcome and outcome[0] != "finished", outcome

@@ -64,9 +64,10 @@ class LocalServer:
         user can read): other users of the machine cannot use the server.
       log: the server's output lines so far (its log goes to stderr, which is kept here).
 
-    Use as a context manager, or call close() (SIGTERM: calls in flight are cancelled after the
-    server's drain time; then the process is killed). client() gives a Client with the token;
-    close the clients before the server, or let the `with` statement do it.
+    Use as a context manager, or call close() (SIGTERM: calls in flight are cancelled after 2 s,
+    the server's --drain_seconds here; the process is killed if it has not ended 40 s later).
+    client() gives a Client with the token; close the clients before the server, or let the
+    `with` statement do it.
     """
 
     def __init__(self, binary=None, *, flags=(), start_timeout=30.0):
@@ -82,8 +83,10 @@ class LocalServer:
         token_file = os.path.join(self._dir.name, "tokens")
         with open(os.open(token_file, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), "w") as f:
             f.write(f"local {self.token}\n")
-        # Metrics off: its default port would clash with a second local server.
-        args = [self._binary, "--listen=127.0.0.1:0", "--metrics_listen=",
+        # Metrics off: its default port would clash with a second local server. A short drain:
+        # close() comes when the pipeline is done with the server (or interrupted), and the
+        # calls still in flight are its own; `flags` come last, so they can change both.
+        args = [self._binary, "--listen=127.0.0.1:0", "--metrics_listen=", "--drain_seconds=2",
                 f"--token_file={token_file}", *flags]
         try:
             self._process = subprocess.Popen(args, stdin=subprocess.DEVNULL,
