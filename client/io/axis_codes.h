@@ -18,9 +18,9 @@ struct AxisCodes {
 };
 
 // `direction`: row-major 3 x 3, column c the world direction of index axis c, of any length (a
-// GridGeometry::direction, or an affine's linear part with the spacing in it); non-singular. The
-// closest directions are assigned greedily on the unit columns, largest |component| first, each
-// world axis once (nibabel's rule); ties go to the lower index axis, then the lower world axis.
+// GridGeometry::direction, or an affine's linear part with the spacing in it); non-singular.
+// Index axes i, j, k in turn take the world axis their column is largest along among those left,
+// as nibabel's aff2axcodes does for orthogonal columns (ties: the lower world axis).
 AxisCodes AxisCodesOf(const Mat3& direction);
 
 // The word of an axis code letter: "right" for 'R', ... "inferior" for 'I'; "?" otherwise.

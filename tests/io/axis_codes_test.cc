@@ -70,7 +70,8 @@ TEST(IoAxisCodesTest, RotatedGridsAreObliqueWithTheirClosestAxes) {
 }
 
 // Scaling columns (an affine's spacing) changes no letter: random rotations, scaled by
-// anisotropic spacings up to 20:1.
+// anisotropic spacings up to 20:1. (python/tests/test_adapters.py compares `info` with nibabel
+// itself on such grids.)
 TEST(IoAxisCodesTest, ColumnLengthsDoNotChangeTheLetters) {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal;
