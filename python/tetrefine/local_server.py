@@ -108,6 +108,7 @@ class LocalServer:
         threading.Thread(target=pump, daemon=True).start()
         deadline = time.monotonic() + start_timeout
         port = None
+        output_ended = False
         while port is None:
             left = deadline - time.monotonic()
             if left <= 0:
@@ -116,13 +117,21 @@ class LocalServer:
                 line = lines.get(timeout=min(left, 0.5))
             except queue.Empty:
                 continue
-            if line is None:  # the process ended
+            if line is None:  # the process closed its output: it is ending
+                output_ended = True
                 break
             match = _LISTENING.search(line)
             if match:
                 port = int(match.group(1))
         if port is None:
+            # Its output ends before it has exited: wait for the status rather than poll, which
+            # could still see it running and blame a timeout that never happened.
             exited = self._process.poll()
+            if exited is None and output_ended:
+                try:
+                    exited = self._process.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    exited = None
             self._stop()
             reason = (f"exited with status {exited}" if exited is not None else
                       f"did not listen within {start_timeout} s")
