@@ -67,15 +67,15 @@ EdgeErrors EvaluateEdges(const Volume& volume, const State& state, const EdgeTab
 // smallest), never by numbering, so every tet sharing the edge agrees and shards agree.
 int LongestEdge(const std::array<Vec3, 4>& p);
 
-// The edges the closure marks for a tet with corners p, as local indices (kTetEdges), 3 bits
-// each: bits 0-2 its longest edge (LongestEdge(p)), bits 3 + 3f .. 5 + 3f the longest edge of
-// face f (kTetFaces order). Equal lengths are broken as LongestEdge breaks them, by geometry, so
-// the two tets of a face agree on its longest edge.
+// The edges the closure and the guard's remedies read for a tet with corners p, as local indices
+// (kTetEdges), 3 bits each: bits 0-2 its longest edge (LongestEdge(p)), bits 3 + 3f .. 5 + 3f the
+// longest edge of face f (kTetFaces order). Equal lengths are broken as LongestEdge breaks them, by
+// geometry, so the two tets of a face agree on its longest edge.
 uint32_t ClosureTargets(const std::array<Vec3, 4>& p);
 
-// Longest-edge closure, `rounds` times: every tet with a split edge also splits its longest
-// edge, and every face with a split edge its longest edge (Plaza's rule; see SchemeRules in
-// core/refine.cc for why both). Each round reads the marks of the round before (never marks made
+// Longest-edge closure, `rounds` times: every face with a split edge also splits its longest
+// edge (Plaza's rule; until 2026-11-28 every tet with a split edge its longest edge too: see
+// SchemeRules in core/refine.cc). Each round reads the marks of the round before (never marks made
 // in the same round), so the result does not depend on the order tets are visited in. Needs
 // edges.tet_edges. Returns the number of edges the closure added. Polls `cancel` per block: once
 // it is set the marks are incomplete and the caller must stop.
@@ -105,8 +105,9 @@ int64_t ClosureRound(const std::vector<Vec3>& points, const std::vector<Tet>& te
 // 2026-11-27; it marks edges the split did not need, and each of them brings the tets around it
 // into the closure. This remedy is the split pattern, a superset of `pattern` (a tet's split
 // edges, EdgeBit of local edges; neither 0 nor 63), with the fewest edges added that
-//   - is closed within the tet: it holds the tet's longest edge, and the longest edge of every
-//     face it splits (ClosureTargets), so the closure adds nothing to it from this tet, and
+//   - is closed within the tet: it holds the tet's longest edge (as longest-edge bisection cuts
+//     a tet), and the longest edge of every face it splits (ClosureTargets), so the closure adds
+//     nothing to it from this tet, and
 //   - has a best tiling (ChooseTiling) whose worst child is at or above `threshold`;
 // all six when no smaller set does. Among sets of one size: the best worst child, then the
 // longer added edges (the edges of each set sorted longest first, as LongestEdge orders them),

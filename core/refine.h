@@ -29,7 +29,7 @@ struct IterationStats {
   // kLongestEdge: the largest discrepancy along any edge at the start of the iteration (0 for
   // kPaper, which does not compute it).
   double max_segment_error = 0.0;
-  int64_t closure_edges = 0;  // edges split only because they are a marked tet's longest edge
+  int64_t closure_edges = 0;  // edges split only because they are a marked face's longest edge
   int64_t guard_edges = 0;    // edges split only by the quality guard (regular refinement)
   // Certified mode: tets whose lattice discrepancy exceeded epsilon at the start of the
   // iteration (each had its longest edge split).

@@ -42,9 +42,9 @@ enum class OrientationPolicy : uint8_t {
 enum class RefineScheme : uint8_t {
   // The paper exactly: an edge is split when the discrepancy at its midpoint exceeds epsilon.
   kPaper,
-  // The paper's midpoint test, then every tet with a split edge also splits its
-  // longest edge (longest-edge closure, as in Rivara's and Plaza's schemes), and a tet whose
-  // split would make a much flatter child is refined regularly (1:8) instead; each tet is cut by
+  // The paper's midpoint test, then every face with a split edge also splits its longest edge
+  // (longest-edge closure, as in Plaza's scheme), and a tet whose split would make a much
+  // flatter child gets the fewest more split edges that avoid it; each tet is cut by
   // the tiling of its faces with the best worst child (core/alternative_tilings.h). It reaches
   // epsilon where the paper's scheme stops with needles. See SchemeRules in core/refine.cc for
   // the measurements behind each rule.

@@ -822,7 +822,7 @@ const CommandSpec& RefineSpec() {
                               "--server)")},
                 {"scheme", "NAME",
                  absl::StrCat("which edges are split: longest-edge (the midpoint test, then "
-                              "each marked tet's and face's longest edge, and the fewest more "
+                              "each marked face's longest edge, and the fewest more "
                               "edges where a split would flatten a tet; each tet cut by the "
                               "tiling with the best worst child: reaches epsilon with bounded "
                               "quality) or paper (the midpoint test and the paper's table alone, "

