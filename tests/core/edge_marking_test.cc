@@ -218,6 +218,35 @@ TEST(EdgeMarkingTest, ClosureTargetsAgreeWithPlainComparisonAndAcrossFaces) {
   }
 }
 
+// A tet whose split edge is the longest edge of both its faces through it, but not the tet's own
+// longest edge: the closure adds nothing (Plaza's rule; before 2026-11-28 it added the tet's
+// longest edge, here 2-3, which is what docs/schemes.md "The closure without the tet rule"
+// measured against).
+TEST(EdgeMarkingTest, ClosureAddsNotTheTetsLongestEdgeWhenNoFaceAsksForIt) {
+  Mesh mesh;
+  // |01| = 2; |02| = |12| = 1.56 and |03| = |13| = 1.60 (01 is the longest of faces 012 and
+  // 013); |23| = 2.11, the tet's longest edge.
+  mesh.points = {{0.0, 0.0, 0.0}, {2.0, 0.0, 0.0}, {1.0, 1.2, 0.0}, {1.0, -0.6, 1.1}};
+  mesh.tets = {{0, 1, 2, 3}};
+  ASSERT_EQ(LongestEdge({mesh.points[0], mesh.points[1], mesh.points[2], mesh.points[3]}),
+            EdgeIndex(2, 3));
+  EdgeTable edges = BuildEdgeTable(mesh.tets, static_cast<int64_t>(mesh.points.size()));
+  AddTetEdges(mesh.tets, &edges);
+  FillLater<uint8_t> split(static_cast<size_t>(edges.size()), 0);
+  split[edges.tet_edges[0][EdgeIndex(0, 1)]] = 1;
+  const std::function<bool()> never = [] { return false; };
+  CancelFlag running(never);
+  EXPECT_EQ(CloseToLongestEdges(mesh.points, mesh.tets, edges, 8, split, running), 0);
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_EQ(split[edges.tet_edges[0][k]] != 0, k == EdgeIndex(0, 1)) << "edge " << k;
+  }
+  // A split edge that is not the longest of a face through it brings that face's longest edge.
+  split.assign(static_cast<size_t>(edges.size()), 0);
+  split[edges.tet_edges[0][EdgeIndex(0, 2)]] = 1;
+  EXPECT_GT(CloseToLongestEdges(mesh.points, mesh.tets, edges, 8, split, running), 0);
+  EXPECT_NE(split[edges.tet_edges[0][EdgeIndex(0, 1)]], 0);  // face 012's longest
+}
+
 // The closure marks what its rule read plainly marks: each round, every face with a split edge
 // (as the round before left them) splits its longest edge, and nothing else (not the tet's own
 // longest edge, since 2026-11-28). Random jittered meshes, random marks, 1 to 6 rounds; the
