@@ -351,9 +351,9 @@ int64_t ClosureRound(const std::vector<Vec3>& points, const std::vector<Tet>& te
     };
     // Faces only, as Plaza's rule: the tet's own longest edge (r & 7) is not added. Measured
     // 2026-11-28 (docs/schemes.md "The closure without the tet rule"): 3.1% fewer tets on the 20
-    // reproduction runs and 3.1% on the 22 unseen ones, runs above Plaza's tets 15 -> 13 and
-    // 20 -> 5; the worst tet the same or better in the unseen runs but lower in three structured
-    // reproduction runs (Marschner-Lobb blocks, heart2).
+    // reproduction runs and 3.1% on the 22 unseen ones, runs above Plaza's tets 14 -> 12 and
+    // 18 -> 5 (of the runs both converge on); the worst tet the same or better in the unseen runs
+    // but lower in three structured reproduction runs (Marschner-Lobb blocks, heart2).
     for (int f = 0; f < 4; ++f) {
       if ((pattern & kFaceEdgeBits[f]) != 0) add((r >> (3 + 3 * f)) & 7u);
     }

@@ -176,7 +176,7 @@ void TetQualities(const std::vector<Vec3>& p, const std::vector<Tet>& tets, int6
 //    without the tet rule": on the 20 reproduction runs 3.1% fewer tets (above Plaza's in 12 of
 //    the 19 both converge on instead of 14), the mean the same or higher, but the worst tet below
 //    half the input's in 3 runs instead of 1 (5-tet block and shell meshes, where Plaza's is as
-//    low); on the 22 unseen runs 3.1% fewer tets, above Plaza's in 5 instead of 20, no worst tet
+//    low); on the 22 unseen runs 3.1% fewer tets, above Plaza's in 5 instead of 18, no worst tet
 //    below 0.5x that was not. Certified: 2.5% and 2.2% fewer tets, above 1.5x Plaza's in 6
 //    instead of 7 and 5 instead of 8.
 // Every rule reads only the tets around an edge, a bounded number of times per iteration
