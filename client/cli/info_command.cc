@@ -64,8 +64,7 @@ int VolumeInfo(const std::string& path) {
   if (v.axis_aligned()) {
     rows.push_back({"direction", "identity (axis-aligned)"});
   } else {
-    const char* kind =
-        io::AxisCodesOf(g.direction).exact ? "axes flipped or swapped, not oblique" : "oblique";
+    const char* kind = GridFillsItsWorldBox(v) ? "axes flipped or swapped, not oblique" : "oblique";
     for (int r = 0; r < 3; ++r) {
       const double* d = g.direction.data() + 3 * r;
       rows.push_back(
