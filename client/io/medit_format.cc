@@ -2,9 +2,11 @@
 
 #include <limits>
 #include <utility>
+#include <vector>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_split.h"
 #include "client/io/cell_census.h"
 #include "client/io/number_text.h"
 #include "client/io/text_scanner.h"
@@ -132,6 +134,21 @@ absl::StatusOr<MeshFile> ParseMedit(absl::string_view text, absl::string_view pa
                      std::numeric_limits<int32_t>::max());
         if (!ref.ok()) return ref.status();
         file.mesh.labels[t] = static_cast<int32_t>(*ref);
+        // Gmsh writes quadratic tets under "Tetrahedra", ten nodes and a reference per line;
+        // read five at a time they misparse, and the error came much later as an "unknown Medit
+        // section" (found by a file-format sweep). The format does not require a line per tet,
+        // so only a first line whose count of numbers is not a multiple of five is refused.
+        if (t == first) {
+          const std::vector<absl::string_view> extra =
+              absl::StrSplit(in.PeekRestOfLine(), absl::ByAnyChar(" \t"), absl::SkipEmpty());
+          const int64_t numbers = 5 + static_cast<int64_t>(extra.size());
+          if (numbers % 5 != 0) {
+            return in.Error(absl::StrCat(
+                "a Tetrahedra line holds ", numbers,
+                " numbers, not 5 (4 vertex indices and a reference)",
+                numbers == 11 ? ": quadratic (10-node) tets, which tetrefine does not read" : ""));
+          }
+        }
       }
       have_tets = true;
     } else if (const OtherSection* other = FindOtherSection(keyword)) {

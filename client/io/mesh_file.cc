@@ -70,11 +70,15 @@ absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path) {
     return FileError(path, absl::StrCat("cell data \"quality\" has ", file.tet_quality.size(),
                                         " entries for ", t, " tetrahedra"));
   }
+  // A name is a line of a .msh file: a control character (a line break) would end it early. A
+  // quote is kept: Gmsh writes `"white matter "WM""` unescaped and reads a name from the line's
+  // first quote to its last, as our reader does; refusing it refused Gmsh's own files (found
+  // by a file-format sweep).
   for (const auto& [label, name] : file.region_names) {
     for (const char c : name) {
-      if (c == '"' || static_cast<unsigned char>(c) < 0x20) {
-        return FileError(path, absl::StrCat("the name of region ", label,
-                                            " holds a quote or a control character"));
+      if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+        return FileError(path,
+                         absl::StrCat("the name of region ", label, " holds a control character"));
       }
     }
   }

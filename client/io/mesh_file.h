@@ -51,7 +51,8 @@ struct MeshFile {
   MeshFrame frame = MeshFrame::kUntagged;
   std::vector<std::string> dropped_arrays{};
   // Names of labels (Gmsh $PhysicalNames of dimension 3), for the formats that keep them: .msh
-  // writes them back. Printable, without '"'.
+  // writes them back. Without control characters (a name is one line of a .msh file); quotes
+  // are kept as Gmsh keeps them.
   std::map<int32_t, std::string> region_names{};
   // Cells a VTK file marked as ghosts (copies of another piece's cells, vtkGhostType), which the
   // reader skipped (io::CellsToTets); the CLI says how many.

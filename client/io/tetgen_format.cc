@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "client/io/number_text.h"
@@ -40,7 +41,11 @@ absl::Status ExpectIndex(TextScanner& in, int64_t want, absl::string_view what) 
 }  // namespace
 
 std::string TetgenNodePath(const std::string& ele_path) {
-  return ele_path.substr(0, ele_path.size() - 4) + ".node";
+  // ".ELE" pairs with ".NODE": files copied from a case-insensitive file system (or written by
+  // tools that upper-case names) keep both in capitals. Reading only ".node" refused such a
+  // pair (found by a file-format sweep); writing X.ELE made X.node.
+  const bool upper = ele_path.size() >= 4 && absl::ascii_isupper(ele_path[ele_path.size() - 3]);
+  return ele_path.substr(0, ele_path.size() - 4) + (upper ? ".NODE" : ".node");
 }
 
 absl::StatusOr<MeshFile> ParseTetgen(absl::string_view node_text, absl::string_view ele_text,

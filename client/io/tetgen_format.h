@@ -23,7 +23,8 @@ namespace tetrefine::io {
 absl::StatusOr<MeshFile> ParseTetgen(absl::string_view node_text, absl::string_view ele_text,
                                      absl::string_view node_path, absl::string_view ele_path);
 
-// The .node file beside an .ele file: "dir/ball.1.ele" -> "dir/ball.1.node".
+// The .node file beside an .ele file: "dir/ball.1.ele" -> "dir/ball.1.node", and in capitals
+// beside an .ELE: "BALL.1.ELE" -> "BALL.1.NODE" (the extension's case is the .ele's).
 std::string TetgenNodePath(const std::string& ele_path);
 
 // The two files for `file`, numbered from 1, coordinates to the bit (shortest round trip): the

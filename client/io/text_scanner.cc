@@ -120,6 +120,16 @@ absl::string_view TextScanner::RestOfLine() {
   return rest;
 }
 
+absl::string_view TextScanner::PeekRestOfLine() const {
+  size_t end = pos_;
+  while (end < text_.size() && text_[end] != '\n' && (comment_ == '\0' || text_[end] != comment_)) {
+    ++end;
+  }
+  absl::string_view rest = text_.substr(pos_, end - pos_);
+  if (!rest.empty() && rest.back() == '\r') rest.remove_suffix(1);
+  return rest;
+}
+
 absl::StatusOr<absl::string_view> TextScanner::Bytes(size_t n, absl::string_view what) {
   if (n > remaining()) {
     return Error(

@@ -41,6 +41,9 @@ class TextScanner {
   // The rest of the current line (after the last token), without the terminator, and moves to
   // the next line. Used for free-text lines such as titles.
   absl::string_view RestOfLine();
+  // The same without moving, and without a comment that ends the line: what follows the last
+  // token on its line (a reader's check that a line holds as many numbers as it should).
+  absl::string_view PeekRestOfLine() const;
 
   // The next `n` raw bytes, from the current position (no whitespace skipped): the binary block
   // that follows a header line in binary legacy VTK and Gmsh files. Line numbers keep counting

@@ -10,7 +10,9 @@
 
 namespace tetrefine::io {
 
-// VTK XML unstructured grid (.vtu), one Piece.
+// VTK XML unstructured grid (.vtu): written as one Piece; read with any number of Pieces, which
+// are merged as a .pvtu's pieces are (MergePvtuPieces: a point repeated in a later piece, bit
+// for bit, is the earlier one).
 //
 // Reading (pugixml): DataArrays in every form VTK 9 and ParaView write: inline "ascii", inline
 // "binary" (base64) and "appended" (raw or base64 <AppendedData>), uncompressed or compressed by

@@ -10,6 +10,7 @@
 #include "client/io/label_names.h"
 #include "client/io/mesh_frame.h"
 #include "client/io/number_text.h"
+#include "client/io/pvtu_reader.h"
 #include "client/io/vtk_cells.h"
 #include "client/io/vtk_xml_file.h"
 #include "client/io/vtu_data_array.h"
@@ -46,22 +47,11 @@ absl::StatusOr<MeshFrame> FieldDataFrame(pugi::xml_node grid, VtuArrayReader& ar
   return MeshFrame::kUntagged;
 }
 
-}  // namespace
-
-absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path) {
-  VtkXmlFile xml;
-  if (absl::Status s = OpenVtkXml(text, path, "UnstructuredGrid", xml); !s.ok()) return s;
+// One <Piece> of the grid as a mesh of its own (its points numbered from 0).
+absl::StatusOr<MeshFile> ParsePiece(const VtkXmlFile& xml, pugi::xml_node piece,
+                                    absl::string_view path) {
   const auto line_of = [&xml](pugi::xml_node node) { return xml.LineOf(node); };
   const pugi::xml_node grid = xml.dataset;
-  std::vector<pugi::xml_node> pieces;
-  for (pugi::xml_node piece : grid.children("Piece")) pieces.push_back(piece);
-  if (pieces.empty()) return FileError(path, "no <Piece>");
-  if (pieces.size() > 1) {
-    return FileUnsupported(path, absl::StrCat(pieces.size(),
-                                              " <Piece>s; merge them into one first (their "
-                                              "shared points are duplicated)"));
-  }
-  const pugi::xml_node piece = pieces[0];
   int64_t v = -1;
   int64_t n = -1;
   if (!AttributeInt(piece, "NumberOfPoints", v) || !AttributeInt(piece, "NumberOfCells", n) ||
@@ -172,7 +162,33 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
   if (absl::Status s = CellsToTets(vtk, cell_data, v, path, file); !s.ok()) return s;
   FrameToRas(file);
   DropNonFiniteDerivedArrays(&file);
-  if (absl::Status s = ValidateMeshFile(file, path); !s.ok()) return s;
+  return file;
+}
+
+}  // namespace
+
+absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path) {
+  VtkXmlFile xml;
+  if (absl::Status s = OpenVtkXml(text, path, "UnstructuredGrid", xml); !s.ok()) return s;
+  std::vector<MeshFile> pieces;
+  for (pugi::xml_node piece : xml.dataset.children("Piece")) {
+    absl::StatusOr<MeshFile> file = ParsePiece(xml, piece, path);
+    if (!file.ok()) return file.status();
+    pieces.push_back(*std::move(file));
+  }
+  if (pieces.empty()) return FileError(path, "no <Piece>");
+  // Several pieces in one file (vtkXMLUnstructuredGridWriter with SetNumberOfPieces, which
+  // VTK and ParaView read) are one mesh whose shared points each piece repeats: merged as a
+  // .pvtu's pieces are. They were refused (found by a file-format sweep).
+  absl::StatusOr<MeshFile> file = absl::InternalError("unset");
+  if (pieces.size() == 1) {
+    file = std::move(pieces[0]);
+  } else {
+    const std::vector<std::string> names(pieces.size(), std::string(path));
+    file = MergePvtuPieces(std::move(pieces), names);
+    if (!file.ok()) return file.status();
+  }
+  if (absl::Status s = ValidateMeshFile(*file, path); !s.ok()) return s;
   return file;
 }
 

@@ -260,6 +260,10 @@ INSTANTIATE_TEST_SUITE_P(
         Edit{".msh", "0 0 0 1\n1 ", "0 0 0 1\n1e3 ", "an entity tag"},
         Edit{".mesh", "Tetrahedra\n2\n", "Hexahedra\n1\n1 2 3 4 1 2 3 4 0\nTetrahedra\n2\n",
              "1 hexahedron beside 2 tetrahedra"},
+        // Gmsh's quadratic tets under "Tetrahedra": was "unknown Medit section" far below.
+        Edit{".mesh", "Tetrahedra\n2\n", "Tetrahedra\n1\n1 2 3 4 5 1 2 3 4 5 0\nTetrahedra\n2\n",
+             ":12: a Tetrahedra line holds 11 numbers, not 5 (4 vertex indices and a reference): "
+             "quadratic (10-node) tets"},
         Edit{".b64.vtu", "format=\"binary\">\n          ", "format=\"binary\">\n          !",
              "invalid base64"},
         Edit{".b64.vtu", "header_type=\"UInt64\"", "header_type=\"UInt32\"", "header says"},

@@ -341,9 +341,19 @@ TEST(IoMeshTest, GmshRegionNamesRoundTrip) {
   ASSERT_TRUE(named.ok()) << named.status();
   EXPECT_EQ(named->region_names,
             (std::map<int32_t, std::string>{{5, "liver"}, {7, "left kidney"}}));
-  file.region_names[5] = "bad \"quote\"";
+  // Quotes inside a name, as Gmsh writes them (unescaped, read from the first quote to the
+  // last): kept both ways. They were refused, and so was Gmsh's own file.
+  file.region_names[5] = "white matter \"WM\" \xc3\xa9";
+  ASSERT_TRUE(WriteMesh(dir.File("quoted.msh"), file).ok());
+  EXPECT_THAT(iotest::ReadBytes(dir.File("quoted.msh")),
+              HasSubstr("3 5 \"white matter \"WM\" \xc3\xa9\"\n"));
+  absl::StatusOr<MeshFile> quoted = ReadMesh(dir.File("quoted.msh"));
+  ASSERT_TRUE(quoted.ok()) << quoted.status();
+  EXPECT_EQ(quoted->region_names.at(5), file.region_names[5]);
+  // A line break would end the name's line early.
+  file.region_names[5] = "two\nlines";
   EXPECT_THAT(std::string(WriteMesh(dir.File("bad.msh"), file).message()),
-              HasSubstr("the name of region 5 holds a quote"));
+              HasSubstr("the name of region 5 holds a control character"));
 }
 
 // A user who keeps `latest.vtu -> runs/7/out.vtu` expects a write to latest.vtu to land in

@@ -10,6 +10,7 @@
 #include "absl/strings/str_join.h"
 #include "client/io/mesh_io.h"
 #include "client/io/pvtu_writer.h"
+#include "client/io/vtu_format.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tests/io/io_test_util.h"
@@ -84,6 +85,41 @@ TEST(IoPvtuReaderTest, PiecesMergeIntoTheWholeMesh) {
       EXPECT_EQ(read->tet_quality, whole.tet_quality);
       EXPECT_EQ(read->frame, whole.frame);
       EXPECT_EQ(read->label_name, whole.label_name);
+    }
+  }
+}
+
+// A .vtu with several <Piece>s (vtkXMLUnstructuredGridWriter with SetNumberOfPieces, which VTK
+// and ParaView read) is one mesh, merged as a .pvtu's pieces are: it was refused (found by a
+// file-format sweep).
+TEST(IoPvtuReaderTest, SeveralPiecesInOneVtuMergeAsAPvtusPiecesDo) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    RandomMeshOptions options;
+    options.labels = seed % 2 == 0;
+    options.values = seed % 3 != 0;
+    const MeshFile whole = Compacted(RandomMesh(seed, options));
+    for (int parts : {2, 3}) {
+      SCOPED_TRACE(absl::StrCat("seed ", seed, ", ", parts, " pieces"));
+      const VtuWriteOptions ascii{.layout = VtuWriteOptions::Layout::kAscii};
+      std::string text;
+      std::string more;
+      for (const MeshFile& piece : Split(whole, parts)) {
+        const std::string one = FormatVtu(piece, ascii);
+        if (text.empty()) {
+          text = one;
+          continue;
+        }
+        const size_t begin = one.find("<Piece ");
+        const size_t end = one.find("</Piece>") + std::string("</Piece>\n").size();
+        more += one.substr(begin, end - begin);
+      }
+      text.insert(text.find("</UnstructuredGrid>"), more);
+      absl::StatusOr<MeshFile> read = ParseVtu(text, "pieces.vtu");
+      ASSERT_TRUE(read.ok()) << read.status();
+      EXPECT_EQ(read->mesh.points, whole.mesh.points);
+      EXPECT_EQ(read->mesh.tets, whole.mesh.tets);
+      EXPECT_EQ(read->mesh.values, whole.mesh.values);
+      EXPECT_EQ(read->mesh.labels, whole.mesh.labels);
     }
   }
 }

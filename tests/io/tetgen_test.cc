@@ -56,6 +56,25 @@ TEST(IoTetgenTest, RoundTripsKeepPointsTetsAndLabels) {
   }
 }
 
+// An upper-case pair (copied from a case-insensitive file system): X.ELE reads X.NODE, and
+// writing X.ELE makes X.NODE. Only "X.node" was tried, so the pair was refused (found by a
+// file-format sweep).
+TEST(IoTetgenTest, AnUpperCaseEleGoesWithAnUpperCaseNode) {
+  EXPECT_EQ(TetgenNodePath("dir/ball.1.ele"), "dir/ball.1.node");
+  EXPECT_EQ(TetgenNodePath("DIR/BALL.1.ELE"), "DIR/BALL.1.NODE");
+  ScratchDir dir;
+  const MeshFile mesh = RandomMesh(4, {.labels = true});
+  const std::string path = dir.File("M.ELE");
+  ASSERT_TRUE(WriteMesh(path, mesh).ok());
+  EXPECT_TRUE(std::filesystem::exists(dir.File("M.NODE")));
+  EXPECT_FALSE(std::filesystem::exists(dir.File("M.node")));
+  absl::StatusOr<MeshFile> back = ReadMesh(path);
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->mesh.points, mesh.mesh.points);
+  EXPECT_EQ(back->mesh.tets, mesh.mesh.tets);
+  EXPECT_EQ(back->mesh.labels, mesh.mesh.labels);
+}
+
 // Found by a CLI sweep: the label -2147483648 was written and then refused as outside int32.
 TEST(IoTetgenTest, TheWholeInt32RangeOfLabelsRoundTrips) {
   ScratchDir dir;
