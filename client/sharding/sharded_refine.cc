@@ -757,6 +757,14 @@ absl::StatusOr<ShardedResult> ShardedRefine(
     result.tet_iteration = std::move(merged->tet_iteration);
     result.tet_quality = std::move(merged->tet_quality);
     result.tet_parent = std::move(merged->tet_parent);
+    // The whole mesh's edges, as the halo path measures them: CombineSummary's mean of the
+    // parts' means counts a part boundary's edges in each part (an outside check, 2026-11-28:
+    // 0.020902 against the unsharded 0.020730 on the same mesh). Pieces kept apart are never
+    // merged here, so their summary stays the parts' (the max is exact either way).
+    const EdgeMidpointStats final_edges =
+        MeasureEdgeMidpoints(volume, result.mesh, result.norm_coeff, clamp);
+    result.final_max_error = final_edges.max_error;
+    result.final_mean_error = final_edges.mean_error;
   }
   out.reply.service.max_tets = budget;
   for (int p = 0; p < num_parts; ++p) {

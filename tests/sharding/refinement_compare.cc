@@ -129,10 +129,10 @@ void ExpectSameRefinement(const Mesh& input, const RefineResult& unsharded,
       EXPECT_GE(a.split_edges, e.split_edges);
     }
   }
-  if (whole_mesh_statistics) {
-    EXPECT_NEAR(sharded.final_mean_error, unsharded.final_mean_error,
-                1e-13 * unsharded.final_mean_error);
-  }
+  // Every scheme's merged mesh is measured whole (the paper path took the parts' mean until an
+  // outside check found 0.020902 against 0.020730 on the same mesh, 2026-11-28).
+  EXPECT_NEAR(sharded.final_mean_error, unsharded.final_mean_error,
+              1e-13 * unsharded.final_mean_error);
 }
 
 }  // namespace tetrefine::testing

@@ -10,11 +10,12 @@ namespace tetrefine::testing {
 // Expects the same refinement to the bit: the same vertices (position and value) and the same
 // tets (corner positions in order, iteration, quality) after sorting both; input vertices at
 // their input indices; no duplicated vertex; and the statistics that sharding keeps exact (tet
-// counts and configurations per iteration, maxima, minima, stop reason, norm_coeff).
+// counts and configurations per iteration, maxima, minima, stop reason, norm_coeff), and the
+// final edge-midpoint mean, which the client measures on the merged mesh (to its sum's rounding:
+// the merged mesh is numbered part by part, so its edges are summed in another order).
 // whole_mesh_statistics: the run went one iteration at a time with halos (the longest-edge
-// scheme, certify), whose client measures the merged mesh: edge counts, other tilings and the
-// edge-midpoint means are the unsharded run's too (the means to their sums' rounding: the merged
-// mesh is numbered part by part, so its edges are summed in another order).
+// scheme, certify), whose client measures the merged mesh after every iteration: edge counts,
+// other tilings and the iterations' edge-midpoint means are the unsharded run's too.
 void ExpectSameRefinement(const Mesh& input, const RefineResult& unsharded,
                           const RefineResult& sharded, bool whole_mesh_statistics = false);
 
