@@ -45,6 +45,13 @@ ABSL_FLAG(bool, reflection, true, "Serve gRPC server reflection (what grpcurl us
 ABSL_FLAG(int, max_streams_per_connection, 100,
           "Streams (calls) one connection may have open at once; a client's next waits for one "
           "to end");
+ABSL_FLAG(int, max_health_and_reflection_streams, 1000,
+          "Health Watch and reflection streams the server keeps open at once, over all clients "
+          "(they need no token); one more is cancelled as it arrives");
+ABSL_FLAG(int64_t, grpc_memory_bytes, 0,
+          "Memory gRPC itself may use for connections and streams (a gRPC resource quota; "
+          "beyond it gRPC refuses new streams); 0: what the memory budget leaves of the memory "
+          "limit, at least 64 MiB");
 ABSL_FLAG(double, handshake_timeout_seconds, 20,
           "Close a new connection that has not completed its handshake (HTTP/2 preface, TLS) "
           "within this");
@@ -73,8 +80,9 @@ ABSL_FLAG(int64_t, max_input_tets, kDefaults.max_input_tets,
           "Largest input mesh accepted, in tets (vertices: 4 times this)");
 ABSL_FLAG(int64_t, max_output_tets, 0,
           "Tet budget of a refinement: the default and largest max_tets (0: 50000000, or less "
-          "when that many tets at --bytes_per_output_tet would not fit 90% of the memory "
-          "budget). A value that one call could not fit in the memory budget is refused");
+          "when --max_concurrent calls of that many tets at --bytes_per_output_tet would not "
+          "fit 90% of the memory budget together). A value that one call could not fit in the "
+          "memory budget is refused");
 ABSL_FLAG(int64_t, max_message_bytes, kDefaults.max_message_bytes,
           "Largest request message accepted, in bytes (GetServerInfo tells clients)");
 ABSL_FLAG(int, max_iterations, kDefaults.max_iterations, "Largest max_iterations of a call");
@@ -226,9 +234,14 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   server.reflection = absl::GetFlag(FLAGS_reflection);
   server.max_streams_per_connection = absl::GetFlag(FLAGS_max_streams_per_connection);
   server.handshake_seconds = absl::GetFlag(FLAGS_handshake_timeout_seconds);
+  server.max_side_streams = absl::GetFlag(FLAGS_max_health_and_reflection_streams);
   if (server.max_streams_per_connection < 1) {
     return Invalid(absl::StrCat("--max_streams_per_connection: must be >= 1, got ",
                                 server.max_streams_per_connection));
+  }
+  if (server.max_side_streams < 1) {
+    return Invalid(absl::StrCat("--max_health_and_reflection_streams: must be >= 1, got ",
+                                server.max_side_streams));
   }
   for (auto [name, value] : {std::pair{"keepalive_seconds", server.keepalive_seconds},
                              {"keepalive_timeout_seconds", server.keepalive_timeout_seconds},
@@ -312,6 +325,12 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
                                 " exceeds the memory limit of ", s.memory_limit_bytes, " (",
                                 s.memory_source, ")"));
   }
+  s.server.grpc_memory_bytes = absl::GetFlag(FLAGS_grpc_memory_bytes);
+  if (s.server.grpc_memory_bytes < 0) return Invalid("--grpc_memory_bytes: must be >= 0");
+  if (s.server.grpc_memory_bytes == 0) {
+    s.server.grpc_memory_bytes =
+        std::max<int64_t>(int64_t{64} << 20, s.memory_limit_bytes - l.memory_budget_bytes);
+  }
   // Half the budget for one client's uploads (server/call_gate.h), so that one client's slow
   // uploads cannot keep every other client's calls out.
   service.max_input_bytes_per_identity = l.memory_budget_bytes / 2;
@@ -327,16 +346,23 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   // tet returned every mesh unrefined): a server that cannot do its job must not start.
   const int64_t fitting_tets = (l.memory_budget_bytes - call_floor) / l.bytes_per_output_tet;
   if (l.max_output_tets == 0) {
-    // One call at the default budget must fit the whole memory budget with its input: a tenth
-    // of the budget is left for the input (a 1.8 GiB budget takes a 180 MiB volume and mesh).
+    // --max_concurrent calls at the default budget must fit the memory budget together with
+    // their inputs: a tenth of the budget is left for the inputs (a 1.8 GiB budget takes 180 MiB
+    // of volumes and meshes). Until 2026-11-28 one call took the 90% (50 M tets, 7.5 GiB, on a
+    // 24 GiB machine), so two calls with default options held the budget and a third, of one
+    // tet, waited its queue time and was refused, on a server that said --max_concurrent 4
+    // (found by a service sweep). A single larger call asks for it: --max_output_tets.
+    const int64_t concurrent = std::max(1, l.max_concurrent_refinements);
     l.max_output_tets = std::min<int64_t>(
-        (l.memory_budget_bytes / 10 * 9 - call_floor) / l.bytes_per_output_tet, 50'000'000);
+        (l.memory_budget_bytes / 10 * 9 / concurrent - call_floor) / l.bytes_per_output_tet,
+        50'000'000);
     if (l.max_output_tets < kMinOutputTets) {
       return Invalid(absl::StrCat(
           "the memory budget (", HumanBytes(l.memory_budget_bytes), ", from ", s.memory_source,
           ") leaves room for ", std::max<int64_t>(0, l.max_output_tets),
-          " output tets a call at --bytes_per_output_tet=", l.bytes_per_output_tet, ", fewer than ",
-          kMinOutputTets, ": raise --memory_limit_bytes or --memory_budget_bytes"));
+          " output tets a call at --bytes_per_output_tet=", l.bytes_per_output_tet, " with ",
+          concurrent, " calls at once (--max_concurrent), fewer than ", kMinOutputTets,
+          ": raise --memory_limit_bytes or --memory_budget_bytes, or lower --max_concurrent"));
     }
   } else if (l.max_output_tets > fitting_tets) {
     return Invalid(absl::StrCat("--max_output_tets=", l.max_output_tets,

@@ -9,6 +9,8 @@
 #include "grpcpp/ext/proto_server_reflection_plugin.h"
 #include "grpcpp/health_check_service_interface.h"
 #include "grpcpp/impl/server_builder_option.h"
+#include "grpcpp/resource_quota.h"
+#include "server/side_stream_cap.h"
 
 namespace tetrefine::server {
 namespace {
@@ -76,6 +78,19 @@ std::unique_ptr<grpc::Server> StartServer(const ServiceConfig& config, RefinerSe
   // of different limits answering one address at random). A port in use is now refused.
   builder->AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder->SetOption(std::make_unique<ReflectionOption>(options.reflection));
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> caps;
+  caps.push_back(std::make_unique<SideStreamCap>(std::max(1, options.max_side_streams)));
+  builder->experimental().SetInterceptorCreators(std::move(caps));
+  // gRPC's own memory (calls, streams, connection buffers) lives in the headroom left outside
+  // the calls' memory budget; without a quota it had no bound: 90 k health Watch streams over
+  // 900 connections (each cancelled at once by SideStreamCap) took a server to 841 MB, 265 MB
+  // with a 256 MiB quota (a service sweep, 2026-11-28). Under the quota gRPC narrows its flow
+  // control windows and refuses new streams rather than growing.
+  if (options.grpc_memory_bytes > 0) {
+    grpc::ResourceQuota quota("tetrefine_server");
+    quota.Resize(static_cast<size_t>(options.grpc_memory_bytes));
+    builder->SetResourceQuota(quota);
+  }
 
   std::unique_ptr<grpc::Server> server = builder->BuildAndStart();
   if (server == nullptr) return nullptr;

@@ -26,6 +26,12 @@ struct ServerOptions {
   // service sweep: 160 k health Watch streams over 8 connections held 1.6 GB outside the memory
   // budget. Refine calls are limited further per client (--max_calls_per_identity).
   int max_streams_per_connection = 100;
+  // Health Watch and reflection streams the whole server keeps open at once (SideStreamCap,
+  // server/side_stream_cap.h): these need no identity, so per-client quotas do not bound them.
+  // About 18 KB each.
+  int max_side_streams = 1000;
+  // A gRPC ResourceQuota for the server's own memory (0: none, as embedded servers run).
+  int64_t grpc_memory_bytes = 0;
   // A new connection has this long to complete its handshake (HTTP/2 preface, and TLS) before
   // it is closed.
   double handshake_seconds = 20;

@@ -214,6 +214,31 @@ TEST(AbuseTest, ACallWithDefaultOptionsFitsTheDefaultBudget) {
   EXPECT_EQ(server->Stop(), 0) << server->process().Output();
 }
 
+// The default tet budget is one that --max_concurrent calls reserve together: it was one call's
+// 90% of the memory budget, so on a 24 GiB machine two calls with default options held the
+// whole budget and a third, of one tet, waited its queue time and was refused (a service sweep).
+TEST(AbuseTest, TheDefaultTetBudgetLetsMaxConcurrentCallsRunTogether) {
+  for (const int concurrent : {1, 4}) {
+    SCOPED_TRACE(concurrent);
+    std::unique_ptr<ServerProcess> server =
+        Start({"--memory_limit_bytes=4294967296", "--drain_seconds=0",
+               "--max_concurrent=" + std::to_string(concurrent)});
+    ASSERT_NE(server, nullptr);
+    absl::StatusOr<client::ServerInfo> info = client::GetServerInfo(server->NewChannel());
+    ASSERT_TRUE(info.ok()) << info.status();
+    const wire::ServiceLimits& l = info->limits;
+    ASSERT_EQ(l.max_concurrent_refinements, concurrent);
+    // Each call: two messages in flight and its budget's tets, a tenth of the budget left over
+    // for the inputs.
+    const int64_t call = 2 * l.max_message_bytes + l.max_output_tets * l.bytes_per_output_tet;
+    EXPECT_LE(concurrent * call, l.memory_budget_bytes / 10 * 9);
+    // And not needlessly small: one tet's bytes more per call would not fit.
+    EXPECT_GT(concurrent * (call + concurrent * l.bytes_per_output_tet),
+              l.memory_budget_bytes / 10 * 9);
+    EXPECT_EQ(server->Stop(), 0) << server->process().Output();
+  }
+}
+
 TEST(ServerCommandLineTest, HelpListsTheFlagsWithTheirDefaults) {
   const ProcessResult help = RunProcess({TETREFINE_SERVER_BINARY, "--help"}, "", 30.0);
   const std::string text = help.out + help.err;

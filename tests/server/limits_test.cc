@@ -196,6 +196,66 @@ TEST(ServiceConnectionLimits, StreamsPerConnectionAreCapped) {
   b->Finish();
 }
 
+// Found by a service sweep: Watch streams spread over many connections (100 each) grew the
+// server by about 18 KB a stream without limit (1.85 GB at 100 k), since health needs no token.
+// The whole server keeps at most max_side_streams open; one more is cancelled as it arrives,
+// and a freed place is taken again.
+TEST(ServiceConnectionLimits, WatchStreamsAreCappedAcrossConnections) {
+  server::ServerOptions options;
+  options.max_side_streams = 2;
+  LoopbackServer server({}, options);
+  struct Watch {
+    std::shared_ptr<grpc::Channel> channel;
+    std::unique_ptr<grpc::health::v1::Health::Stub> stub;
+    grpc::ClientContext context;
+    std::unique_ptr<grpc::ClientReader<grpc::health::v1::HealthCheckResponse>> reader;
+  };
+  // Each on its own connection: the per-connection limit is not what stops them.
+  const auto open = [&] {
+    auto w = std::make_unique<Watch>();
+    w->channel = server.NewChannel();
+    w->stub = grpc::health::v1::Health::NewStub(w->channel);
+    w->context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    w->reader = w->stub->Watch(&w->context, {});
+    return w;
+  };
+  const auto serving = [](Watch& w) {
+    grpc::health::v1::HealthCheckResponse response;
+    return w.reader->Read(&response) &&
+           response.status() == grpc::health::v1::HealthCheckResponse::SERVING;
+  };
+  std::unique_ptr<Watch> first = open(), second = open();
+  ASSERT_TRUE(serving(*first));
+  ASSERT_TRUE(serving(*second));
+  std::unique_ptr<Watch> third = open();
+  EXPECT_FALSE(serving(*third));
+  EXPECT_EQ(third->reader->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  // Check is unary and not counted.
+  {
+    grpc::ClientContext context;
+    grpc::health::v1::HealthCheckResponse response;
+    EXPECT_TRUE(first->stub->Check(&context, {}, &response).ok());
+  }
+  first->context.TryCancel();
+  first->reader->Finish();
+  // The server counts a stream until its call is torn down, a moment after the client's end.
+  bool served = false;
+  for (int attempt = 0; attempt < 100 && !served; ++attempt) {
+    std::unique_ptr<Watch> next = open();
+    served = serving(*next);
+    if (!served) {
+      next->reader->Finish();
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    } else {
+      next->context.TryCancel();
+      next->reader->Finish();
+    }
+  }
+  EXPECT_TRUE(served);
+  second->context.TryCancel();
+  second->reader->Finish();
+}
+
 // A connection that never completes its HTTP/2 handshake is closed after handshake_seconds
 // (gRPC's default of 120 s let silent sockets pile up against the open-file limit).
 TEST(ServiceConnectionLimits, SilentConnectionsAreClosed) {
