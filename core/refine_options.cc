@@ -128,13 +128,36 @@ absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>&
         ", so the errors would be rounding, not the data; use a norm_coeff of at least ",
         RoundedUp(smallest), ", or none for the volume's value range (", range[1] - range[0], ")"));
   }
+  // What the rounding would be with the minimum subtracted: the values then reach the range.
+  const double offset_noise =
+      16.0 * std::numeric_limits<double>::epsilon() * (range[1] - range[0]) / norm_coeff;
+  // The CLI checks its --norm-coeff here too (norm_given false): that one is not epsilon's fault.
+  const bool norm_is_range = norm_coeff == range[1] - range[0];
+  if (!(noise <= 0.01 * epsilon) && !(offset_noise <= 0.01 * epsilon) && norm_is_range) {
+    // No offset helps: epsilon itself is below what float64 resolves (1e-300 on an int16 volume
+    // was blamed on the volume, with an offset as the remedy: a service sweep, 2026-11-28).
+    return absl::InvalidArgumentError(absl::StrCat(
+        "options.epsilon: ", epsilon,
+        " is below what float64 resolves on this volume: rounding of the interpolation alone is "
+        "about ",
+        noise, " of the normalisation ", norm_coeff, " (values reach ", magnitude,
+        "), above a hundredth of epsilon, so the errors would be rounding, not the data; use an "
+        "epsilon of at least ",
+        RoundedUp(100.0 * noise)));
+  }
   if (!(noise <= 0.01 * epsilon)) {
     // The remedies end with the smallest epsilon that would pass: a tiny epsilon on an ordinary
     // volume was blamed on the volume alone (an outside review, 2026-11-28). The CLI's
     // --norm-coeff message keeps the text before "; subtract an offset" (cli/command_support).
+    // A constant volume has no range: its normalisation is 1 (RefineInArena), said as such.
+    const std::string spread =
+        range[1] > range[0]
+            ? absl::StrCat(" but vary over only ", norm_coeff, " (the normalisation)")
+            : absl::StrCat(" and are all equal (a constant volume, normalised by ", norm_coeff,
+                           ")");
     return absl::InvalidArgumentError(absl::StrCat(
-        "volume: values reach ", magnitude, " but vary over only ", norm_coeff,
-        " (the normalisation): float64 rounding of the interpolation alone is about ", noise,
+        "volume: values reach ", magnitude, spread,
+        ": float64 rounding of the interpolation alone is about ", noise,
         " of it, above a hundredth of epsilon ", epsilon,
         ", so the errors would be rounding, not the data; subtract an offset (e.g. the minimum, ",
         range[0], ") from the volume first, or use an epsilon of at least ",

@@ -483,13 +483,18 @@ int RunRefinement(const RefineSettings& s) {
                                " ghost cells (copies of another piece's cells, as VTK flags them; "
                                "ParaView drops them too)"));
   }
+  // What the output will lack, said once the input is accepted and refined, just before it is
+  // written: said up front, they came before a refusal of the input, one claiming a file was
+  // "written" that never was (a file-format sweep, 2026-11-28).
+  std::vector<std::string> output_warnings;
   if (!mesh_file->dropped_arrays.empty()) {
     // The refined file has the sampled values, iteration, quality and the region labels; other
     // arrays of the input have no meaning on new vertices and tets, but their loss must not be
     // silent (found by a CLI sweep).
-    PrintWarning(absl::StrCat(s.mesh_path, ": not carried to the output: ",
-                              absl::StrJoin(mesh_file->dropped_arrays, ", "),
-                              " (refine writes value, iteration, quality and the region labels)"));
+    output_warnings.push_back(absl::StrCat(
+        s.mesh_path,
+        ": not carried to the output: ", absl::StrJoin(mesh_file->dropped_arrays, ", "),
+        " (refine writes value, iteration, quality and the region labels)"));
   }
   const InputTags tags{.label_name = mesh_file->label_name,
                        .frame = mesh_file->frame,
@@ -499,21 +504,22 @@ int RunRefinement(const RefineSettings& s) {
     for (const auto& [label, name] : tags.region_names) {
       names.push_back(absl::StrCat(label, " \"", name, "\""));
     }
-    PrintWarning(absl::StrCat(s.output_path, ": the region names (", absl::StrJoin(names, ", "),
-                              ") are not written: only .msh keeps them; the labels are kept"));
+    output_warnings.push_back(
+        absl::StrCat(s.output_path, ": the region names (", absl::StrJoin(names, ", "),
+                     ") are not written: only .msh keeps them; the labels are kept"));
   }
   // Found by a downstream sweep (2026-11-25): a Gmsh re-save as MSH 2.2 of label -7 beside 7
   // gave one region 7 with the -7 tets inside out.
   if (const std::vector<int32_t> negative = io::NegativeGmshLabels(s.output_path, *mesh_file);
       !negative.empty()) {
-    PrintWarning(absl::StrCat(
+    output_warnings.push_back(absl::StrCat(
         s.output_path, ": negative labels (", absl::StrJoin(negative, ", "),
         ") are written as negative physical groups: meshio and tetrefine read them back, but "
         "Gmsh takes -L as group L with the orientation reversed (saved from Gmsh as MSH 2.2 "
         "they merge into L, inside out); .vtu and .vtk keep them as plain numbers"));
   }
   if (io::LpsTagLost(s.output_path, *mesh_file)) {
-    PrintWarning(absl::StrCat(
+    output_warnings.push_back(absl::StrCat(
         s.output_path,
         ": written in the input's LPS coordinates, but this format has no place "
         "for the SPACE=LPS tag: RAS readers (tetrefine's too) will see it mirrored in x and y; "
@@ -729,6 +735,7 @@ int RunRefinement(const RefineSettings& s) {
   } else {
     add_file(result.mesh, result.tet_iteration, result.tet_quality);
   }
+  for (const std::string& warning : output_warnings) PrintWarning(warning);
   if (!mesh.labels.empty() && !files.empty() && files[0].mesh.labels.empty()) {
     PrintWarning(absl::StrCat((*backend)->Name(), " returned no region labels; ", s.output_path,
                               " is written without them"));

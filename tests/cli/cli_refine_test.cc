@@ -374,6 +374,23 @@ TEST_F(CliRefine, ArraysNotCarriedToTheOutputAreNamed) {
       run.err,
       mesh + R"(: not carried to the output: cell data "density", point data "temperature")"))
       << run.err;
+  // An input that is refused has no output to warn about: with --quiet its error is the only
+  // line. The warnings came first, and an LPS-tagged input's said its output was "written"
+  // (found by a file-format sweep).
+  const std::string outside = dir_.File("arrays_outside_lps.vtk");
+  io::iotest::WriteBytes(outside,
+                         "# vtk DataFile Version 4.2\nSPACE=LPS\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                         "POINTS 4 double\n-1 -1 1 -500 -1 1 -1 -7 1 -1 -1 7\nCELLS 1 5\n"
+                         "4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS temperature float 1\n"
+                         "LOOKUP_TABLE default\n1 2 3 4\n");
+  const ProcessResult refused =
+      RunTetrefine({"refine", "--quiet", "--volume", volume_, "--mesh", outside, "--epsilon", "0.1",
+                    "--output", dir_.File("never.msh")});
+  EXPECT_EQ(refused.exit_code, 2) << refused.err;
+  EXPECT_TRUE(absl::StrContains(refused.err, "outside")) << refused.err;
+  EXPECT_FALSE(absl::StrContains(refused.err, "not carried")) << refused.err;
+  EXPECT_FALSE(absl::StrContains(refused.err, "written in")) << refused.err;
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
 }
 
 // The README's example: the bundled MRI and unit cube, the cube fitted into the volume.

@@ -164,6 +164,13 @@ TEST(Validation, ValuesFloat64CannotResolveAreRefused) {
   ASSERT_EQ(offset.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(offset.status().message().find("subtract an offset"), std::string::npos)
       << offset.status();
+  // A constant volume far from 0: normalised by 1, and said to be constant, not to "vary over
+  // only 1" (an outside check, 2026-11-28).
+  const absl::Status constant = CheckValuePrecision(1.0, {1e15, 1e15}, 0.1);
+  EXPECT_THAT(std::string(constant.message()),
+              ::testing::HasSubstr("values reach 1e+15 and are all equal (a constant volume, "
+                                   "normalised by 1)"));
+  EXPECT_THAT(std::string(constant.message()), ::testing::HasSubstr("subtract an offset"));
   const absl::StatusOr<RefineResult> tiny = Refine(two_level(0, 5e-324), mesh, options);
   ASSERT_EQ(tiny.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(tiny.status().message().find("below 1e-290"), std::string::npos) << tiny.status();
@@ -173,17 +180,20 @@ TEST(Validation, ValuesFloat64CannotResolveAreRefused) {
   wide.norm_coeff = 1e16;
   EXPECT_TRUE(Refine(two_level(1e16, 1e16 + 2), mesh, wide).ok());
   EXPECT_TRUE(CheckValuePrecision(4096, {-1024, 3071}, 1e-6).ok());  // an int16 CT
-  // A tiny epsilon on an ordinary volume: the message ends with the smallest epsilon that
-  // passes, which does (it blamed the volume alone: an outside review, 2026-11-28).
-  const absl::Status small = CheckValuePrecision(4096, {-1024, 3071}, 1e-14);
+  // A tiny epsilon on an ordinary volume, which no offset helps: the message names epsilon and
+  // ends with the smallest that passes, which does (it blamed the volume alone, then with an
+  // offset as its remedy: outside reviews, 2026-11-28).
+  const absl::Status small = CheckValuePrecision(4096, {-1024, 3072}, 1e-14);
   ASSERT_EQ(small.code(), absl::StatusCode::kInvalidArgument);
   const std::string text(small.message());
-  const std::string quoted = "or use an epsilon of at least ";
+  EXPECT_EQ(text.rfind("options.epsilon: 1e-14 is below what float64 resolves", 0), 0u) << text;
+  EXPECT_EQ(text.find("subtract an offset"), std::string::npos) << text;
+  const std::string quoted = "use an epsilon of at least ";
   const size_t at = text.find(quoted);
   ASSERT_NE(at, std::string::npos) << text;
   const double least = std::stod(text.substr(at + quoted.size()));
-  EXPECT_TRUE(CheckValuePrecision(4096, {-1024, 3071}, least).ok()) << least;
-  EXPECT_FALSE(CheckValuePrecision(4096, {-1024, 3071}, least * 0.98).ok()) << least;
+  EXPECT_TRUE(CheckValuePrecision(4096, {-1024, 3072}, least).ok()) << least;
+  EXPECT_FALSE(CheckValuePrecision(4096, {-1024, 3072}, least * 0.98).ok()) << least;
   // A norm_coeff the caller gave too small is named as such, with the smallest that passes,
   // which does (it was blamed on the volume, with remedies for the volume: an outside review of
   // the service, 2026-11-28).
