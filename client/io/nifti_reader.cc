@@ -196,6 +196,15 @@ absl::StatusOr<VolumeFile> ReadNifti(const std::string& path) {
       PlaceOnGrid(path, affine, *dims, voxels->type, std::move(voxels->data));
   if (placed.ok() && !scaling_warning.empty()) placed->warnings.push_back(scaling_warning);
   if (placed.ok() && transform == NiftiTransform::kPixdimOnly) {
+    // The standard's method 1 places such a file with voxel (0, 0, 0) at the origin, as niftilib
+    // does; nibabel centres it and mirrors x (its "base affine"), so a mesh made in nibabel's
+    // world coordinates is somewhere else here. Said, since `info` called such a file
+    // unremarkable (a file-format sweep, 2026-11-28).
+    placed->warnings.push_back(absl::StrCat(
+        path,
+        ": no qform or sform (both codes 0): placed by pixdim alone, voxel (0, 0, 0) at the "
+        "origin, as the NIfTI standard's method 1 says; nibabel centres such a volume and "
+        "mirrors x, so meshes made in its coordinates will not line up"));
     // Without qform or sform the spacing is pixdim; a zero or non-finite one is read as 1 (as
     // nibabel does). Said, since every distance in the result then depends on it.
     for (int a = 0; a < 3; ++a) {

@@ -173,7 +173,8 @@ TEST(IoNiftiFrameTest, QformWithQfacIsWorldRas) {
 }
 
 // Without qform and sform the spacing is pixdim; a zero or NaN one is read as 1, and said (it
-// was silent until a CLI sweep found it). A good pixdim gives no warning.
+// was silent until a CLI sweep found it). Such a file is placed as the standard's method 1 says,
+// which nibabel does not do: said too, with a good pixdim alone (a file-format sweep).
 TEST(IoNiftiFrameTest, ZeroOrNanPixdimWithoutTransformsIsOneAndWarned) {
   ScratchDir dir;
   NiftiSpec spec;
@@ -183,17 +184,24 @@ TEST(IoNiftiFrameTest, ZeroOrNanPixdimWithoutTransformsIsOneAndWarned) {
   absl::StatusOr<VolumeFile> file = ReadNifti(path);
   ASSERT_TRUE(file.ok()) << file.status();
   EXPECT_EQ(file->volume.grid().spacing, (Vec3{1, 2, 1}));
-  ASSERT_EQ(file->warnings.size(), 2u);
-  EXPECT_EQ(file->warnings[0],
+  ASSERT_EQ(file->warnings.size(), 3u);
+  const std::string method_one =
+      path +
+      ": no qform or sform (both codes 0): placed by pixdim alone, voxel (0, 0, 0) at the "
+      "origin, as the NIfTI standard's method 1 says; nibabel centres such a volume and mirrors "
+      "x, so meshes made in its coordinates will not line up";
+  EXPECT_EQ(file->warnings[0], method_one);
+  EXPECT_EQ(file->warnings[1],
             path +
                 ": pixdim[1] is 0 and the file has no qform or sform: voxel size 1 used along "
                 "axis 0");
-  EXPECT_TRUE(absl::StrContains(file->warnings[1], "pixdim[3] is nan")) << file->warnings[1];
+  EXPECT_TRUE(absl::StrContains(file->warnings[2], "pixdim[3] is nan")) << file->warnings[2];
   spec.pixdim = {1, 3, 2, 1, 0, 0, 0, 0};
   WriteBytes(path, NiftiHeaderBytes(spec) + FloatSamples(Ramp(8), false));
   file = ReadNifti(path);
   ASSERT_TRUE(file.ok()) << file.status();
-  EXPECT_TRUE(file->warnings.empty());
+  EXPECT_EQ(file->warnings, std::vector<std::string>{method_one});
+  EXPECT_EQ(file->volume.grid().origin, (Vec3{0, 0, 0}));
 }
 
 TEST(IoNiftiFrameTest, ObliqueSformBecomesTheDirection) {
@@ -332,7 +340,8 @@ TEST(IoNiftiTest, AppliesSlopeAndIntercept) {
   ASSERT_TRUE(file.ok()) << file.status();
   EXPECT_EQ(file->volume.type(), VoxelType::kInt16);
   EXPECT_EQ(file->volume.At(0, 0, 1), 100);
-  ASSERT_EQ(file->warnings.size(), 1u);
+  // (The other warning: this file has no qform or sform.)
+  ASSERT_EQ(file->warnings.size(), 2u);
   EXPECT_THAT(file->warnings[0], HasSubstr("scl_slope is nan, not a scaling"));
   spec.slope = 2.0;
   spec.inter = std::numeric_limits<double>::quiet_NaN();
