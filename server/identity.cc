@@ -1,5 +1,7 @@
 #include "server/identity.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <openssl/crypto.h>
 #include <openssl/sha.h>
 
@@ -130,17 +132,47 @@ std::optional<std::string> TokenTable::Find(absl::string_view token) const {
   return match->identity;
 }
 
+namespace {
+
+// An IPv6 address as the client it stands for: one host usually holds a whole /64 (SLAAC,
+// privacy addresses), so per-address quotas count the /64 ("[2001:db8:1:2::]/64"); an
+// IPv4-mapped address is its IPv4 one, and loopback stays "[::1]". Unparsable text is kept.
+// Found by a service sweep: quotas per address are only as good as the cost of a new address,
+// and a /64 holds 2^64 of them.
+std::string Ipv6Client(absl::string_view bracketed) {
+  absl::string_view text = bracketed;
+  if (!absl::ConsumePrefix(&text, "[") || !absl::ConsumeSuffix(&text, "]")) {
+    return std::string(bracketed);
+  }
+  const std::string host(text.substr(0, text.find('%')));  // no zone id
+  in6_addr address{};
+  if (inet_pton(AF_INET6, host.c_str(), &address) != 1) return std::string(bracketed);
+  if (IN6_IS_ADDR_V4MAPPED(&address)) {
+    char v4[INET_ADDRSTRLEN];
+    if (inet_ntop(AF_INET, &address.s6_addr[12], v4, sizeof(v4)) != nullptr) return v4;
+    return std::string(bracketed);
+  }
+  if (IN6_IS_ADDR_LOOPBACK(&address)) return std::string(bracketed);
+  std::fill(address.s6_addr + 8, address.s6_addr + 16, 0);
+  char prefix[INET6_ADDRSTRLEN];
+  if (inet_ntop(AF_INET6, &address, prefix, sizeof(prefix)) == nullptr) {
+    return std::string(bracketed);
+  }
+  return absl::StrCat("[", prefix, "]/64");
+}
+
+}  // namespace
+
 std::string PeerAddress(absl::string_view peer) {
   absl::string_view address = peer;
-  if (!absl::ConsumePrefix(&address, "ipv4:") && !absl::ConsumePrefix(&address, "ipv6:")) {
-    return std::string(peer);
-  }
+  const bool ipv6 = absl::ConsumePrefix(&address, "ipv6:");
+  if (!ipv6 && !absl::ConsumePrefix(&address, "ipv4:")) return std::string(peer);
   const size_t colon = address.rfind(':');
   const size_t bracket = address.rfind(']');
-  if (colon == absl::string_view::npos || (bracket != absl::string_view::npos && colon < bracket)) {
-    return std::string(address);
+  if (colon != absl::string_view::npos && (bracket == absl::string_view::npos || colon > bracket)) {
+    address = address.substr(0, colon);
   }
-  return std::string(address.substr(0, colon));
+  return ipv6 ? Ipv6Client(address) : std::string(address);
 }
 
 absl::StatusOr<std::string> IdentifyCall(const AccessPolicy& policy,

@@ -60,7 +60,10 @@ struct AccessPolicy {
 absl::StatusOr<std::string> IdentifyCall(const AccessPolicy& policy,
                                          const grpc::ServerContextBase& context);
 
-// "ipv4:10.0.0.7:51234" -> "10.0.0.7", "ipv6:[::1]:5000" -> "[::1]"; anything else unchanged.
+// The client a peer address stands for, for per-client quotas: "ipv4:10.0.0.7:51234" ->
+// "10.0.0.7"; an IPv6 address counts by its /64, "ipv6:[2001:db8:1:2::7]:5000" ->
+// "[2001:db8:1:2::]/64" (one host usually holds a whole /64), except loopback ("[::1]") and
+// IPv4-mapped addresses ("ipv6:[::ffff:10.0.0.7]:5000" -> "10.0.0.7"); anything else unchanged.
 std::string PeerAddress(absl::string_view peer);
 
 }  // namespace tetrefine::server

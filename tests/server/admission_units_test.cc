@@ -295,6 +295,14 @@ TEST(TokenTableTest, BadLinesAreNamedWithTheirLineNumber) {
 TEST(PeerAddressTest, DropsThePort) {
   EXPECT_EQ(PeerAddress("ipv4:10.0.0.7:51234"), "10.0.0.7");
   EXPECT_EQ(PeerAddress("ipv6:[::1]:5000"), "[::1]");
+  // IPv6 clients count by their /64 (a host holds 2^64 addresses: a service sweep); mapped IPv4
+  // addresses by their IPv4 one.
+  EXPECT_EQ(PeerAddress("ipv6:[2001:db8:1:2:aaaa:bbbb:cccc:dddd]:443"), "[2001:db8:1:2::]/64");
+  EXPECT_EQ(PeerAddress("ipv6:[2001:db8:1:2::7]:5000"), PeerAddress("ipv6:[2001:db8:1:2::8]:5001"));
+  EXPECT_NE(PeerAddress("ipv6:[2001:db8:1:2::7]:5000"), PeerAddress("ipv6:[2001:db8:1:3::7]:5000"));
+  EXPECT_EQ(PeerAddress("ipv6:[fe80::1%eth0]:5000"), "[fe80::]/64");
+  EXPECT_EQ(PeerAddress("ipv6:[::ffff:10.0.0.7]:5000"), "10.0.0.7");
+  EXPECT_EQ(PeerAddress("ipv6:[not an address]:5000"), "[not an address]");
   EXPECT_EQ(PeerAddress("unix:/tmp/socket"), "unix:/tmp/socket");
   EXPECT_EQ(PeerAddress("inproc"), "inproc");
 }
