@@ -403,6 +403,20 @@ TEST_F(CliMeshVerify, InfoOnAMesh) {
                            "frame                 LPS (SPACE=LPS tag), read as RAS"}) {
     EXPECT_TRUE(absl::StrContains(info.out, text)) << text << " missing from\n" << info.out;
   }
+  EXPECT_TRUE(absl::StrContains(info.out, "conformity            conformal")) << info.out;
+
+  // A mesh listed twice (what a .pvtu whose pieces each hold the whole mesh reads as) is said to
+  // be one: info gave three times the tets and volume with no word (a file-format sweep).
+  io::MeshFile twice = labelled;
+  const size_t n = twice.mesh.tets.size();
+  for (size_t t = 0; t < n; ++t) {
+    twice.mesh.tets.push_back(twice.mesh.tets[t]);
+    twice.mesh.labels.push_back(twice.mesh.labels[t]);
+  }
+  ASSERT_TRUE(io::WriteMesh(dir_.File("twice.vtu"), twice).ok());
+  const ProcessResult doubled = RunTetrefine({"info", dir_.File("twice.vtu")});
+  ASSERT_EQ(doubled.exit_code, 0) << doubled.err;
+  EXPECT_TRUE(absl::StrContains(doubled.out, "an element listed twice")) << doubled.out;
 }
 
 // verify bounds --norm-coeff as refine's service does: a value so small that the errors overflow
