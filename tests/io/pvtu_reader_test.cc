@@ -2,12 +2,14 @@
 // errors naming the index or the piece.
 #include "client/io/pvtu_reader.h"
 
+#include <map>
 #include <string>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
 #include "client/io/mesh_io.h"
 #include "client/io/pvtu_writer.h"
 #include "client/io/vtu_format.h"
@@ -122,6 +124,41 @@ TEST(IoPvtuReaderTest, SeveralPiecesInOneVtuMergeAsAPvtusPiecesDo) {
       EXPECT_EQ(read->mesh.labels, whole.mesh.labels);
     }
   }
+}
+
+// The same from VTK itself: vtkXMLUnstructuredGridWriter writing 3 pieces of the cube.
+TEST(IoPvtuReaderTest, AVtuVtkWroteInThreePiecesReadsAsTheMesh) {
+  if (testing::RunProcess({iotest::kPython, "-c", "import vtk"}).exit_code != 0) {
+    GTEST_SKIP() << "python3-vtk9 is not installed";
+  }
+  ScratchDir dir;
+  absl::StatusOr<MeshFile> cube =
+      ReadMesh(std::string(TETREFINE_SOURCE_DIR) + "/examples/unit_cube_1782tets.mesh");
+  ASSERT_TRUE(cube.ok()) << cube.status();
+  ASSERT_TRUE(WriteMesh(dir.File("cube.vtu"), *cube).ok());
+  const std::string script =
+      "import sys, vtk\n"
+      "d = sys.argv[1]\n"
+      "r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName(d + '/cube.vtu')\n"
+      "e = vtk.vtkExtractUnstructuredGridPiece(); e.SetInputConnection(r.GetOutputPort())\n"
+      "w = vtk.vtkXMLUnstructuredGridWriter(); w.SetInputConnection(e.GetOutputPort())\n"
+      "w.SetFileName(d + '/pieces.vtu'); w.SetNumberOfPieces(3); w.Write()\n";
+  WriteBytes(dir.File("write.py"), script);
+  const testing::ProcessResult run =
+      testing::RunProcess({iotest::kPython, dir.File("write.py"), dir.path()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::vector<std::string> split =
+      absl::StrSplit(iotest::ReadBytes(dir.File("pieces.vtu")), "<Piece ");
+  ASSERT_EQ(split.size(), 4u);
+  absl::StatusOr<MeshFile> read = ReadMesh(dir.File("pieces.vtu"));
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(read->mesh.points.size(), cube->mesh.points.size());
+  ASSERT_EQ(read->mesh.tets.size(), cube->mesh.tets.size());
+  // Per region, to float32's precision (VTK's piece extraction stores points as float32).
+  const std::map<int32_t, double> got = iotest::RegionVolumes(*read);
+  const std::map<int32_t, double> want = iotest::RegionVolumes(*cube);
+  ASSERT_EQ(got.size(), want.size());
+  for (const auto& [label, volume] : want) EXPECT_NEAR(got.at(label), volume, 1e-6) << label;
 }
 
 TEST(IoPvtuReaderTest, RepeatedPointsWithinAPieceStayApart) {
