@@ -82,10 +82,11 @@ std::unique_ptr<grpc::Server> StartServer(const ServiceConfig& config, RefinerSe
   caps.push_back(std::make_unique<SideStreamCap>(std::max(1, options.max_side_streams)));
   builder->experimental().SetInterceptorCreators(std::move(caps));
   // gRPC's own memory (calls, streams, connection buffers) lives in the headroom left outside
-  // the calls' memory budget; without a quota it had no bound: 90 k health Watch streams over
-  // 900 connections (each cancelled at once by SideStreamCap) took a server to 841 MB, 265 MB
-  // with a 256 MiB quota (a service sweep, 2026-11-28). Under the quota gRPC narrows its flow
-  // control windows and refuses new streams rather than growing.
+  // the calls' memory budget, and had no quota. Measured 2026-11-28 (a service sweep's raw
+  // HTTP/2 client): 900 connections opening 100 health Watch streams each (all but 1000
+  // cancelled by SideStreamCap) peaked at 1.12 GB, 486 MB under a 256 MiB quota. It narrows such
+  // bursts without bounding them (1,500 connections: 1.44 GB under the same quota): only a
+  // proxy bounds the connections (docs/results/service_abuse.md).
   if (options.grpc_memory_bytes > 0) {
     grpc::ResourceQuota quota("tetrefine_server");
     quota.Resize(static_cast<size_t>(options.grpc_memory_bytes));

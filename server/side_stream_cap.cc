@@ -1,6 +1,7 @@
 #include "server/side_stream_cap.h"
 
 #include <string_view>
+#include <utility>
 
 namespace tetrefine::server {
 namespace {

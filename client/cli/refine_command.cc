@@ -681,6 +681,13 @@ int RunRefinement(const RefineSettings& s) {
   if (!iteration_write.ok()) return Fail(iteration_write, kExitUsage);
   if (g_interrupted != 0) return Fail("interrupted; no output written", 130);
   if (!reply.ok()) {
+    if (reply.status().code() == absl::StatusCode::kInvalidArgument &&
+        absl::StartsWith(reply.status().message(), "options.")) {
+      // An option the volume cannot serve (an epsilon below what float64 resolves on it): the
+      // flag, then the volume. It was put under the mesh file's name (a service sweep).
+      return Fail(absl::StrCat(AsFlagError(reply.status()).message(), " (", s.volume_path, ")"),
+                  kExitUsage);
+    }
     if (reply.status().code() == absl::StatusCode::kInvalidArgument) {
       // The service names the input it refuses ("mesh.points[7] ...", "volume: ..."): the file
       // is the one that holds it.

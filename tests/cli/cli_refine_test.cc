@@ -357,6 +357,24 @@ TEST_F(CliRefine, ClampAcceptsAMeshReachingOutsideTheVolume) {
       << far_run.err;
 }
 
+// An epsilon below what float64 resolves on the volume names --epsilon and the volume, with
+// the smallest that passes; it was "volume: ... subtract an offset" under the mesh file's name.
+TEST_F(CliRefine, AnEpsilonTooSmallForTheVolumeNamesTheFlag) {
+  const std::string mesh = dir_.File("small_eps.vtu");
+  WriteMeshFile(mesh, testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2}));
+  const ProcessResult run =
+      RunTetrefine({"refine", "--quiet", "--volume", volume_, "--mesh", mesh, "--epsilon", "1e-300",
+                    "--output", dir_.File("small_eps_out.vtu")});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err,
+                                "tetrefine: --epsilon: 1e-300 is below what float64 "
+                                "resolves on this volume"))
+      << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "use an epsilon of at least ")) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "(" + volume_ + ")")) << run.err;
+  EXPECT_FALSE(absl::StrContains(run.err, mesh)) << run.err;
+}
+
 // Arrays the output will not have are named, not dropped in silence (found by a CLI sweep).
 TEST_F(CliRefine, ArraysNotCarriedToTheOutputAreNamed) {
   const std::string mesh = dir_.File("arrays.vtk");
