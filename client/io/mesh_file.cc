@@ -71,9 +71,10 @@ absl::Status ValidateMeshFile(const MeshFile& file, absl::string_view path) {
                                         " entries for ", t, " tetrahedra"));
   }
   // A name is a line of a .msh file: a control character (a line break) would end it early. A
-  // quote is kept: Gmsh writes `"white matter "WM""` unescaped and reads a name from the line's
-  // first quote to its last, as our reader does; refusing it refused Gmsh's own files (found
-  // by a file-format sweep).
+  // quote is kept: Gmsh 4.8 writes `"white matter "WM""` unescaped (and reads its own name back
+  // only to the inner quote, "white matter "; meshio drops the inner quotes); our reader takes
+  // the line's first quote to its last, the whole name, and writes it back as Gmsh wrote it.
+  // Refusing it refused Gmsh's own files (found by a file-format sweep).
   for (const auto& [label, name] : file.region_names) {
     for (const char c : name) {
       if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {

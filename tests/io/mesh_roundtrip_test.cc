@@ -341,8 +341,8 @@ TEST(IoMeshTest, GmshRegionNamesRoundTrip) {
   ASSERT_TRUE(named.ok()) << named.status();
   EXPECT_EQ(named->region_names,
             (std::map<int32_t, std::string>{{5, "liver"}, {7, "left kidney"}}));
-  // Quotes inside a name, as Gmsh writes them (unescaped, read from the first quote to the
-  // last): kept both ways. They were refused, and so was Gmsh's own file.
+  // Quotes inside a name, as Gmsh writes them (unescaped; read here from the line's first quote
+  // to its last): kept both ways. They were refused, and so was Gmsh's own file.
   file.region_names[5] = "white matter \"WM\" \xc3\xa9";
   ASSERT_TRUE(WriteMesh(dir.File("quoted.msh"), file).ok());
   EXPECT_THAT(iotest::ReadBytes(dir.File("quoted.msh")),
