@@ -29,14 +29,16 @@ class CountedStream : public grpc::experimental::Interceptor {
   bool over_;
 };
 
-}  // namespace
-
+// Whether `method` (a full gRPC method name, "/package.Service/Method") is one SideStreamCap
+// counts.
 bool IsCappedSideStream(const char* method) {
   const std::string_view m = method == nullptr ? std::string_view() : std::string_view(method);
   return m == "/grpc.health.v1.Health/Watch" ||
          m == "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo" ||
          m == "/grpc.reflection.v1.ServerReflection/ServerReflectionInfo";
 }
+
+}  // namespace
 
 SideStreamCap::SideStreamCap(int max_streams) : max_streams_(max_streams) {}
 

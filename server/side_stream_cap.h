@@ -23,17 +23,10 @@ class SideStreamCap : public grpc::experimental::ServerInterceptorFactoryInterfa
   grpc::experimental::Interceptor* CreateServerInterceptor(
       grpc::experimental::ServerRpcInfo* info) override;
 
-  // Streams counted now (for tests).
-  int open() const { return open_->load(); }
-
  private:
   int max_streams_;
   // Shared with the interceptors, which may end after the factory (they end with their calls).
   std::shared_ptr<std::atomic<int>> open_ = std::make_shared<std::atomic<int>>(0);
 };
-
-// Whether `method` (a full gRPC method name, "/package.Service/Method") is one SideStreamCap
-// counts.
-bool IsCappedSideStream(const char* method);
 
 }  // namespace tetrefine::server

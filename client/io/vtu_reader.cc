@@ -180,14 +180,11 @@ absl::StatusOr<MeshFile> ParseVtu(absl::string_view text, absl::string_view path
   // Several pieces in one file (vtkXMLUnstructuredGridWriter with SetNumberOfPieces, which
   // VTK and ParaView read) are one mesh whose shared points each piece repeats: merged as a
   // .pvtu's pieces are. They were refused (found by a file-format sweep).
-  absl::StatusOr<MeshFile> file = absl::InternalError("unset");
-  if (pieces.size() == 1) {
-    file = std::move(pieces[0]);
-  } else {
-    const std::vector<std::string> names(pieces.size(), std::string(path));
-    file = MergePvtuPieces(std::move(pieces), names);
-    if (!file.ok()) return file.status();
-  }
+  const std::vector<std::string> names(pieces.size(), std::string(path));
+  absl::StatusOr<MeshFile> file = pieces.size() == 1
+                                      ? absl::StatusOr<MeshFile>(std::move(pieces[0]))
+                                      : MergePvtuPieces(std::move(pieces), names);
+  if (!file.ok()) return file.status();
   if (absl::Status s = ValidateMeshFile(*file, path); !s.ok()) return s;
   return file;
 }

@@ -126,27 +126,43 @@ TEST(IoPvtuReaderTest, SeveralPiecesInOneVtuMergeAsAPvtusPiecesDo) {
   }
 }
 
+// The bundled cube (without its labels unless keep_labels), written to `dir` as cube.vtu and
+// passed by python3-vtk9 through vtkExtractUnstructuredGridPiece (`e`) to `writer`: Python lines
+// that write from `e` into `d`, the directory. The cube as written, or the script's failure.
+absl::StatusOr<MeshFile> CubeThroughVtkPieces(const ScratchDir& dir, bool keep_labels,
+                                              const std::string& writer) {
+  absl::StatusOr<MeshFile> cube =
+      ReadMesh(std::string(TETREFINE_SOURCE_DIR) + "/examples/unit_cube_1782tets.mesh");
+  if (!cube.ok()) return cube.status();
+  if (!keep_labels) {
+    cube->mesh.labels.clear();
+    cube->label_name.clear();
+  }
+  if (absl::Status s = WriteMesh(dir.File("cube.vtu"), *cube); !s.ok()) return s;
+  WriteBytes(
+      dir.File("write.py"),
+      "import sys, vtk\n"
+      "d = sys.argv[1]\n"
+      "r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName(d + '/cube.vtu')\n"
+      "e = vtk.vtkExtractUnstructuredGridPiece(); e.SetInputConnection(r.GetOutputPort())\n" +
+          writer);
+  const testing::ProcessResult run =
+      testing::RunProcess({iotest::kPython, dir.File("write.py"), dir.path()});
+  if (run.exit_code != 0) return absl::InternalError(absl::StrCat("write.py: ", run.err));
+  return cube;
+}
+
 // The same from VTK itself: vtkXMLUnstructuredGridWriter writing 3 pieces of the cube.
 TEST(IoPvtuReaderTest, AVtuVtkWroteInThreePiecesReadsAsTheMesh) {
   if (testing::RunProcess({iotest::kPython, "-c", "import vtk"}).exit_code != 0) {
     GTEST_SKIP() << "python3-vtk9 is not installed";
   }
   ScratchDir dir;
-  absl::StatusOr<MeshFile> cube =
-      ReadMesh(std::string(TETREFINE_SOURCE_DIR) + "/examples/unit_cube_1782tets.mesh");
-  ASSERT_TRUE(cube.ok()) << cube.status();
-  ASSERT_TRUE(WriteMesh(dir.File("cube.vtu"), *cube).ok());
-  const std::string script =
-      "import sys, vtk\n"
-      "d = sys.argv[1]\n"
-      "r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName(d + '/cube.vtu')\n"
-      "e = vtk.vtkExtractUnstructuredGridPiece(); e.SetInputConnection(r.GetOutputPort())\n"
+  absl::StatusOr<MeshFile> cube = CubeThroughVtkPieces(
+      dir, /*keep_labels=*/true,
       "w = vtk.vtkXMLUnstructuredGridWriter(); w.SetInputConnection(e.GetOutputPort())\n"
-      "w.SetFileName(d + '/pieces.vtu'); w.SetNumberOfPieces(3); w.Write()\n";
-  WriteBytes(dir.File("write.py"), script);
-  const testing::ProcessResult run =
-      testing::RunProcess({iotest::kPython, dir.File("write.py"), dir.path()});
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+      "w.SetFileName(d + '/pieces.vtu'); w.SetNumberOfPieces(3); w.Write()\n");
+  ASSERT_TRUE(cube.ok()) << cube.status();
   const std::vector<std::string> split =
       absl::StrSplit(iotest::ReadBytes(dir.File("pieces.vtu")), "<Piece ");
   ASSERT_EQ(split.size(), 4u);
@@ -392,24 +408,12 @@ TEST(IoPvtuReaderTest, APvtuVtkWroteWithGhostLevelsReadsAsTheMesh) {
     GTEST_SKIP() << "python3-vtk9 is not installed";
   }
   ScratchDir dir;
-  absl::StatusOr<MeshFile> cube =
-      ReadMesh(std::string(TETREFINE_SOURCE_DIR) + "/examples/unit_cube_1782tets.mesh");
-  ASSERT_TRUE(cube.ok()) << cube.status();
-  cube->mesh.labels.clear();
-  cube->label_name.clear();
-  ASSERT_TRUE(WriteMesh(dir.File("cube.vtu"), *cube).ok());
-  const std::string script =
-      "import sys, vtk\n"
-      "d = sys.argv[1]\n"
-      "r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName(d + '/cube.vtu')\n"
-      "e = vtk.vtkExtractUnstructuredGridPiece(); e.SetInputConnection(r.GetOutputPort())\n"
+  absl::StatusOr<MeshFile> cube = CubeThroughVtkPieces(
+      dir, /*keep_labels=*/false,
       "w = vtk.vtkXMLPUnstructuredGridWriter(); w.SetInputConnection(e.GetOutputPort())\n"
       "w.SetFileName(d + '/ghosts.pvtu'); w.SetNumberOfPieces(3)\n"
-      "w.SetStartPiece(0); w.SetEndPiece(2); w.SetGhostLevel(1); w.Write()\n";
-  WriteBytes(dir.File("write.py"), script);
-  const testing::ProcessResult run =
-      testing::RunProcess({iotest::kPython, dir.File("write.py"), dir.path()});
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+      "w.SetStartPiece(0); w.SetEndPiece(2); w.SetGhostLevel(1); w.Write()\n");
+  ASSERT_TRUE(cube.ok()) << cube.status();
   absl::StatusOr<MeshFile> read = ReadMesh(dir.File("ghosts.pvtu"));
   ASSERT_TRUE(read.ok()) << read.status();
   EXPECT_GT(read->ghost_cells_skipped, 0);
