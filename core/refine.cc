@@ -109,6 +109,13 @@ void TetQualities(const std::vector<Vec3>& p, const std::vector<Tet>& tets, int6
 //    fitted to the three real volumes at eps 0.1 and 0.05 (`refine --certify
 //    --fit-mesh-to-volume`): 0.5-5% fewer tets in the four converging runs, worst tet better in
 //    one and worse in three (anatomical eps 0.05: min 0.186 against 0.215): kept as is.
+//    Measured again 2026-11-29 with the midpoint test only on edges at most 1-6 voxels long
+//    (index units; docs/schemes.md "Certified mode: the segment test on long edges only"): at
+//    2 voxels 2.2% fewer tets over the 18 converging reproduction runs and 7% over the 22
+//    unseen ones, but on an anisotropic volume (0.3 x 0.3 x 5 mm voxels) 5.2x the tets at 1 and
+//    2 voxels (360,203 -> 1,871,533: the lattice then finds what the edges missed, and splits
+//    only a failing tet's longest edge), and one unseen run's worst tet 0.48x -> 0.26x of the
+//    input's. Not adopted: a few percent do not pay for 5x on thick-slice volumes.
 //  - Four closure rounds rather than two: fewer tets and a better worst tet (anatomical cube
 //    eps 0.1: 28,731 tets, min 0.65x, against 31,031 and 0.59x; sharp blob of
 //    tests/core/refine_test.cc: min 0.40x against 0.28x); more guard rounds cost tets for little.

@@ -26,8 +26,8 @@ struct IterationStats {
   int64_t short_edges_kept = 0;  // edges above epsilon left whole: shorter than min_edge_length
   double max_error = 0.0;        // max edge-midpoint error at the start of the iteration
   double mean_error = 0.0;       // mean over unique edges of the edge-midpoint error
-  // kLongestEdge: the largest discrepancy along any edge at the start of the iteration (0 for
-  // kPaper, which does not compute it).
+  // kLongestEdge with certify: the largest discrepancy along any edge at the start of the
+  // iteration. 0 otherwise: the midpoint test, which the others use, computes none.
   double max_segment_error = 0.0;
   int64_t closure_edges = 0;  // edges split only because they are a marked face's longest edge
   int64_t guard_edges = 0;    // edges split only by the quality guard (regular refinement)

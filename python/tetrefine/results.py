@@ -71,8 +71,9 @@ class IterationStats(Record):
     (NTwE), edges, split_edges, short_edges_kept, max_error and mean_error (relative, at the start
     of the iteration), configuration_counts (11 counts in CONFIGURATIONS order),
     schonhardt_prisms, quality (min, mean, count after the iteration), seconds; for the
-    longest-edge scheme also max_segment_error, closure_edges, guard_edges, failing_tets and
-    other_tilings (tets cut by a better tiling of their faces than the paper's table)."""
+    longest-edge scheme also max_segment_error (certified runs only), closure_edges,
+    guard_edges, failing_tets and other_tilings (tets cut by a better tiling of their faces
+    than the paper's table)."""
 
     @property
     def configurations(self):
