@@ -27,8 +27,15 @@ struct PlotSettings {
   std::vector<std::string> labels;  // at most one per stats file; the rest take the default
   std::string output_path;
   int width = 960;
-  int height = 400;
+  // --height, or 400 and one legend line more for each run after the third, so that a legend
+  // of many runs does not squeeze the panels (an outside review's eleven runs left the error
+  // panel 110 pixels).
+  int height = 0;
 };
+
+int DefaultHeight(size_t runs) {
+  return 400 + render::kLegendLineHeight * static_cast<int>(std::max<size_t>(runs, 3) - 3);
+}
 
 absl::Status SettingsFromArgs(const ParsedArgs& args, PlotSettings* s) {
   s->stats_paths = args.GetAll("stats-json");
@@ -46,6 +53,8 @@ absl::Status SettingsFromArgs(const ParsedArgs& args, PlotSettings* s) {
     absl::StatusOr<int64_t> n = ParseInteger("height", *text, 150, 8192);
     if (!n.ok()) return n.status();
     s->height = static_cast<int>(*n);
+  } else {
+    s->height = DefaultHeight(s->stats_paths.size());
   }
   s->output_path = *args.Get("output");
   if (absl::AsciiStrToLower(PathExtension(s->output_path)) != ".png") {
@@ -153,7 +162,8 @@ const CommandSpec& PlotSpec() {
                /*repeated=*/true},
               {"output", "FILE", "the picture, .png", true},
               {"width", "W", "picture width in pixels (default 960)"},
-              {"height", "H", "picture height in pixels (default 400)"},
+              {"height", "H",
+               "picture height in pixels (default 400, 16 more per run after the third)"},
           },
       .positional = ""};
   return spec;

@@ -24,7 +24,6 @@ constexpr int kYTickLabels = 56;  // room for the y tick labels, left of a panel
 constexpr int kXLabels = 36;      // x tick labels and the x-axis title, under a panel
 constexpr int kGap = 28;          // between the two panels (besides the right one's y labels)
 constexpr int kLegendPad = 8;     // between the x-axis title and the legend
-constexpr int kLegendLine = 16;   // one legend line per series
 constexpr int kMinPanelWidth = 100;
 constexpr int kMinPanelHeight = 80;
 constexpr double kFontSize = 11.0;
@@ -179,7 +178,7 @@ void ZeroMarker(cairo_t* cr, double x, double y) {
 
 // The series' line through its plottable points (broken where one is not) and its markers.
 void DrawSeries(cairo_t* cr, const PlotArea& area, const std::vector<double>& values,
-                const Rgb& colour) {
+                const Rgb& colour, const std::vector<double>& dash) {
   const PixelRect& r = area.rect;
   cairo_save(cr);
   cairo_rectangle(cr, r.x, r.y, r.width, r.height);
@@ -187,6 +186,7 @@ void DrawSeries(cairo_t* cr, const PlotArea& area, const std::vector<double>& va
   SetColour(cr, colour);
   cairo_set_line_width(cr, 2.0);
   cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  cairo_set_dash(cr, dash.data(), static_cast<int>(dash.size()), 0.0);
   bool drawing = false;
   const auto y_of = [&](double v) { return v == 0.0 ? area.ZeroY() : area.Y(v); };
   for (size_t i = 0; i < values.size(); ++i) {
@@ -204,6 +204,7 @@ void DrawSeries(cairo_t* cr, const PlotArea& area, const std::vector<double>& va
     }
   }
   cairo_stroke(cr);
+  cairo_set_dash(cr, nullptr, 0, 0.0);
   for (size_t i = 0; i < values.size(); ++i) {
     const double x = area.X(static_cast<double>(i));
     if (Plottable(values[i])) Marker(cr, x, area.Y(values[i]));
@@ -212,11 +213,13 @@ void DrawSeries(cairo_t* cr, const PlotArea& area, const std::vector<double>& va
   cairo_restore(cr);
 }
 
-void DrawEpsilon(cairo_t* cr, const PlotArea& area, double epsilon) {
+// The dashed line at `epsilon`; its label's baseline is label_y.
+void DrawEpsilon(cairo_t* cr, const PlotArea& area, double epsilon, const Rgb& colour,
+                 double label_y) {
   const PixelRect& r = area.rect;
   const double y = area.Row(epsilon) + 0.5;
   cairo_save(cr);
-  SetColour(cr, kEpsilonColour);
+  SetColour(cr, colour);
   cairo_set_line_width(cr, 1.0);
   const std::array<double, 2> dash = {6.0, 4.0};
   cairo_set_dash(cr, dash.data(), static_cast<int>(dash.size()), 0.0);
@@ -224,7 +227,14 @@ void DrawEpsilon(cairo_t* cr, const PlotArea& area, double epsilon) {
   cairo_line_to(cr, r.x + r.width, y);
   cairo_stroke(cr);
   cairo_set_dash(cr, nullptr, 0, 0.0);
-  Text(cr, r.x + r.width - 4, y - 4, absl::StrFormat("epsilon = %g", epsilon), 1.0);
+  // At the left, where the errors of the first iterations are usually well above epsilon (at
+  // the right the runs end at it), on white so that another epsilon's line does not cross it.
+  const std::string label = absl::StrFormat("epsilon = %g", epsilon);
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_rectangle(cr, r.x + 3, label_y - kFontSize, TextWidth(cr, label) + 2, kFontSize + 3);
+  cairo_fill(cr);
+  SetColour(cr, colour);
+  Text(cr, r.x + 4, label_y, label);
   cairo_restore(cr);
 }
 
@@ -253,7 +263,7 @@ absl::StatusOr<ConvergenceLayout> LayoutConvergencePlot(
   const int n = static_cast<int>(series.size());
   const int left = kYAxisTitle + kYTickLabels;
   const int top = kMargin + kTitle + kPanelTitle;
-  const int bottom = kXLabels + kLegendPad + n * kLegendLine + kMargin;
+  const int bottom = kXLabels + kLegendPad + n * kLegendLineHeight + kMargin;
   const int panel_width = (options.width - 2 * kMargin - 2 * left - kGap) / 2;
   const int panel_height = options.height - top - bottom;
   if (panel_width < kMinPanelWidth) {
@@ -272,7 +282,7 @@ absl::StatusOr<ConvergenceLayout> LayoutConvergencePlot(
   layout.error.rect = {kMargin + left, top, panel_width, panel_height};
   layout.tets.rect = {kMargin + left + panel_width + kGap + left, top, panel_width, panel_height};
   layout.legend = {kMargin + left, top + panel_height + kXLabels + kLegendPad,
-                   options.width - 2 * kMargin - left, n * kLegendLine};
+                   options.width - 2 * kMargin - left, n * kLegendLineHeight};
   std::vector<double> errors = options.epsilons;
   std::vector<double> tets;
   size_t points = 0;
@@ -312,6 +322,33 @@ Rgb SeriesColour(size_t i) {
   return kCycle[i % kCycle.size()];
 }
 
+std::vector<double> SeriesDash(size_t i) {
+  switch (i / 10 % 4) {
+    case 1:
+      return {8.0, 4.0};
+    case 2:
+      return {2.0, 3.0};
+    case 3:
+      return {8.0, 3.0, 2.0, 3.0};
+    default:
+      return {};
+  }
+}
+
+std::vector<double> SeparateLabels(const std::vector<double>& wanted, double spacing) {
+  std::vector<size_t> order(wanted.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return wanted[a] < wanted[b]; });
+  std::vector<double> placed(wanted.size());
+  double last = -std::numeric_limits<double>::infinity();
+  for (size_t i : order) {
+    placed[i] = std::max(wanted[i], last + spacing);
+    last = placed[i];
+  }
+  return placed;
+}
+
 absl::StatusOr<std::string> RenderConvergencePlotPng(const std::vector<ConvergenceSeries>& series,
                                                      const ConvergenceOptions& options) {
   absl::StatusOr<ConvergenceLayout> layout = LayoutConvergencePlot(series, options);
@@ -328,25 +365,39 @@ absl::StatusOr<std::string> RenderConvergencePlotPng(const std::vector<Convergen
 
   DrawAxes(cr.get(), layout->error, options.error_axis, "max error");
   DrawAxes(cr.get(), layout->tets, "tets", "tets");
+  // Each epsilon once, with the first series that has it.
   std::vector<double> epsilons;
-  for (double e : options.epsilons) {
+  std::vector<size_t> first_series;
+  for (size_t i = 0; i < options.epsilons.size(); ++i) {
+    const double e = options.epsilons[i];
     if (Plottable(e) && std::find(epsilons.begin(), epsilons.end(), e) == epsilons.end()) {
       epsilons.push_back(e);
+      first_series.push_back(i);
     }
   }
-  for (double e : epsilons) DrawEpsilon(cr.get(), layout->error, e);
+  std::vector<double> label_rows;
+  for (double e : epsilons) label_rows.push_back(layout->error.Row(e) + 0.5 - 4.0);
+  label_rows = SeparateLabels(label_rows, kFontSize + 2.0);
+  for (size_t k = 0; k < epsilons.size(); ++k) {
+    const Rgb colour = epsilons.size() == 1 ? kEpsilonColour : SeriesColour(first_series[k]);
+    DrawEpsilon(cr.get(), layout->error, epsilons[k], colour, label_rows[k]);
+  }
   for (size_t i = 0; i < series.size(); ++i) {
-    DrawSeries(cr.get(), layout->error, series[i].error, SeriesColour(i));
-    DrawSeries(cr.get(), layout->tets, series[i].tets, SeriesColour(i));
+    DrawSeries(cr.get(), layout->error, series[i].error, SeriesColour(i), SeriesDash(i));
+    DrawSeries(cr.get(), layout->tets, series[i].tets, SeriesColour(i), SeriesDash(i));
   }
   const PixelRect& legend = layout->legend;
   for (size_t i = 0; i < series.size(); ++i) {
-    const double y = legend.y + static_cast<double>(i) * kLegendLine + kLegendLine / 2.0;
+    const double y =
+        legend.y + static_cast<double>(i) * kLegendLineHeight + kLegendLineHeight / 2.0;
     SetColour(cr.get(), SeriesColour(i));
     cairo_set_line_width(cr.get(), 2.0);
+    const std::vector<double> dash = SeriesDash(i);
+    cairo_set_dash(cr.get(), dash.data(), static_cast<int>(dash.size()), 0.0);
     cairo_move_to(cr.get(), legend.x, y);
     cairo_line_to(cr.get(), legend.x + 24, y);
     cairo_stroke(cr.get());
+    cairo_set_dash(cr.get(), nullptr, 0, 0.0);
     Marker(cr.get(), legend.x + 12, y);
     cairo_set_source_rgb(cr.get(), 0, 0, 0);
     Text(cr.get(), legend.x + 32, y + 4, series[i].label);

@@ -26,7 +26,10 @@ struct ConvergenceSeries {
 struct ConvergenceOptions {
   int width = 960, height = 400;  // the whole picture, pixels
   std::string title;              // first line of the picture; may be empty
-  // A horizontal dashed line on the error panel for each (> 0; duplicates are drawn once).
+  // A horizontal dashed line on the error panel for each (> 0; duplicates are drawn once),
+  // labelled with its value; epsilons[i] is series i's. When they are not all equal each line
+  // takes the colour of the first series with that epsilon (black lines could not say whose
+  // they are) and the labels are moved apart so that none covers another.
   std::vector<double> epsilons;
   // The error panel's axis title: what the errors are relative to.
   std::string error_axis = "largest edge-midpoint error (relative to the value range)";
@@ -65,6 +68,15 @@ absl::StatusOr<ConvergenceLayout> LayoutConvergencePlot(
 
 // The colour of series i (a ten-colour cycle, distinct from black, white and the greys).
 Rgb SeriesColour(size_t i);
+// The dash pattern of series i's line (cairo_set_dash lengths, pixels; empty = solid): solid
+// for the first ten series, then dashed, dotted and dash-dotted for each further ten, so that
+// forty runs differ in colour or line.
+std::vector<double> SeriesDash(size_t i);
+// The legend's height per series, pixels.
+inline constexpr int kLegendLineHeight = 16;
+// Baselines for labels wanted at the rows `wanted` (any order), each moved down as little as
+// needed so that no two are closer than `spacing`; in the order of `wanted`.
+std::vector<double> SeparateLabels(const std::vector<double>& wanted, double spacing);
 // The epsilon line's colour (dashed).
 inline constexpr Rgb kEpsilonColour{0, 0, 0};
 

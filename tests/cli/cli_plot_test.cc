@@ -1,6 +1,7 @@
 // tetrefine plot: reading refine's --stats-json, the plot's layout, and the command end to end
 // (the PNG's size and where its lines are; bad inputs give one line naming them, exit 2, no file).
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <ostream>
@@ -337,6 +338,112 @@ TEST(CliPlot, TwoRunsMakeTwoPanelsWithTheirLinesAndTheEpsilonLine) {
   EXPECT_EQ(centre(error, 4, 0.18), render::SeriesColour(1));
   // Run A has no iteration 4: nothing of its colour there.
   EXPECT_NE(centre(tets, 4, 20000), render::SeriesColour(0));
+}
+
+// Runs at different epsilons (an outside review compared 0.08, 0.1 and 0.12 on the demo): each
+// epsilon's line is in its run's colour, not black, so the plot says whose line it is.
+TEST(CliPlot, EpsilonLinesOfDifferentEpsilonsTakeTheirRunsColours) {
+  ScratchDir dir;
+  const std::vector<double> epsilons = {0.08, 0.1, 0.12};
+  std::vector<std::string> args = {"plot"};
+  for (size_t k = 0; k < epsilons.size(); ++k) {
+    const std::string path = dir.File(absl::StrCat("r", k, ".json"));
+    WriteBytes(path, StatsJson("longest-edge", epsilons[k],
+                               {{1000, 3000, 0.5}, {3000, 9000, 0.3}, {9000, 20000, 0.15}}, 0.05,
+                               "converged"));
+    args.insert(args.end(), {"--stats-json", path});
+  }
+  args.insert(args.end(), {"--output", dir.File("c.png"), "--width", "800", "--height", "400"});
+  const ProcessResult run = RunTetrefine(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  absl::StatusOr<Image> image = DecodePng(ReadBytes(dir.File("c.png")));
+  ASSERT_TRUE(image.ok()) << image.status();
+  std::vector<render::ConvergenceSeries> series(3);
+  for (render::ConvergenceSeries& one : series) {
+    one.error = {0.5, 0.3, 0.15, 0.05};
+    one.tets = {1000, 3000, 9000, 20000};
+  }
+  render::ConvergenceOptions options;
+  options.width = 800;
+  options.height = 400;
+  options.epsilons = epsilons;
+  absl::StatusOr<render::ConvergenceLayout> layout = render::LayoutConvergencePlot(series, options);
+  ASSERT_TRUE(layout.ok()) << layout.status();
+  for (size_t k = 0; k < epsilons.size(); ++k) {
+    const int row = layout->error.Row(epsilons[k]);
+    EXPECT_GT(RowShare(*image, layout->error.rect, row, render::SeriesColour(k)), 0.3)
+        << "epsilon " << epsilons[k] << " row " << row;
+    EXPECT_LT(RowShare(*image, layout->error.rect, row, render::kEpsilonColour), 0.05)
+        << "epsilon " << epsilons[k] << " drawn black";
+  }
+}
+
+// Labels moved apart: none closer than the spacing, none above where it was wanted, each as
+// close to it as the ones above allow; random rows, many seeds.
+TEST(CliPlotLayout, SeparatedLabelsKeepTheirSpacingAndMoveAsLittleAsNeeded) {
+  for (uint64_t seed : testing::Seeds(50)) {
+    uint64_t state = seed * 6364136223846793005ull + 1442695040888963407ull;
+    const auto next = [&] {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      return static_cast<double>(state >> 40) / static_cast<double>(1ull << 24);
+    };
+    std::vector<double> wanted(1 + static_cast<size_t>(next() * 8));
+    for (double& w : wanted) w = 100.0 * next();
+    const double spacing = 13.0;
+    const std::vector<double> placed = render::SeparateLabels(wanted, spacing);
+    ASSERT_EQ(placed.size(), wanted.size());
+    std::vector<size_t> order(wanted.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return wanted[a] < wanted[b]; });
+    for (size_t k = 0; k < order.size(); ++k) {
+      const size_t i = order[k];
+      EXPECT_GE(placed[i], wanted[i]) << "seed " << seed;
+      if (k == 0) {
+        EXPECT_EQ(placed[i], wanted[i]) << "seed " << seed;
+      } else {
+        const double above = placed[order[k - 1]];
+        EXPECT_GE(placed[i] - above, spacing - 1e-9) << "seed " << seed;
+        EXPECT_EQ(placed[i], std::max(wanted[i], above + spacing)) << "seed " << seed;
+      }
+    }
+  }
+}
+
+// Forty runs differ in colour or line: ten colours, then a dashed, a dotted and a dash-dotted
+// round of them (an outside review's eleventh run was the first's blue line).
+TEST(CliPlotLayout, FortySeriesDifferInColourOrDash) {
+  std::set<std::tuple<int, int, int, std::vector<double>>> styles;
+  for (size_t i = 0; i < 40; ++i) {
+    const render::Rgb c = render::SeriesColour(i);
+    styles.insert({c.r, c.g, c.b, render::SeriesDash(i)});
+    if (i < 10) {
+      EXPECT_TRUE(render::SeriesDash(i).empty()) << i;
+    }
+  }
+  EXPECT_EQ(styles.size(), 40u);
+}
+
+// Without --height the picture grows by a legend line for each run after the third, so the
+// panels keep their size; --height is kept as given.
+TEST(CliPlot, TheDefaultHeightGrowsWithTheLegend) {
+  ScratchDir dir;
+  for (int runs : {1, 3, 11}) {
+    std::vector<std::string> args = {"plot"};
+    for (int k = 0; k < runs; ++k) {
+      const std::string path = dir.File(absl::StrCat("r", k, ".json"));
+      WriteBytes(path, RunA());
+      args.insert(args.end(), {"--stats-json", path});
+    }
+    args.insert(args.end(), {"--output", dir.File("c.png")});
+    const ProcessResult run = RunTetrefine(args);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    absl::StatusOr<Image> image = DecodePng(ReadBytes(dir.File("c.png")));
+    ASSERT_TRUE(image.ok()) << image.status();
+    EXPECT_EQ(image->height, 400 + render::kLegendLineHeight * std::max(0, runs - 3)) << runs;
+    EXPECT_TRUE(absl::StrContains(run.out, absl::StrCat("x ", image->height, " pixels")))
+        << run.out;
+  }
 }
 
 // refine of the 40-tet grid in the bump volume at `epsilon`, its --stats-json in dir/s.json.
