@@ -131,7 +131,11 @@ std::string BarLabel(double value, double lo, double hi) {
 
 FigureLayout LayoutFigure(int rows, int panel_width, int panel_height) {
   FigureLayout layout;
-  const int row_height = kRowTitle + kPanelTitle + panel_height;
+  // A colour bar is at least kMinColourBarHeight high whatever the panels: a thin plane (an outside
+  // review cut a 100 x 100 x 2 volume along x: panels 3 pixels high) printed its bars' three
+  // labels over each other.
+  const int bar_height = std::max(panel_height, kMinColourBarHeight);
+  const int row_height = kRowTitle + kPanelTitle + bar_height;
   for (int r = 0; r < rows; ++r) {
     const int y = kMargin + kHeader + r * (row_height + kRowGap) + kRowTitle + kPanelTitle;
     FigureLayout::Row row;
@@ -140,11 +144,11 @@ FigureLayout LayoutFigure(int rows, int panel_width, int panel_height) {
     x += panel_width + kGap;
     row.mesh = {x, y, panel_width, panel_height};
     x += panel_width + kGap;
-    row.value_bar = {x, y, kBarWidth, panel_height};
+    row.value_bar = {x, y, kBarWidth, bar_height};
     x += kBarWidth + kBarLabels;
     row.discrepancy = {x, y, panel_width, panel_height};
     x += panel_width + kGap;
-    row.discrepancy_bar = {x, y, kBarWidth, panel_height};
+    row.discrepancy_bar = {x, y, kBarWidth, bar_height};
     layout.width = x + kBarWidth + kBarLabels + kMargin;
     layout.rows.push_back(row);
   }

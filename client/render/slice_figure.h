@@ -31,7 +31,9 @@ struct PixelRect {
 // Where everything goes. Per row, left to right: the volume's trilinear values, the mesh's
 // linear interpolation, the colour bar of both, the discrepancy, its colour bar. Panels are
 // drawn pixel for pixel (no scaling), so panel pixel (c, r) of SliceSamples is figure pixel
-// (x + c, y + r).
+// (x + c, y + r). A colour bar is at least kMinColourBarHeight high (its three labels), and a
+// row as high as its bars.
+inline constexpr int kMinColourBarHeight = 52;
 struct FigureLayout {
   struct Row {
     PixelRect volume, mesh, value_bar, discrepancy, discrepancy_bar;

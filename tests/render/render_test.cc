@@ -361,6 +361,26 @@ absl::StatusOr<testing::Image> Render(const std::vector<FigureRow>& rows,
   return testing::DecodePng(*png);
 }
 
+// A thin plane (a 100 x 100 x 2 volume cut along x makes panels 3 pixels high): the colour bars
+// keep room for their three labels, and the rows for the bars; a tall panel's bars are its height.
+TEST(Figure, ColourBarsOfAThinPlaneKeepRoomForTheirLabels) {
+  for (int rows : {1, 2}) {
+    const FigureLayout thin = LayoutFigure(rows, 320, 3);
+    for (const FigureLayout::Row& row : thin.rows) {
+      EXPECT_EQ(row.volume.height, 3);
+      EXPECT_EQ(row.value_bar.height, kMinColourBarHeight);
+      EXPECT_EQ(row.discrepancy_bar.height, kMinColourBarHeight);
+    }
+    EXPECT_GE(thin.height, thin.rows.back().value_bar.y + kMinColourBarHeight);
+    if (rows == 2) {
+      EXPECT_GT(thin.rows[1].value_bar.y, thin.rows[0].value_bar.y + kMinColourBarHeight);
+    }
+  }
+  const FigureLayout tall = LayoutFigure(1, 200, 320);
+  EXPECT_EQ(tall.rows[0].value_bar.height, 320);
+  EXPECT_EQ(tall.rows[0].discrepancy_bar.height, 320);
+}
+
 TEST(Figure, PanelsShowTheSamplesPixelForPixel) {
   const Volume volume = AnalyticVolume(kBox, Linear);
   Mesh mesh = FiveTetMesh({0, 0, 0}, {10, 10, 10}, {2, 2, 2});
