@@ -152,8 +152,9 @@ const CommandSpec& PlotSpec() {
           "mesh's is the file's final_max_error; an error of 0 is a triangle on the bottom edge.\n"
           "One coloured line with markers per file; the legend gives its label (--label in\n"
           "order, else the file's scheme, \"certified\" after it with --certify, else its\n"
-          "name), why it stopped, its iterations and\n"
-          "its tets.",
+          "name), why it stopped, its iterations and its tets; past ten files the lines\n"
+          "are dashed, then dotted. Runs at different epsilons have each epsilon's line in\n"
+          "the colour of its run.",
       .flags =
           {
               {"stats-json", "FILE", "JSON written by tetrefine refine --stats-json", true,
