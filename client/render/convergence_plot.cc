@@ -213,9 +213,8 @@ void DrawSeries(cairo_t* cr, const PlotArea& area, const std::vector<double>& va
   cairo_restore(cr);
 }
 
-// The dashed line at `epsilon`; its label's baseline is label_y.
-void DrawEpsilon(cairo_t* cr, const PlotArea& area, double epsilon, const Rgb& colour,
-                 double label_y) {
+// The dashed line at `epsilon`.
+void DrawEpsilon(cairo_t* cr, const PlotArea& area, double epsilon, const Rgb& colour) {
   const PixelRect& r = area.rect;
   const double y = area.Row(epsilon) + 0.5;
   cairo_save(cr);
@@ -226,10 +225,17 @@ void DrawEpsilon(cairo_t* cr, const PlotArea& area, double epsilon, const Rgb& c
   cairo_move_to(cr, r.x, y);
   cairo_line_to(cr, r.x + r.width, y);
   cairo_stroke(cr);
-  cairo_set_dash(cr, nullptr, 0, 0.0);
-  // At the left, where the errors of the first iterations are usually well above epsilon (at
-  // the right the runs end at it), on white so that another epsilon's line does not cross it.
+  cairo_restore(cr);
+}
+
+// Its label, baseline at label_y: at the left, where the errors of the first iterations are
+// usually well above epsilon (at the right the runs end at it), on white, after every epsilon
+// line, so that no other epsilon's line crosses it.
+void DrawEpsilonLabel(cairo_t* cr, const PlotArea& area, double epsilon, const Rgb& colour,
+                      double label_y) {
+  const PixelRect& r = area.rect;
   const std::string label = absl::StrFormat("epsilon = %g", epsilon);
+  cairo_save(cr);
   cairo_set_source_rgb(cr, 1, 1, 1);
   cairo_rectangle(cr, r.x + 3, label_y - kFontSize, TextWidth(cr, label) + 2, kFontSize + 3);
   cairo_fill(cr);
@@ -378,9 +384,14 @@ absl::StatusOr<std::string> RenderConvergencePlotPng(const std::vector<Convergen
   std::vector<double> label_rows;
   for (double e : epsilons) label_rows.push_back(layout->error.Row(e) + 0.5 - 4.0);
   label_rows = SeparateLabels(label_rows, kFontSize + 2.0);
+  const auto epsilon_colour = [&](size_t k) {
+    return epsilons.size() == 1 ? kEpsilonColour : SeriesColour(first_series[k]);
+  };
   for (size_t k = 0; k < epsilons.size(); ++k) {
-    const Rgb colour = epsilons.size() == 1 ? kEpsilonColour : SeriesColour(first_series[k]);
-    DrawEpsilon(cr.get(), layout->error, epsilons[k], colour, label_rows[k]);
+    DrawEpsilon(cr.get(), layout->error, epsilons[k], epsilon_colour(k));
+  }
+  for (size_t k = 0; k < epsilons.size(); ++k) {
+    DrawEpsilonLabel(cr.get(), layout->error, epsilons[k], epsilon_colour(k), label_rows[k]);
   }
   for (size_t i = 0; i < series.size(); ++i) {
     DrawSeries(cr.get(), layout->error, series[i].error, SeriesColour(i), SeriesDash(i));
