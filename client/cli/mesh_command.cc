@@ -68,6 +68,9 @@ int RunMesh(const std::vector<std::string>& args) {
   const std::string volume_path = *parsed->Get("volume");
   const std::string output = *parsed->Get("output");
   absl::Status output_ok = CheckOutputPath(output, "--output", /*mesh=*/true);
+  // A legacy .vtk is a volume and a mesh format: the volume must not become its own mesh.
+  if (output_ok.ok())
+    output_ok = CheckNotTheSameFile({"--output", output}, {{"--volume", volume_path}});
   if (!output_ok.ok()) return Fail(output_ok, kExitUsage);
 
   absl::StatusOr<io::VolumeFile> volume = LoadVolume(volume_path, "--volume");

@@ -411,13 +411,10 @@ absl::Status WritePiecesReported(const RefineSettings& s, Progress& progress,
   return absl::OkStatus();
 }
 
-// --stats-json must not be one of the other files the run writes: a TetGen output's .node, an
-// --every-iteration file or its .pvd, a .pvtu's piece. Only --output itself was checked, and
-// the statistics silently replaced the others (an outside review: exit 0, an unreadable
-// result).
-absl::Status CheckStatsJsonIsNoCompanion(const RefineSettings& s) {
-  if (s.stats_json_path.empty()) return absl::OkStatus();
-  std::vector<NamedPath> written;
+// The files the run writes besides --stats-json: --output, a TetGen output's .node, the
+// --every-iteration files and their .pvd, a .pvtu's pieces.
+std::vector<NamedPath> FilesWritten(const RefineSettings& s) {
+  std::vector<NamedPath> written = {{"--output", s.output_path}};
   if (absl::EndsWithIgnoreCase(s.output_path, ".ele")) {
     written.push_back({"the .node file of --output", io::TetgenNodePath(s.output_path)});
   }
@@ -436,11 +433,29 @@ absl::Status CheckStatsJsonIsNoCompanion(const RefineSettings& s) {
           {absl::StrCat("piece ", k, " of --output"), io::PvtuPiecePath(s.output_path, k)});
     }
   }
+  return written;
+}
+
+// No file the run writes may be an input or another output. --stats-json was checked against
+// --output alone, and replaced the other files silently (an outside review: exit 0, an
+// unreadable result); --output itself was never checked against the inputs, and replaced the
+// input mesh, or the volume with a tet mesh, with exit 0 (a second review). The message names
+// both flags, as for --stats-json.
+absl::Status CheckWrittenFilesAreNoInput(const RefineSettings& s) {
+  std::vector<NamedPath> inputs = {{"--volume", s.volume_path}, {"--mesh", s.mesh_path}};
+  if (absl::EndsWithIgnoreCase(s.mesh_path, ".ele")) {
+    inputs.push_back({"the .node file of --mesh", io::TetgenNodePath(s.mesh_path)});
+  }
+  const std::vector<NamedPath> written = FilesWritten(s);
+  for (const NamedPath& file : written) {
+    if (absl::Status same = CheckNotTheSameFile(file, inputs); !same.ok()) return same;
+  }
+  if (s.stats_json_path.empty()) return absl::OkStatus();
   return CheckNotTheSameFile({"--stats-json", s.stats_json_path}, written);
 }
 
 int RunRefinement(const RefineSettings& s) {
-  if (absl::Status companion = CheckStatsJsonIsNoCompanion(s); !companion.ok()) {
+  if (absl::Status companion = CheckWrittenFilesAreNoInput(s); !companion.ok()) {
     return Fail(companion, kExitUsage);
   }
   Progress progress(s.quiet);

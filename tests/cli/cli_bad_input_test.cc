@@ -227,6 +227,21 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"StatsJsonIsTheSeries",
                 Refine({"--epsilon", "0.1", "--every-iteration", "--stats-json", "$D/out.pvd"}),
                 "--stats-json names the same file as --every-iteration's series"},
+        // No written file may be an input (a second review: --output replaced the input mesh,
+        // or a legacy .vtk volume with a tet mesh, with exit 0).
+        BadCase{"OutputIsTheMesh", RefineWith("--output", "$D/m.vtu"),
+                "$D/m.vtu: --output names the same file as --mesh"},
+        BadCase{"OutputIsTheMeshByAnotherName", RefineWith("--output", "$D/./m.vtu"),
+                "--output names the same file as --mesh ($D/m.vtu)"},
+        BadCase{"OutputIsTheVolume",
+                Refine({"--epsilon", "0.1", "--output", "$D/image.vtk"},
+                       {"refine", "--volume", "$D/image.vtk", "--mesh", "$D/m.vtu"}),
+                "$D/image.vtk: --output names the same file as --volume"},
+        BadCase{
+            "AnIterationFileIsTheMesh",
+            RefineWith("--mesh", "$D/out.iter01.vtu", {"--epsilon", "0.1", "--every-iteration"}),
+            "$D/out.iter01.vtu: --every-iteration's file of iteration 1 names the same file as "
+            "--mesh"},
         BadCase{"TlsWithoutServer", Refine({"--epsilon", "0.1", "--tls-ca", "$D/ca.pem"}),
                 "--tls-ca"},
         BadCase{"TlsCertWithoutKey",
@@ -245,6 +260,9 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadCase{"NoCommand", {}, "tetrefine"}, BadCase{"UnknownCommand", {"refien"}, "refien"},
         BadCase{"MeshMissingOutput", {"mesh", "--volume", "$D/v.nii"}, "--output"},
+        BadCase{"MeshOutputIsTheVolume",
+                {"mesh", "--volume", "$D/image.vtk", "--output", "$D/image.vtk"},
+                "$D/image.vtk: --output names the same file as --volume"},
         BadCase{"MeshBlockZero",
                 {"mesh", "--volume", "$D/v.nii", "--block", "0", "--output", "$D/g.vtu"},
                 "--block"},
