@@ -13,14 +13,21 @@
 namespace tetrefine::cli {
 namespace {
 
-// The request chunk size for the servers behind `channels`: what the smallest of their message
-// limits allows. A server without GetServerInfo (UNIMPLEMENTED) gets the default. With
-// `unreachable` set (a sharded run, whose parts move to the next server when one is down), an
-// UNAVAILABLE server is passed to it and skipped, unless no server answers at all.
-absl::StatusOr<size_t> ChunkBytesForServers(
+// What the servers behind `channels` take together: the request chunk size the smallest of
+// their message limits allows, and the smallest of their output tet limits (0 when a server
+// does not say). A server without GetServerInfo (UNIMPLEMENTED) gets the default chunk and
+// leaves the tet limit unknown. With `unreachable` set (a sharded run, whose parts move to the
+// next server when one is down), an UNAVAILABLE server is passed to it and skipped, unless no
+// server answers at all.
+struct ServerSizes {
+  size_t chunk_bytes = 0;
+  int64_t max_output_tets = 0;
+};
+absl::StatusOr<ServerSizes> AskServerSizes(
     const std::vector<std::shared_ptr<grpc::Channel>>& channels, const std::string& token,
     const std::function<void(size_t index, const absl::Status& status)>& unreachable = nullptr) {
-  size_t chunk = client::CallOptions{}.chunk_bytes;
+  ServerSizes sizes{.chunk_bytes = client::CallOptions{}.chunk_bytes, .max_output_tets = 0};
+  bool every_limit_known = true;
   std::vector<std::pair<size_t, absl::Status>> down;
   for (size_t i = 0; i < channels.size(); ++i) {
     absl::StatusOr<client::ServerInfo> info = client::GetServerInfo(
@@ -29,13 +36,23 @@ absl::StatusOr<size_t> ChunkBytesForServers(
       down.emplace_back(i, info.status());
       continue;
     }
-    if (absl::IsUnimplemented(info.status())) continue;
+    if (absl::IsUnimplemented(info.status())) {
+      every_limit_known = false;
+      continue;
+    }
     if (!info.ok()) return info.status();
-    chunk = std::min(chunk, client::ChunkBytesFor(info->limits.max_message_bytes, chunk));
+    sizes.chunk_bytes =
+        std::min(sizes.chunk_bytes,
+                 client::ChunkBytesFor(info->limits.max_message_bytes, sizes.chunk_bytes));
+    const int64_t limit = info->limits.max_output_tets;
+    if (limit <= 0) every_limit_known = false;
+    sizes.max_output_tets =
+        sizes.max_output_tets == 0 ? limit : std::min(sizes.max_output_tets, limit);
   }
   if (!down.empty() && down.size() == channels.size()) return down.back().second;
   for (const auto& [index, status] : down) unreachable(index, status);
-  return chunk;
+  if (!every_limit_known) sizes.max_output_tets = 0;
+  return sizes;
 }
 
 class ChannelBackend : public RefineBackend {
@@ -52,9 +69,9 @@ class ChannelBackend : public RefineBackend {
                                               const client::RefineRequestOptions& options,
                                               const client::RefineCallbacks& callbacks) override {
     if (ask_server_) {
-      absl::StatusOr<size_t> chunk = ChunkBytesForServers({channel_}, call_.bearer_token);
-      if (!chunk.ok()) return chunk.status();
-      call_.chunk_bytes = *chunk;
+      absl::StatusOr<ServerSizes> sizes = AskServerSizes({channel_}, call_.bearer_token);
+      if (!sizes.ok()) return sizes.status();
+      call_.chunk_bytes = sizes->chunk_bytes;
       ask_server_ = false;
     }
     return client::RefineViaService(channel_, volume, mesh, options, callbacks, call_);
@@ -99,7 +116,8 @@ class ShardedBackend : public RefineBackend {
     absl::StatusOr<LiveServers> live = AskServers(callbacks);
     if (!live.ok()) return live.status();
     call_.chunk_bytes = live->chunk_bytes;
-    return sharding::RefineSharded(live->channels, volume, mesh, options, shards_, callbacks, call_,
+    return sharding::RefineSharded(live->channels, volume, mesh,
+                                   WithTheServersBudget(options, *live), shards_, callbacks, call_,
                                    live->addresses);
   }
 
@@ -109,16 +127,32 @@ class ShardedBackend : public RefineBackend {
     absl::StatusOr<LiveServers> live = AskServers(callbacks);
     if (!live.ok()) return live.status();
     call_.chunk_bytes = live->chunk_bytes;
-    return sharding::RefineShardedInPieces(live->channels, volume, mesh, options, shards_,
-                                           callbacks, call_, live->addresses);
+    return sharding::RefineShardedInPieces(live->channels, volume, mesh,
+                                           WithTheServersBudget(options, *live), shards_, callbacks,
+                                           call_, live->addresses);
   }
 
  private:
   struct LiveServers {
     size_t chunk_bytes = 0;
+    int64_t max_output_tets = 0;  // the smallest limit of the servers, 0 when one did not say
     std::vector<std::shared_ptr<grpc::Channel>> channels;
     std::vector<std::string> addresses;
   };
+
+  // Without --max-tets the run's budget is the smallest output limit of the servers that
+  // answered, sent with every part. It was the smallest limit a part's server reported, so that
+  // under the halo schemes, whose small iterations all go to the first address, swapping two
+  // servers with different limits changed the result (an outside review: 90,051 tets, converged,
+  // against 17,616 at the tet budget).
+  static client::RefineRequestOptions WithTheServersBudget(client::RefineRequestOptions options,
+                                                           const LiveServers& live) {
+    if (!options.send_max_tets && live.max_output_tets > 0) {
+      options.refine.max_tets = live.max_output_tets;
+      options.send_max_tets = true;
+    }
+    return options;
+  }
 
   // The servers that answer, and the chunk size every one of them takes. A replica that is down
   // does not stop the run: the operator is told once, and it is left out of this run (it was
@@ -126,17 +160,18 @@ class ShardedBackend : public RefineBackend {
   // servers refine it).
   absl::StatusOr<LiveServers> AskServers(const client::RefineCallbacks& callbacks) {
     std::vector<bool> down(channels_.size(), false);
-    absl::StatusOr<size_t> chunk = ChunkBytesForServers(
-        channels_, call_.bearer_token, [&](size_t i, const absl::Status& status) {
+    absl::StatusOr<ServerSizes> sizes =
+        AskServerSizes(channels_, call_.bearer_token, [&](size_t i, const absl::Status& status) {
           down[i] = true;
           if (!callbacks.on_warning) return;
           callbacks.on_warning(absl::StrCat(addresses_[i], " is unreachable (",
                                             absl::StatusCodeToString(status.code()), ": ",
                                             status.message(), "); its parts go to the others"));
         });
-    if (!chunk.ok()) return chunk.status();
+    if (!sizes.ok()) return sizes.status();
     LiveServers live;
-    live.chunk_bytes = *chunk;
+    live.chunk_bytes = sizes->chunk_bytes;
+    live.max_output_tets = sizes->max_output_tets;
     for (size_t i = 0; i < channels_.size(); ++i) {
       if (down[i]) continue;
       live.channels.push_back(channels_[i]);

@@ -487,6 +487,9 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
   round.skip_final_mesh = false;
 
   // The caller's budget, or the smallest server limit a part met (as for the paper scheme).
+  // Which servers the parts meet depends on their order and on how many parts an iteration
+  // has, so the CLI sends the smallest limit of all its servers as the caller's budget
+  // (client/cli/refine_backend.cc, WithTheServersBudget).
   int64_t server_budget = 0;
   auto budget = [&] { return options.send_max_tets ? options.refine.max_tets : server_budget; };
   std::optional<StopReason> stopped;
@@ -706,7 +709,8 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   for (int p = 0; p < num_parts; ++p) all[p] = p;
   if (absl::Status s = runner.Run(all, sent, replies, reports); !s.ok()) return s;
 
-  // The budget the whole run has: the caller's, or the smallest server default a part met.
+  // The budget the whole run has: the caller's, or the smallest server default a part met (the
+  // CLI sends the smallest of all its servers' as the caller's: see the halo path above).
   int64_t budget = 0;
   for (const auto& reply : replies) {
     budget = budget == 0 ? reply->service.max_tets : std::min(budget, reply->service.max_tets);

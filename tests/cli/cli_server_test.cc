@@ -8,6 +8,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "client/cli/convergence_stats.h"
 #include "client/io/mesh_io.h"
 #include "gtest/gtest.h"
 #include "sharding/halo_parts.h"
@@ -140,6 +141,46 @@ TEST_F(CliServer, ShardedOverTwoServersGivesTheEmbeddedResult) {
   const ProcessResult refused = RunTetrefine(args);
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_TRUE(absl::StartsWith(refused.err, "tetrefine: --every-iteration: ")) << refused.err;
+}
+
+// Without --max-tets a sharded run's budget is the smallest output limit of its servers, in
+// whatever order they are listed: it was the smallest limit a part's server reported, and this
+// small mesh's iterations each go to the first address, so swapping a server with a small limit
+// and one with the default changed the result (an outside review). Both orders give the
+// embedded run with that limit as --max-tets.
+TEST_F(CliServer, AShardedRunsBudgetIsTheSmallestServerLimitInAnyOrder) {
+  const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
+                                           mesh_,    "--epsilon", "0.02",  "--quiet"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(),
+              {"--output", dir_.File("free.vtu"), "--stats-json", dir_.File("free.json")});
+  ASSERT_EQ(RunTetrefine(args).exit_code, 0);
+  absl::StatusOr<cli::ConvergenceRun> free_run = cli::ReadConvergenceRun(dir_.File("free.json"));
+  ASSERT_TRUE(free_run.ok()) << free_run.status();
+  ASSERT_GE(free_run->tets.size(), 4u) << "the case should take several iterations";
+  // A limit the first iteration fits and the second does not.
+  const int64_t limit = free_run->tets[1] + 1;
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--threads=1", absl::StrCat("--max_output_tets=", limit)});
+  ASSERT_TRUE(started.ok()) << started.status();
+  const ServerProcess& small = **started;
+  args = common;
+  args.insert(args.end(), {"--max-tets", absl::StrCat(limit), "--output", dir_.File("want.vtu")});
+  ASSERT_EQ(RunTetrefine(args).exit_code, 0);
+  absl::StatusOr<io::MeshFile> want = io::ReadMesh(dir_.File("want.vtu"));
+  ASSERT_TRUE(want.ok());
+  ASSERT_EQ(want->mesh.tets.size(), static_cast<size_t>(free_run->tets[1]));
+  for (const std::string& servers :
+       {server_->target() + "," + small.target(), small.target() + "," + server_->target()}) {
+    args = common;
+    args.insert(args.end(), {"--server", servers, "--shards", "2", "--output", dir_.File("s.vtu")});
+    const ProcessResult run = RunTetrefine(args);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_TRUE(absl::StrContains(run.out, "Stopped after 1 iteration: tet_budget")) << run.out;
+    absl::StatusOr<io::MeshFile> got = io::ReadMesh(dir_.File("s.vtu"));
+    ASSERT_TRUE(got.ok());
+    EXPECT_EQ(testing::GeometricTets(got->mesh), testing::GeometricTets(want->mesh)) << servers;
+  }
 }
 
 // A replica that is down is worked around, and the operator is told, even with --quiet (a CLI
