@@ -5,6 +5,7 @@
 #include <functional>
 #include <utility>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_split.h"
 #include "client/sharding/sharded_refine.h"
@@ -213,7 +214,13 @@ std::unique_ptr<RefineBackend> MakeRemoteBackend(std::string address,
 
 absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice& choice) {
   if (choice.shards > 0) {
-    std::vector<std::string> addresses = absl::StrSplit(choice.server, ',', absl::SkipEmpty());
+    // "a:1, b:2" as well as "a:1,b:2": the space went into the second address, which was then
+    // reported unreachable and left out (an outside review).
+    std::vector<std::string> addresses;
+    for (absl::string_view address : absl::StrSplit(choice.server, ',')) {
+      address = absl::StripAsciiWhitespace(address);
+      if (!address.empty()) addresses.emplace_back(address);
+    }
     std::vector<std::shared_ptr<grpc::Channel>> channels;
     for (const std::string& address : addresses) {
       absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(address, choice.tls);

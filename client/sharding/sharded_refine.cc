@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "absl/numeric/int128.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "core/edge_statistics.h"
@@ -40,9 +41,17 @@ double SecondsSince(Clock::time_point start) {
 // and the whole sharded run failed with "part 0: on host:port: CANCELLED" although another
 // replica was listed (found 2026-11-28 by a sweep: 3 of 3 runs, one replica of two sent
 // SIGTERM mid-run). A server also cancels a call whose client stalled (--write_stall_seconds).
-bool Retryable(absl::StatusCode code) {
-  return code == absl::StatusCode::kUnavailable || code == absl::StatusCode::kResourceExhausted ||
-         code == absl::StatusCode::kAborted || code == absl::StatusCode::kCancelled;
+// A RESOURCE_EXHAUSTED that refuses one of the request's options ("options.max_iterations: 32
+// exceeds this server's limit of 3") is not a busy replica: the same request is refused the
+// same way again, and an outside review saw it retried on the one server it had, eight warnings
+// and the server marked down, before the run failed with it. It fails the run at once.
+bool Retryable(const absl::Status& status) {
+  const absl::StatusCode code = status.code();
+  if (code == absl::StatusCode::kResourceExhausted) {
+    return !absl::StartsWith(status.message(), "options.");
+  }
+  return code == absl::StatusCode::kUnavailable || code == absl::StatusCode::kAborted ||
+         code == absl::StatusCode::kCancelled;
 }
 
 absl::Status Prefixed(int part, const absl::Status& status) {
@@ -315,7 +324,7 @@ class PartRunner {
         return;
       }
       if (abort_.load()) return;  // cancelled because the run stops: not this part's error
-      if (!Retryable(reply.status().code()) || attempt + 1 == max_attempts_) {
+      if (!Retryable(reply.status()) || attempt + 1 == max_attempts_) {
         return Fail(Prefixed(
             p, absl::Status(reply.status().code(), absl::StrCat("on ", TargetName(target), ": ",
                                                                 reply.status().message()))));

@@ -218,6 +218,38 @@ TEST_F(CliServer, AShardedRunSaysWhichServerFailedAndWhereThePartWent) {
   EXPECT_LT(first, measured) << run.err;
 }
 
+// A server that refuses one of the request's options refuses it again: the sharded run fails at
+// once with the refusal, no retry warning (an outside review saw eight, the server then marked
+// down). Addresses may have spaces after the commas.
+TEST_F(CliServer, AShardedRunDoesNotRetryARefusedOptionAndTakesSpacedAddresses) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--threads=1", "--max_iterations=3"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  const ServerProcess& strict = **started;
+  const std::vector<std::string> common = {"refine", "--volume",  volume_, "--mesh",
+                                           mesh_,    "--epsilon", "0.05",  "--scheme",
+                                           "paper",  "--shards",  "3",     "--quiet"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--server", strict.target(), "--output", dir_.File("refused.vtu")});
+  ProcessResult run = RunTetrefine(args);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "options.max_iterations: 32 exceeds this server's limit"))
+      << run.err;
+  EXPECT_FALSE(absl::StrContains(run.err, "retrying")) << run.err;
+  EXPECT_EQ(SplitLines(run.err).size(), 1u) << run.err;
+  // The same run within its limit, over both servers written with a space after the comma:
+  // both are used, none is reported unreachable.
+  args = common;
+  args.insert(args.end(),
+              {"--max-iterations", "3", "--server", server_->target() + ", " + strict.target(),
+               "--output", dir_.File("spaced.vtu")});
+  args.erase(std::find(args.begin(), args.end(), "--quiet"));
+  run = RunTetrefine(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, "3 shards over 2 servers")) << run.err;
+  EXPECT_FALSE(absl::StrContains(run.err, "unreachable")) << run.err;
+}
+
 TEST_F(CliServer, ServerSideValidationErrorNamesTheMesh) {
   // Two tets above one triangle: a face in three tets, which only the service's check finds.
   Mesh bad;
