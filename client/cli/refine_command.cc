@@ -371,16 +371,21 @@ std::string MeshFileSummary(const std::string& path, int64_t tets) {
   return text;
 }
 
-// Writes `file` to `path` as `s.write` says, reporting it as a progress phase.
+// Writes `file` to `path` as `s.write` says, or stages it there (`staged`), reporting it as a
+// progress phase.
 absl::Status WriteMeshReported(const RefineSettings& s, Progress& progress, const std::string& path,
-                               const io::MeshFile& file) {
+                               const io::MeshFile& file, io::StagedFiles* staged = nullptr) {
   progress.Begin(absl::StrCat("writing ", path));
-  absl::Status written = io::WriteMesh(path, file, s.write);
+  absl::Status written = staged != nullptr ? io::StageMesh(path, file, s.write, *staged)
+                                           : io::WriteMesh(path, file, s.write);
   if (!written.ok()) {
     progress.Abandon();
     return written;
   }
-  progress.End(MeshFileSummary(path, static_cast<int64_t>(file.mesh.tets.size())));
+  const auto tets = static_cast<int64_t>(file.mesh.tets.size());
+  // A staged file is not at `path` yet: its size there would be a file of a run before.
+  progress.End(staged != nullptr ? absl::StrCat(FormatCount(tets), " tets")
+                                 : MeshFileSummary(path, tets));
   return absl::OkStatus();
 }
 
@@ -451,7 +456,9 @@ absl::Status CheckWrittenFilesAreNoInput(const RefineSettings& s) {
     if (absl::Status same = CheckNotTheSameFile(file, inputs); !same.ok()) return same;
   }
   if (s.stats_json_path.empty()) return absl::OkStatus();
-  return CheckNotTheSameFile({"--stats-json", s.stats_json_path}, written);
+  // --volume and --mesh were checked with the flags; a .ele input's .node only here.
+  inputs.insert(inputs.end(), written.begin(), written.end());
+  return CheckNotTheSameFile({"--stats-json", s.stats_json_path}, inputs);
 }
 
 int RunRefinement(const RefineSettings& s) {
@@ -660,11 +667,16 @@ int RunRefinement(const RefineSettings& s) {
                                FormatSeconds(SecondsSince(phase_start))));
   };
   std::vector<io::PvdEntry> series;  // the iteration files written, for the .pvd
+  // The iteration files and their .pvd are renamed into place only once the output is written:
+  // a run that fails or is interrupted leaves a series of a run before as it was (an outside
+  // review found an interrupted re-run's first iterations under the old .pvd, and the message
+  // saying that nothing was written).
+  io::StagedFiles series_files;
   if (s.every_iteration) {
     callbacks.on_mesh = [&](int iteration, const Mesh& m) {
       if (!iteration_write.ok()) return;
       const std::string path = IterationPath(s.output_path, iteration);
-      iteration_write = WriteMeshReported(s, progress, path, WithQuality(m, tags));
+      iteration_write = WriteMeshReported(s, progress, path, WithQuality(m, tags), &series_files);
       series.push_back({.timestep = static_cast<double>(iteration), .file = path});
     };
   }
@@ -783,8 +795,12 @@ int RunRefinement(const RefineSettings& s) {
   if (!series_path.empty() && input_only)
     series.push_back({.timestep = 0.0, .file = s.output_path});
   if (!series_path.empty()) {
-    absl::Status pvd = io::WritePvd(series_path, series);
+    const std::string directory = std::filesystem::path(series_path).parent_path().string();
+    absl::Status pvd = series_files.Write(series_path, io::FormatPvd(series, directory));
     if (!pvd.ok()) return Fail(pvd, kExitUsage);
+  }
+  if (absl::Status committed = series_files.Commit(); !committed.ok()) {
+    return Fail(committed, kExitUsage);
   }
   if (!s.stats_json_path.empty()) {
     progress.Begin(absl::StrCat("writing ", s.stats_json_path));

@@ -167,7 +167,17 @@ absl::Status WriteInPlace(const std::string& path, absl::string_view content) {
 
 }  // namespace
 
-absl::Status WriteFileAtomically(const std::string& path, absl::string_view content) {
+namespace {
+
+// Where `path`'s content goes: written in place (a character device or FIFO), or to a
+// temporary beside the file behind its links, to be renamed over it (`temporary` and
+// `destination` set).
+struct Prepared {
+  bool in_place = false;
+  std::string temporary, destination;
+};
+
+absl::StatusOr<Prepared> WriteBeside(const std::string& path, absl::string_view content) {
   // Only a regular file (or none) is replaced. Renaming over a device or FIFO would destroy it:
   // `--output /dev/null`, or a link to it, turned /dev/null into a regular file (found by a
   // sweep as root, 2026-11-27). stat follows links as the kernel does, /proc's too: /dev/stdout
@@ -175,14 +185,18 @@ absl::Status WriteFileAtomically(const std::string& path, absl::string_view cont
   struct stat st;
   if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
     if (S_ISDIR(st.st_mode)) return ErrnoError(path, "cannot write", EISDIR);
-    if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) return WriteInPlace(path, content);
+    if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) {
+      if (absl::Status s = WriteInPlace(path, content); !s.ok()) return s;
+      return Prepared{.in_place = true, .temporary = "", .destination = ""};
+    }
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": not a regular file, character device or FIFO (",
         S_ISBLK(st.st_mode) ? "a block device" : "a socket", "): refusing to write over it"));
   }
-  const std::string destination = FileBehindLinks(path).string();
-  const std::string temporary = TemporaryNameFor(destination);
-  std::FILE* file = std::fopen(temporary.c_str(), "wb");
+  Prepared prepared;
+  prepared.destination = FileBehindLinks(path).string();
+  prepared.temporary = TemporaryNameFor(prepared.destination);
+  std::FILE* file = std::fopen(prepared.temporary.c_str(), "wb");
   if (file == nullptr) return ErrnoError(path, "cannot create temporary file", errno);
   const bool written = std::fwrite(content.data(), 1, content.size(), file) == content.size();
   int err = errno;
@@ -191,15 +205,56 @@ absl::Status WriteFileAtomically(const std::string& path, absl::string_view cont
   const bool closed = std::fclose(file) == 0;
   if (written && flushed && !closed) err = errno;
   if (!written || !flushed || !closed) {
-    std::remove(temporary.c_str());
+    std::remove(prepared.temporary.c_str());
     return ErrnoError(path, "write failed", err);
   }
-  if (std::rename(temporary.c_str(), destination.c_str()) != 0) {
-    err = errno;
-    std::remove(temporary.c_str());
+  return prepared;
+}
+
+absl::Status RenameIntoPlace(const std::string& path, const Prepared& prepared) {
+  if (std::rename(prepared.temporary.c_str(), prepared.destination.c_str()) != 0) {
+    const int err = errno;
+    std::remove(prepared.temporary.c_str());
     return ErrnoError(path, "cannot rename temporary file into place", err);
   }
   return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::Status WriteFileAtomically(const std::string& path, absl::string_view content) {
+  absl::StatusOr<Prepared> prepared = WriteBeside(path, content);
+  if (!prepared.ok()) return prepared.status();
+  if (prepared->in_place) return absl::OkStatus();
+  return RenameIntoPlace(path, *prepared);
+}
+
+StagedFiles::~StagedFiles() {
+  for (const Staged& f : staged_) std::remove(f.temporary.c_str());
+}
+
+absl::Status StagedFiles::Write(const std::string& path, absl::string_view content) {
+  absl::StatusOr<Prepared> prepared = WriteBeside(path, content);
+  if (!prepared.ok()) return prepared.status();
+  if (!prepared->in_place) {
+    staged_.push_back({path, prepared->temporary, prepared->destination});
+  }
+  return absl::OkStatus();
+}
+
+absl::Status StagedFiles::Commit() {
+  absl::Status first;
+  for (const Staged& f : staged_) {
+    if (!first.ok()) {
+      std::remove(f.temporary.c_str());
+      continue;
+    }
+    first = RenameIntoPlace(
+        f.path,
+        Prepared{.in_place = false, .temporary = f.temporary, .destination = f.destination});
+  }
+  staged_.clear();
+  return first;
 }
 
 }  // namespace tetrefine::io

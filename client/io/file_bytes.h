@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
@@ -44,5 +45,33 @@ absl::StatusOr<std::string> ReadFileMaybeGzip(const std::string& path);
 // link to one) is written into as it is, never replaced; a directory, block device or socket is
 // an error naming `path`.
 absl::Status WriteFileAtomically(const std::string& path, absl::string_view content);
+
+// Files that belong together (a .pvtu and its pieces, an --every-iteration series), written as
+// WriteFileAtomically writes one but renamed into place only by Commit(), all of them, in the
+// order written: a run that fails or is interrupted before Commit leaves every file it would
+// have replaced as it was. Destroyed uncommitted, it removes its temporaries. A character
+// device or FIFO is written into at once (nothing to rename). An outside review found a .pvtu
+// re-run that ran out of disk leaving the old index over two new pieces and two old ones, and
+// an interrupted --every-iteration run leaving new iteration files under the old series.
+class StagedFiles {
+ public:
+  StagedFiles() = default;
+  StagedFiles(const StagedFiles&) = delete;
+  StagedFiles& operator=(const StagedFiles&) = delete;
+  ~StagedFiles();
+
+  // Writes `content` beside `path` under a temporary name; errors name `path`.
+  absl::Status Write(const std::string& path, absl::string_view content);
+  // Renames every staged file into place. On a failure the rest are removed and the error
+  // names the file (the ones renamed before it stay: renames within a directory fail only
+  // when the file system does).
+  absl::Status Commit();
+
+ private:
+  struct Staged {
+    std::string path, temporary, destination;
+  };
+  std::vector<Staged> staged_;
+};
 
 }  // namespace tetrefine::io

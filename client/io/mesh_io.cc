@@ -259,6 +259,16 @@ absl::StatusOr<std::string> FormatMesh(const std::string& path, const MeshFile& 
   return all;
 }
 
+absl::Status StageMesh(const std::string& path, const MeshFile& file,
+                       const MeshWriteOptions& options, StagedFiles& staged) {
+  absl::StatusOr<std::vector<EncodedFile>> files = Encode(path, file, options);
+  if (!files.ok()) return files.status();
+  for (const EncodedFile& f : *files) {
+    if (absl::Status s = staged.Write(f.path, f.bytes); !s.ok()) return s;
+  }
+  return absl::OkStatus();
+}
+
 absl::Status WriteMesh(const std::string& path, const MeshFile& file,
                        const MeshWriteOptions& options) {
   absl::StatusOr<std::vector<EncodedFile>> files = Encode(path, file, options);

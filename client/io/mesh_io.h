@@ -5,6 +5,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "client/io/file_bytes.h"
 #include "client/io/mesh_file.h"
 #include "client/io/vtu_format.h"
 
@@ -45,6 +46,10 @@ struct MeshWriteOptions {
 // its coordinates whatever the format (LpsTagLost says when).
 absl::Status WriteMesh(const std::string& path, const MeshFile& file,
                        const MeshWriteOptions& options = {});
+// As WriteMesh, but into `staged` (client/io/file_bytes.h): the files are renamed into place
+// only by staged.Commit(), with the others staged there.
+absl::Status StageMesh(const std::string& path, const MeshFile& file,
+                       const MeshWriteOptions& options, StagedFiles& staged);
 
 // The bytes WriteMesh would write for `path` (the format from its extension), without writing
 // them: for callers that send or time the encoding on its own. For an .ele, its .node's bytes

@@ -67,6 +67,9 @@ absl::Status WritePvtu(const std::string& path, const std::vector<MeshFile>& pie
                        const VtuWriteOptions& options) {
   if (pieces.empty()) return absl::InvalidArgumentError(absl::StrCat(path, ": no pieces"));
   const std::string signature = ArraySignature(pieces[0]);
+  // Every piece and the index first, then all renamed into place: a failure leaves the files of
+  // a run before as they were, never its index over a mix of pieces.
+  StagedFiles staged;
   std::vector<std::string> sources;
   for (size_t k = 0; k < pieces.size(); ++k) {
     const std::string piece_path = PvtuPiecePath(path, static_cast<int>(k));
@@ -76,12 +79,13 @@ absl::Status WritePvtu(const std::string& path, const std::vector<MeshFile>& pie
           absl::StrCat(path, ": piece ", k, " holds the arrays [", ArraySignature(pieces[k]),
                        "], piece 0 [", signature, "]; an index declares one set for all"));
     }
-    if (absl::Status s = WriteFileAtomically(piece_path, FormatVtu(pieces[k], options)); !s.ok()) {
+    if (absl::Status s = staged.Write(piece_path, FormatVtu(pieces[k], options)); !s.ok()) {
       return s;
     }
     sources.push_back(std::filesystem::path(piece_path).filename().string());
   }
-  return WriteFileAtomically(path, FormatPvtu(pieces[0], sources));
+  if (absl::Status s = staged.Write(path, FormatPvtu(pieces[0], sources)); !s.ok()) return s;
+  return staged.Commit();
 }
 
 }  // namespace tetrefine::io

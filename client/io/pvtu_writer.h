@@ -22,8 +22,9 @@ std::string FormatPvtu(const MeshFile& like, const std::vector<std::string>& sou
 std::string PvtuPiecePath(const std::string& path, int k);
 
 // Writes each of `pieces` as a .vtu (FormatVtu with `options`) at PvtuPiecePath(path, k), then
-// the index at `path`; every file through a temporary renamed into place, the index last, so a
-// failure never leaves an index naming missing pieces. Pieces share no vertex numbering: a
+// the index at `path`; all of them to temporaries first, renamed into place together, the
+// index last (StagedFiles), so a failure leaves the files of a run before as they were, never an
+// index naming missing pieces or another run's. Pieces share no vertex numbering: a
 // vertex on the boundary of two pieces is in both (what VTK expects of pieces).
 // Errors: INVALID_ARGUMENT when there are no pieces, when a piece fails ValidateMeshFile (the
 // message names its file) or when the pieces do not hold the same arrays (named, with the

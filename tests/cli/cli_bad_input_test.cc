@@ -238,6 +238,10 @@ INSTANTIATE_TEST_SUITE_P(
                        {"refine", "--volume", "$D/image.vtk", "--mesh", "$D/m.vtu"}),
                 "$D/image.vtk: --output names the same file as --volume"},
         BadCase{
+            "StatsJsonIsTheInputsNodeFile",
+            RefineWith("--mesh", "$D/in.ele", {"--epsilon", "0.1", "--stats-json", "$D/in.node"}),
+            "$D/in.node: --stats-json names the same file as the .node file of --mesh"},
+        BadCase{
             "AnIterationFileIsTheMesh",
             RefineWith("--mesh", "$D/out.iter01.vtu", {"--epsilon", "0.1", "--every-iteration"}),
             "$D/out.iter01.vtu: --every-iteration's file of iteration 1 names the same file as "

@@ -15,6 +15,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_replace.h"
+#include "client/io/file_bytes.h"
 #include "client/io/gmsh_format.h"
 #include "client/io/mesh_io.h"
 #include "client/io/vtu_format.h"
@@ -307,6 +308,36 @@ TEST(IoMeshTest, FailedWriteLeavesOldFileAndNoTemporary) {
     ++files;
   }
   EXPECT_EQ(files, 1);
+}
+
+// Files staged together replace nothing until Commit, then all of them; staged files dropped
+// uncommitted leave the old files and no temporary; a FIFO or device is written at once.
+TEST(IoMeshTest, StagedFilesReplaceTheirFilesOnlyTogetherOnCommit) {
+  ScratchDir dir;
+  const std::vector<std::string> names = {dir.File("a.vtu"), dir.File("b.vtu"), dir.File("c.pvd")};
+  for (const std::string& name : names) ASSERT_TRUE(WriteFileAtomically(name, "old " + name).ok());
+  const auto count_files = [&] {
+    int files = 0;
+    for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+      ++files;
+    }
+    return files;
+  };
+  {
+    StagedFiles staged;
+    for (const std::string& name : names) ASSERT_TRUE(staged.Write(name, "new " + name).ok());
+    ASSERT_TRUE(staged.Write("/dev/null", "into the device at once").ok());
+    for (const std::string& name : names) EXPECT_EQ(iotest::ReadBytes(name), "old " + name);
+  }  // dropped: a run that failed or was interrupted
+  for (const std::string& name : names) EXPECT_EQ(iotest::ReadBytes(name), "old " + name);
+  EXPECT_EQ(count_files(), 3) << "a temporary was left behind";
+  StagedFiles staged;
+  for (const std::string& name : names) ASSERT_TRUE(staged.Write(name, "new " + name).ok());
+  const absl::Status refused = staged.Write(dir.File("no/such/dir/d.vtu"), "x");
+  EXPECT_THAT(std::string(refused.message()), HasSubstr("d.vtu"));
+  ASSERT_TRUE(staged.Commit().ok());
+  for (const std::string& name : names) EXPECT_EQ(iotest::ReadBytes(name), "new " + name);
+  EXPECT_EQ(count_files(), 3);
 }
 
 // Gmsh's $PhysicalNames of volume groups are the regions' names: read, and written back to .msh
