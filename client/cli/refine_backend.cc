@@ -23,11 +23,15 @@ namespace {
 struct ServerSizes {
   size_t chunk_bytes = 0;
   int64_t max_output_tets = 0;
+  // Per server, its max_concurrent_refinements (0: unknown, or down).
+  std::vector<int> max_concurrent;
 };
 absl::StatusOr<ServerSizes> AskServerSizes(
     const std::vector<std::shared_ptr<grpc::Channel>>& channels, const std::string& token,
     const std::function<void(size_t index, const absl::Status& status)>& unreachable = nullptr) {
-  ServerSizes sizes{.chunk_bytes = client::CallOptions{}.chunk_bytes, .max_output_tets = 0};
+  ServerSizes sizes{.chunk_bytes = client::CallOptions{}.chunk_bytes,
+                    .max_output_tets = 0,
+                    .max_concurrent = std::vector<int>(channels.size(), 0)};
   bool every_limit_known = true;
   std::vector<std::pair<size_t, absl::Status>> down;
   for (size_t i = 0; i < channels.size(); ++i) {
@@ -45,6 +49,7 @@ absl::StatusOr<ServerSizes> AskServerSizes(
     sizes.chunk_bytes =
         std::min(sizes.chunk_bytes,
                  client::ChunkBytesFor(info->limits.max_message_bytes, sizes.chunk_bytes));
+    sizes.max_concurrent[i] = info->limits.max_concurrent_refinements;
     const int64_t limit = info->limits.max_output_tets;
     if (limit <= 0) every_limit_known = false;
     sizes.max_output_tets =
@@ -119,7 +124,7 @@ class ShardedBackend : public RefineBackend {
     call_.chunk_bytes = live->chunk_bytes;
     return sharding::RefineSharded(live->channels, volume, mesh,
                                    WithTheServersBudget(options, *live), shards_, callbacks, call_,
-                                   live->addresses);
+                                   live->addresses, live->max_concurrent);
   }
 
   absl::StatusOr<sharding::ShardedResult> RefineInPieces(
@@ -130,7 +135,7 @@ class ShardedBackend : public RefineBackend {
     call_.chunk_bytes = live->chunk_bytes;
     return sharding::RefineShardedInPieces(live->channels, volume, mesh,
                                            WithTheServersBudget(options, *live), shards_, callbacks,
-                                           call_, live->addresses);
+                                           call_, live->addresses, live->max_concurrent);
   }
 
  private:
@@ -139,6 +144,7 @@ class ShardedBackend : public RefineBackend {
     int64_t max_output_tets = 0;  // the smallest limit of the servers, 0 when one did not say
     std::vector<std::shared_ptr<grpc::Channel>> channels;
     std::vector<std::string> addresses;
+    std::vector<int> max_concurrent;  // parallel to channels: their concurrent call limits
   };
 
   // Without --max-tets the run's budget is the smallest output limit of the servers that
@@ -177,6 +183,7 @@ class ShardedBackend : public RefineBackend {
       if (down[i]) continue;
       live.channels.push_back(channels_[i]);
       live.addresses.push_back(addresses_[i]);
+      live.max_concurrent.push_back(sizes->max_concurrent[i]);
     }
     return live;
   }

@@ -225,8 +225,12 @@ class PartRunner {
         max_attempts_(shard.max_attempts > 0 ? shard.max_attempts
                                              : std::max(3, 2 * static_cast<int>(targets.size()))) {
     for (size_t t = 0; t < targets.size(); ++t) {
-      open_calls_.push_back(std::make_unique<std::counting_semaphore<kMaxOpenCallsPerTarget>>(
-          kMaxOpenCallsPerTarget));
+      std::ptrdiff_t open = kMaxOpenCallsPerTarget;
+      if (t < shard.max_open_calls.size() && shard.max_open_calls[t] > 0) {
+        open = std::min<std::ptrdiff_t>(open, shard.max_open_calls[t]);
+      }
+      open_calls_.push_back(
+          std::make_unique<std::counting_semaphore<kMaxOpenCallsPerTarget>>(open));
     }
   }
 
@@ -816,7 +820,7 @@ absl::StatusOr<ShardedResult> RefineShardedFor(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
     const client::RefineCallbacks& callbacks, const client::CallOptions& call, bool keep_pieces,
-    const std::vector<std::string>& target_names) {
+    const std::vector<std::string>& target_names, const std::vector<int>& max_open_calls) {
   if (callbacks.on_mesh) {
     return absl::UnimplementedError("sharded refinement does not stream intermediate meshes");
   }
@@ -825,6 +829,7 @@ absl::StatusOr<ShardedResult> RefineShardedFor(
   shard.call = call;
   shard.keep_pieces = keep_pieces;
   shard.target_names = target_names;
+  shard.max_open_calls = max_open_calls;
   ShardCallbacks sharded;
   sharded.should_cancel = callbacks.should_cancel;
   sharded.on_iteration = callbacks.on_iteration;
@@ -851,9 +856,9 @@ absl::StatusOr<client::ClientResult> RefineSharded(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
     const client::RefineCallbacks& callbacks, const client::CallOptions& call,
-    const std::vector<std::string>& target_names) {
-  absl::StatusOr<ShardedResult> result = RefineShardedFor(targets, volume, mesh, options, shards,
-                                                          callbacks, call, false, target_names);
+    const std::vector<std::string>& target_names, const std::vector<int>& max_open_calls) {
+  absl::StatusOr<ShardedResult> result = RefineShardedFor(
+      targets, volume, mesh, options, shards, callbacks, call, false, target_names, max_open_calls);
   if (!result.ok()) return result.status();
   return std::move(result->reply);
 }
@@ -862,9 +867,9 @@ absl::StatusOr<ShardedResult> RefineShardedInPieces(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
     const client::RefineCallbacks& callbacks, const client::CallOptions& call,
-    const std::vector<std::string>& target_names) {
+    const std::vector<std::string>& target_names, const std::vector<int>& max_open_calls) {
   return RefineShardedFor(targets, volume, mesh, options, shards, callbacks, call, true,
-                          target_names);
+                          target_names, max_open_calls);
 }
 
 }  // namespace tetrefine::sharding

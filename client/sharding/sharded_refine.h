@@ -57,6 +57,11 @@ struct ShardOptions {
   bool keep_pieces = false;
   // The targets' names for messages ("server host:port"); empty: "server 2 of 3".
   std::vector<std::string> target_names;
+  // Per target (parallel to the targets), the most calls to have open on it at once: its
+  // max_concurrent_refinements (GetServerInfo), so that parts wait here rather than in its
+  // queue, where they timed out and failed the run on a server with --max_concurrent 1 (an
+  // outside review). 0 or missing: 8 (the most ever opened on one target).
+  std::vector<int> max_open_calls;
 };
 
 struct ShardCallbacks {
@@ -151,11 +156,12 @@ absl::StatusOr<ShardedResult> ShardedRefine(
 // ShardCallbacks::on_iteration does (the parts' own iterations are not forwarded);
 // callbacks.on_warning is told of each part retried on another server, naming both by
 // `target_names` (parallel to `targets`; "server k" when empty); on_mesh is UNIMPLEMENTED.
+// `max_open_calls`: ShardOptions::max_open_calls.
 absl::StatusOr<client::ClientResult> RefineSharded(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
     const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {},
-    const std::vector<std::string>& target_names = {});
+    const std::vector<std::string>& target_names = {}, const std::vector<int>& max_open_calls = {});
 
 // As RefineSharded, with ShardOptions::keep_pieces: the whole ShardedResult, whose reply has no
 // mesh and whose pieces hold the result (for a .pvtu written piece by piece).
@@ -163,7 +169,7 @@ absl::StatusOr<ShardedResult> RefineShardedInPieces(
     const std::vector<std::shared_ptr<grpc::Channel>>& targets, const Volume& volume,
     const Mesh& mesh, const client::RefineRequestOptions& options, int shards,
     const client::RefineCallbacks& callbacks = {}, const client::CallOptions& call = {},
-    const std::vector<std::string>& target_names = {});
+    const std::vector<std::string>& target_names = {}, const std::vector<int>& max_open_calls = {});
 
 // One channel per address ("host:port", or any gRPC target such as "dns:///name:port").
 std::vector<std::shared_ptr<grpc::Channel>> ChannelsFor(

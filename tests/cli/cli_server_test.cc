@@ -250,6 +250,26 @@ TEST_F(CliServer, AShardedRunDoesNotRetryARefusedOptionAndTakesSpacedAddresses) 
   EXPECT_FALSE(absl::StrContains(run.err, "unreachable")) << run.err;
 }
 
+// A server that runs one refinement at a time gets one part at a time: the others wait in the
+// client, not in its queue, where they timed out (RESOURCE_EXHAUSTED), were retried and failed
+// the run (an outside review: --max_concurrent 1 --queue_seconds 1, four parts).
+TEST_F(CliServer, ASerialServerGetsOnePartAtATime) {
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--threads=1", "--max_concurrent=1", "--queue_seconds=0.02"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  const ServerProcess& serial = **started;
+  const std::string mesh = dir_.File("finer.vtu");
+  WriteMeshFile(mesh, testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {6, 6, 6}));
+  const std::vector<std::string> args = {
+      "refine",    "--volume", volume_,         "--mesh",   mesh,
+      "--epsilon", "0.005",    "--scheme",      "paper",    "--shards",
+      "4",         "--server", serial.target(), "--output", dir_.File("serial.vtu")};
+  const ProcessResult run = RunTetrefine(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_FALSE(absl::StrContains(run.err, "retrying")) << run.err;
+  EXPECT_FALSE(absl::StrContains(run.err, "RESOURCE_EXHAUSTED")) << run.err;
+}
+
 TEST_F(CliServer, ServerSideValidationErrorNamesTheMesh) {
   // Two tets above one triangle: a face in three tets, which only the service's check finds.
   Mesh bad;
