@@ -69,8 +69,12 @@ absl::Status CheckOutputPath(const std::string& path, const std::string& flag, b
   std::filesystem::path parent = std::filesystem::path(path).parent_path();
   if (parent.empty()) parent = ".";
   if (!std::filesystem::is_directory(parent, ec)) {
+    // A file where the directory should be was "does not exist" (an outside review).
+    const bool exists = std::filesystem::exists(parent, ec);
     return absl::InvalidArgumentError(
-        absl::StrCat(path, ": directory ", parent.string(), " does not exist (", flag, ")"));
+        exists
+            ? absl::StrCat(path, ": ", parent.string(), " is not a directory (", flag, ")")
+            : absl::StrCat(path, ": directory ", parent.string(), " does not exist (", flag, ")"));
   }
   if (access(parent.c_str(), W_OK) != 0) {
     return absl::InvalidArgumentError(

@@ -212,6 +212,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"OutputDirectoryMissing", RefineWith("--output", "$D/no/such/out.vtu"),
                 "$D/no/such/out.vtu"},
         BadCase{"OutputIsADirectory", RefineWith("--output", "$D/adir.vtu"), "$D/adir.vtu"},
+        BadCase{"OutputUnderAFile", RefineWith("--output", "$D/m.msh/out.vtu"),
+                "$D/m.msh/out.vtu: $D/m.msh is not a directory (--output)"},
         BadCase{"StatsDirectoryMissing",
                 Refine({"--epsilon", "0.1", "--stats-json", "$D/no/stats.json"}),
                 "$D/no/stats.json"},
