@@ -91,6 +91,15 @@ absl::Status CheckTargetPorts(const std::string& address) {
   absl::string_view rest = address;
   // Only the resolvers that take host:port lists; unix:, vsock: and the like have no port.
   bool list = false;
+  // A web address is not a gRPC target: gRPC took "http://host:port" for a host name, and the
+  // run failed with a DNS error, exit 1 (an outside review).
+  for (absl::string_view scheme : {"http://", "https://", "grpc://", "grpcs://"}) {
+    if (absl::StartsWithIgnoreCase(rest, scheme)) {
+      return absl::InvalidArgumentError(absl::StrCat("--server: '", address,
+                                                     "' is a URL; write host:port without ", scheme,
+                                                     " (--tls for an encrypted connection)"));
+    }
+  }
   if (absl::ConsumePrefix(&rest, "dns:")) {
     if (absl::ConsumePrefix(&rest, "//")) {  // dns://authority/host:port
       const size_t slash = rest.find('/');

@@ -253,6 +253,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"TlsCertWithoutKey",
                 Refine({"--epsilon", "0.1", "--server", "127.0.0.1:1", "--tls-cert", "$D/c.pem"}),
                 "--tls-key"},
+        BadCase{"ServerIsAUrl", Refine({"--epsilon", "0.1", "--server", "http://127.0.0.1:50051"}),
+                "--server: 'http://127.0.0.1:50051' is a URL; write host:port without http://"},
         BadCase{"ServerPortOutOfRange",
                 Refine({"--epsilon", "0.1", "--server", "127.0.0.1:1,127.0.0.1:65536"}),
                 "--server: port 65536 of '127.0.0.1:65536' is out of range"},
