@@ -14,18 +14,18 @@
 namespace tetrefine::cli {
 namespace {
 
-// What the servers behind `channels` take together: the request chunk size the smallest of
-// their message limits allows, and the smallest of their output tet limits (0 when a server
-// does not say). A server without GetServerInfo (UNIMPLEMENTED) gets the default chunk and
-// leaves the tet limit unknown. With `unreachable` set (a sharded run, whose parts move to the
-// next server when one is down), an UNAVAILABLE server is passed to it and skipped, unless no
-// server answers at all.
+// What a list of servers takes (GetServerInfo of each).
 struct ServerSizes {
-  size_t chunk_bytes = 0;
-  int64_t max_output_tets = 0;
+  size_t chunk_bytes = 0;       // the request chunk the smallest message limit allows
+  int64_t max_output_tets = 0;  // the smallest output tet limit; 0 when a server does not say
   // Per server, its max_concurrent_refinements (0: unknown, or down).
   std::vector<int> max_concurrent;
 };
+
+// The ServerSizes of the servers behind `channels`. A server without GetServerInfo
+// (UNIMPLEMENTED) gets the default chunk and leaves the tet limit unknown. With `unreachable`
+// set (a sharded run, whose parts move to the next server when one is down), an UNAVAILABLE
+// server is passed to it and skipped, unless no server answers at all.
 absl::StatusOr<ServerSizes> AskServerSizes(
     const std::vector<std::shared_ptr<grpc::Channel>>& channels, const std::string& token,
     const std::function<void(size_t index, const absl::Status& status)>& unreachable = nullptr) {
