@@ -447,6 +447,13 @@ std::vector<NamedPath> FilesWritten(const RefineSettings& s) {
 // input mesh, or the volume with a tet mesh, with exit 0 (a second review). The message names
 // both flags, as for --stats-json.
 absl::Status CheckWrittenFilesAreNoInput(const RefineSettings& s) {
+  // "--output .vtu": a name that is all extension gave ".vtu.iter01", refused only after the
+  // first iteration (an outside review).
+  if (s.every_iteration && !io::IsWritableMeshPath(IterationPath(s.output_path, 1))) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        s.output_path, ": --output needs a name before its extension with --every-iteration, ",
+        "which writes <name>.iterNN.<extension> beside it"));
+  }
   std::vector<NamedPath> inputs = {{"--volume", s.volume_path}, {"--mesh", s.mesh_path}};
   if (absl::EndsWithIgnoreCase(s.mesh_path, ".ele")) {
     inputs.push_back({"the .node file of --mesh", io::TetgenNodePath(s.mesh_path)});

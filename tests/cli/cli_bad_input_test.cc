@@ -243,6 +243,9 @@ INSTANTIATE_TEST_SUITE_P(
             "StatsJsonIsTheInputsNodeFile",
             RefineWith("--mesh", "$D/in.ele", {"--epsilon", "0.1", "--stats-json", "$D/in.node"}),
             "$D/in.node: --stats-json names the same file as the .node file of --mesh"},
+        BadCase{"AnIterationSeriesOfANameThatIsAllExtension",
+                RefineWith("--output", "$D/.vtu", {"--epsilon", "0.1", "--every-iteration"}),
+                "$D/.vtu: --output needs a name before its extension with --every-iteration"},
         BadCase{
             "AnIterationFileIsTheMesh",
             RefineWith("--mesh", "$D/out.iter01.vtu", {"--epsilon", "0.1", "--every-iteration"}),
