@@ -724,7 +724,9 @@ absl::Status AbaqusParser::AssignLabels(MeshFile& file, const std::vector<size_t
     if (!numbered) label[i] = static_cast<int32_t>(i + 1);
     std::string name;
     for (char c : taken[i]->name) {
-      if (c != '"' && static_cast<unsigned char>(c) >= 0x20) name += c;
+      // Control characters (DEL too: the fuzzer found one that ValidateMeshFile then refused)
+      // cannot be in a region name.
+      if (c != '"' && static_cast<unsigned char>(c) >= 0x20 && c != 0x7f) name += c;
     }
     file.region_names[label[i]] = name;
   }

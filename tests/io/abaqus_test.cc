@@ -95,6 +95,21 @@ TEST(IoAbaqusTest, CalculixStyleInputReads) {
   EXPECT_EQ(file->region_names.at(8), "Rim8");
 }
 
+// A set name with a control character, DEL included, is a region name without it (the fuzzer
+// found a DEL that the reader kept and ValidateMeshFile then refused).
+TEST(IoAbaqusTest, ControlCharactersLeaveSetNames) {
+  std::string text(kCalculix);
+  const size_t at = text.find("Core3");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 5,
+               "Co\x7fre\x01"
+               "3");
+  absl::StatusOr<MeshFile> file = ParseAbaqus(text, "c.inp");
+  ASSERT_TRUE(file.ok()) << file.status();
+  EXPECT_EQ(file->region_names.at(3), "Core3");
+  EXPECT_TRUE(ValidateMeshFile(*file, "c.inp").ok());
+}
+
 TEST(IoAbaqusTest, OverlappingSetsGiveTheFirstAndUnnumberedSetsCount) {
   const std::string head =
       "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n5,1,1,1\n6,2,2,2\n"
