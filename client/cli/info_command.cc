@@ -169,6 +169,10 @@ int MeshInfo(const std::string& path) {
   if (!file->dropped_arrays.empty()) {
     rows.push_back({"not read", absl::StrJoin(file->dropped_arrays, ", ")});
   }
+  if (!file->skipped_cells.empty()) {
+    rows.push_back({"skipped cells", absl::StrCat(io::SkippedCellsText(*file),
+                                                  " (not tetrahedra: not read, not refined)")});
+  }
   if (file->ghost_cells_skipped > 0) {
     rows.push_back({"ghost cells", absl::StrCat(file->ghost_cells_skipped,
                                                 " skipped (VTK ghost cells: copies of another "

@@ -545,6 +545,7 @@ absl::Status AbaqusParser::Structure(const Keyword& k, int64_t line, bool& handl
 
 absl::StatusOr<MeshFile> AbaqusParser::Assemble() {
   MeshFile file;
+  file.skipped_cells = census_.SkippedCells();
   // The parts placed, in order: a flat file's own, or each instance's part.
   std::vector<size_t> placed;
   std::vector<uint32_t> tet_offset;

@@ -43,6 +43,14 @@ int64_t CellCensus::skipped() const {
   return n;
 }
 
+std::map<std::string, int64_t> CellCensus::SkippedCells() const {
+  std::map<std::string, int64_t> out;
+  for (const auto& [name, entry] : kinds_) {
+    if (entry.kind.fate == CellFate::kSkip) out[name] = entry.count;
+  }
+  return out;
+}
+
 absl::Status CellCensus::Check(absl::string_view path) const {
   std::vector<std::string> unsupported;
   std::vector<std::string> skipped;

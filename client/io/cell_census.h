@@ -41,6 +41,9 @@ class CellCensus {
 
   int64_t tets() const { return tets_; }
   int64_t skipped() const;
+  // The skipped cells' counts by kind (plural name), e.g. {"lines": 1, "triangles": 180}: for
+  // MeshFile::skipped_cells.
+  std::map<std::string, int64_t> SkippedCells() const;
 
  private:
   struct Entry {

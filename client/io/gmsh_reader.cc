@@ -991,6 +991,7 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
   }
   const auto at = [&](size_t i) { return order.empty() ? i : order[i]; };
   MeshFile file;
+  file.skipped_cells = census.SkippedCells();
   file.mesh.points = std::move(points_);
   file.mesh.values = std::move(values_);
   ReserveHuge(file.mesh.tets, t);

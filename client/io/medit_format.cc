@@ -167,6 +167,7 @@ absl::StatusOr<MeshFile> ParseMedit(absl::string_view text, absl::string_view pa
   if (!have_vertices) return in.Error("no Vertices section (not a Medit mesh?)");
   census.AddTets(static_cast<int64_t>(mesh.tets.size()));
   if (absl::Status s = census.Check(path); !s.ok()) return s;
+  file.skipped_cells = census.SkippedCells();
   // A volume mesh without its tets is more likely cut short than meant.
   if (!have_tets) return in.Error("no Tetrahedra section (truncated, or a surface mesh?)");
   file.label_name = "medit:ref";

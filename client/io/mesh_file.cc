@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 #include "client/io/io_error.h"
 #include "client/io/label_names.h"
 
@@ -24,6 +27,13 @@ absl::string_view FrameTag(MeshFrame frame) {
 
 std::string DroppedArray(bool point_data, absl::string_view name) {
   return absl::StrCat(point_data ? "point" : "cell", " data \"", name, "\"");
+}
+
+std::string SkippedCellsText(const MeshFile& file) {
+  std::vector<std::string> kinds;
+  for (const auto& [kind, count] : file.skipped_cells)
+    kinds.push_back(absl::StrCat(kind, ": ", count));
+  return absl::StrJoin(kinds, ", ");
 }
 
 void DropNonFiniteDerivedArrays(MeshFile* file) {

@@ -154,6 +154,7 @@ class MeshbReader {
     if (!have_vertices) return Error("no Vertices keyword (not a volume mesh?)");
     census.AddTets(static_cast<int64_t>(file.mesh.tets.size()));
     if (absl::Status s = census.Check(path_); !s.ok()) return s;
+    file.skipped_cells = census.SkippedCells();
     if (!have_tets) return Error("no Tetrahedra keyword (truncated, or a surface mesh?)");
     file.label_name = "medit:ref";
     DropNonFiniteDerivedArrays(&file);

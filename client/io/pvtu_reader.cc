@@ -105,6 +105,7 @@ absl::StatusOr<MeshFile> MergePvtuPieces(std::vector<MeshFile> pieces,
     out.tet_quality.insert(out.tet_quality.end(), piece.tet_quality.begin(),
                            piece.tet_quality.end());
     out.ghost_cells_skipped += piece.ghost_cells_skipped;
+    for (const auto& [kind, count] : piece.skipped_cells) out.skipped_cells[kind] += count;
     for (std::string& dropped : piece.dropped_arrays) {
       if (std::find(out.dropped_arrays.begin(), out.dropped_arrays.end(), dropped) ==
           out.dropped_arrays.end()) {

@@ -116,6 +116,7 @@ absl::Status CellsToTets(const VtkCells& cells, const VtkCellData& data, size_t 
   census.AddTets(tets);
   for (const auto& [type, count] : other_types) census.Add(VtkCellKind(type), count);
   if (absl::Status s = census.Check(path); !s.ok()) return s;
+  file.skipped_cells = census.SkippedCells();
 
   Mesh& mesh = file.mesh;
   mesh.tets.clear();

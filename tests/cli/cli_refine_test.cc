@@ -392,6 +392,21 @@ TEST_F(CliRefine, ArraysNotCarriedToTheOutputAreNamed) {
       run.err,
       mesh + R"(: not carried to the output: cell data "density", point data "temperature")"))
       << run.err;
+  // Boundary cells too (a Gmsh physical surface's triangles, boundary conditions): they were
+  // dropped without a word (an outside review, 2026-11-29).
+  const std::string with_triangles = dir_.File("with_triangles.msh");
+  io::iotest::WriteBytes(with_triangles,
+                         "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 1 1 1\n2 7 1 1\n"
+                         "3 1 7 1\n4 1 1 7\n$EndNodes\n$Elements\n3\n1 4 2 1 1 1 2 3 4\n"
+                         "2 2 2 7 2 1 2 3\n3 2 2 7 2 1 2 4\n$EndElements\n");
+  const ProcessResult triangles =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", with_triangles, "--epsilon", "0.1",
+                    "--output", dir_.File("with_triangles_out.msh")});
+  ASSERT_EQ(triangles.exit_code, 0) << triangles.err;
+  EXPECT_TRUE(absl::StrContains(
+      triangles.err, with_triangles + ": not carried to the output: the cells that are not "
+                                      "tetrahedra (triangles: 2;"))
+      << triangles.err;
   // An input that is refused has no output to warn about: with --quiet its error is the only
   // line. The warnings came first, and an LPS-tagged input's said its output was "written"
   // (found by a file-format sweep).

@@ -217,6 +217,9 @@ TEST(IoMeshTest, ReadsGmsh22WithOtherElementsAndSparseTags) {
   EXPECT_EQ(file->mesh.tets[1], (Tet{1, 2, 3, 4}));
   EXPECT_EQ(file->mesh.values, (std::vector<double>{1.5, 2.5, 3.5, 4.5, 5.5}));
   EXPECT_EQ(file->tet_iteration, (std::vector<int32_t>{3, 4}));
+  // Said, not dropped in silence (the CLI prints them).
+  EXPECT_EQ(file->skipped_cells, (std::map<std::string, int64_t>{{"points", 1}, {"triangles", 1}}));
+  EXPECT_EQ(SkippedCellsText(*file), "points: 1, triangles: 1");
   GmshReadInfo info;
   ASSERT_TRUE(ParseGmsh(iotest::ReadBytes(path), path, &info).ok());
   EXPECT_EQ(info.ignored_elements, 2);
@@ -267,6 +270,7 @@ TEST(IoMeshTest, ReadsAsciiVtuWithOtherCells) {
   EXPECT_EQ(file->dropped_arrays,
             (std::vector<std::string>{R"(cell data "region")", R"(cell data "density")",
                                       R"(point data "other")"}));
+  EXPECT_EQ(file->skipped_cells, (std::map<std::string, int64_t>{{"triangles", 1}}));
 }
 
 TEST(IoMeshTest, ReadsLegacyVtk51AndFieldData) {
