@@ -940,7 +940,9 @@ const CommandSpec& RefineSpec() {
                  "longest-edge keeps new tets at 0.5 Q mean ratio where it can, in (0, 1] "
                  "(default: the input's worst tet; pass the first input's when refining a "
                  "result again)"},
-                {"clamp", "", "sample vertices outside the volume at the nearest point of its box"},
+                {"clamp", "",
+                 "sample vertices outside the volume at the nearest point of its grid, indices "
+                 "clamped (for a sheared grid not always the nearest world point)"},
                 {"fix-orientation", "", "flip inverted input tets instead of refusing the mesh"},
                 {"fit-mesh-to-volume", "",
                  "scale and move the mesh (per axis) to fill the volume's box less one voxel "

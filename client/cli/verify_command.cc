@@ -99,7 +99,9 @@ const CommandSpec& VerifySpec() {
               {"mesh", "FILE", "tet mesh: .vtu .pvtu .vtk .msh .mesh .meshb .ele .inp", true},
               {"epsilon", "E", "tolerance for the share of lattice points above it (default 0.1)"},
               {"norm-coeff", "X", "normCoeff of the error (default: the volume's max - min)"},
-              {"clamp", "", "accept vertices outside the volume, sampled at the nearest point"},
+              {"clamp", "",
+               "accept vertices outside the volume, sampled at the nearest point of its grid, "
+               "indices clamped"},
           },
       .positional = ""};
   return spec;

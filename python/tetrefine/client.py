@@ -288,7 +288,8 @@ class Client:
           timeout: seconds for the whole call (DEADLINE_EXCEEDED after that); None (or inf):
             no limit.
           norm_coeff: normCoeff of eq. 3 (default: the volume's max - min).
-          clamp: sample vertices outside the volume at the nearest point of its box.
+          clamp: sample vertices outside the volume at the nearest point of its grid (indices
+            clamped; for a sheared grid not always the nearest world point).
           fix_orientation: flip inverted tets instead of refusing them.
           quality_reference: the mean ratio in (0, 1] the longest-edge scheme keeps new tets at
             half of where it can (default: the input's worst tet; pass the first input's when
