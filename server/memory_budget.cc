@@ -1,5 +1,6 @@
 #include "server/memory_budget.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -72,6 +73,39 @@ std::optional<int64_t> CgroupMemoryLimit(const std::string& root_in) {
 int64_t PhysicalMemoryBytes() {
   return static_cast<int64_t>(sysconf(_SC_PHYS_PAGES)) *
          static_cast<int64_t>(sysconf(_SC_PAGESIZE));
+}
+
+namespace {
+
+// A "kB" field of /proc/self/status, in bytes; nullopt when it cannot be read.
+std::optional<int64_t> OwnStatusBytes(absl::string_view field) {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);) {
+    absl::string_view rest = line;
+    if (!absl::ConsumePrefix(&rest, field) || !absl::ConsumePrefix(&rest, ":")) continue;
+    rest = absl::StripAsciiWhitespace(rest);
+    if (!absl::ConsumeSuffix(&rest, "kB")) return std::nullopt;
+    int64_t kb = 0;
+    if (!absl::SimpleAtoi(absl::StripAsciiWhitespace(rest), &kb)) return std::nullopt;
+    return kb * 1024;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<int64_t> AddressSpaceLeft() {
+  std::optional<int64_t> left;
+  for (const auto& [resource, field] : {std::pair{RLIMIT_AS, "VmSize"}, {RLIMIT_DATA, "VmData"}}) {
+    rlimit limit{};
+    if (getrlimit(resource, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) continue;
+    const int64_t cap =
+        static_cast<int64_t>(std::min<rlim_t>(limit.rlim_cur, static_cast<rlim_t>(kNoLimitAbove)));
+    if (cap >= kNoLimitAbove) continue;
+    const int64_t here = std::max<int64_t>(0, cap - OwnStatusBytes(field).value_or(0));
+    left = std::min(left.value_or(here), here);
+  }
+  return left;
 }
 
 int64_t BudgetForLimit(int64_t limit_bytes) {

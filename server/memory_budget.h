@@ -17,6 +17,15 @@ std::optional<int64_t> CgroupMemoryLimit(const std::string& root = "/");
 // Physical memory of the machine, bytes.
 int64_t PhysicalMemoryBytes();
 
+// What the soft resource limits on address space leave this process, bytes: the smaller of
+// RLIMIT_AS less the address space mapped now (VmSize) and RLIMIT_DATA less the data mapped now
+// (VmData), never below 0; nullopt when neither is set. Why: `ulimit -v` is how batch systems
+// and shared hosts bound a job's memory, and under it an allocation fails long before the
+// machine or the cgroup runs out. Sized from physical memory alone, a server under
+// `ulimit -v 2000000` offered 32 M-tet calls and the first large one ended the whole process on
+// std::bad_alloc (outside review, 2026-11-29).
+std::optional<int64_t> AddressSpaceLeft();
+
 // The part of a memory limit the calls may reserve: the limit less what the process needs
 // besides its calls (code, gRPC and TBB threads, allocator slack): max(256 MiB, 10% of it).
 // Why: an idle tetrefine_server has 30-40 MB resident; the rest covers fragmentation, which

@@ -1,6 +1,7 @@
 #include "server/refine_call.h"
 
 #include <algorithm>
+#include <new>
 #include <span>
 #include <thread>
 #include <utility>
@@ -300,7 +301,18 @@ void RefineCall::StartRefinement() {
 }
 
 void RefineCall::Work() {
-  const grpc::Status status = Refine();
+  grpc::Status status;
+  try {
+    status = Refine();
+  } catch (const std::bad_alloc&) {
+    // Refine catches a failed allocation of the refinement itself; this one came while the
+    // call prepared it or wrote its result.
+    if (!slot_released_) env_.gate->ReleaseSlot(identity_);
+    slot_released_ = true;
+    status = grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                          "out of memory while preparing or writing this call's result: this "
+                          "server could not allocate more; ask for less or retry");
+  }
   {
     std::lock_guard<std::mutex> lock(mu_);
     finish_claimed_ = true;  // from the start of the refinement, only this thread finishes
@@ -340,7 +352,9 @@ grpc::Status RefineCall::Refine() {
   options.threads = env_.config->refine_threads;
   wire::ResponseWriter writer(request_options.response_chunk_bytes,
                               [this](const v1::RefineResponse& r) { return BlockingWrite(r); });
+  int iterations_done = 0;
   options.on_iteration = [&](const IterationStats& stats, const Mesh& mesh) {
+    iterations_done = stats.iteration;
     if (broken_.load()) return;
     bool ok = writer.WriteIterationStats(stats);
     if (ok && request_options.stream_every_iteration) {
@@ -353,10 +367,23 @@ grpc::Status RefineCall::Refine() {
   absl::StatusOr<RefineResult> result;
   {
     ServiceMetrics::InFlight in_flight(env_.config->metrics.get());
-    result = tetrefine::Refine(input_->volume, input_->mesh, options);
+    // An allocation that fails ends this call, not the process: uncaught, std::bad_alloc
+    // terminated the server and every call in it (an outside review, 2026-11-29: a server under
+    // `ulimit -v`, one request at a small epsilon). The core holds no lock or shared state
+    // across an allocation, and TBB carries the exception out of its parallel loops; what the
+    // call allocated is freed on the way.
+    try {
+      result = tetrefine::Refine(input_->volume, input_->mesh, options);
+    } catch (const std::bad_alloc&) {
+      result = absl::ResourceExhaustedError(absl::StrCat(
+          "out of memory during the refinement, after ", iterations_done,
+          " iterations: this server could not allocate more (its memory limit, or another "
+          "call's share of it); ask for less (a larger epsilon, a lower max_tets) or retry"));
+    }
   }
   // The CPU work is done: the slot goes to the next call while this one writes its result.
   env_.gate->ReleaseSlot(identity_);
+  slot_released_ = true;
   input_.reset();
   if (!result.ok()) return wire::ToGrpcStatus(result.status());
   iterations_ = static_cast<int>(result->iterations.size());

@@ -113,6 +113,7 @@ class RefineCall final : public grpc::ServerBidiReactor<v1::RefineRequest, v1::R
   double input_seconds_ = 0.0;
   int64_t tets_out_ = 0;
   int iterations_ = 0;
+  bool slot_released_ = false;  // the refinement slot went back to the gate (Work's thread only)
   // Set by Admit: the reservation the refinement waits for, its input part and its tet budget.
   int64_t worst_case_bytes_ = 0;
   int64_t worst_case_input_bytes_ = 0;

@@ -114,7 +114,8 @@ ABSL_FLAG(int, max_slots_per_identity, 0,
           "take every slot");
 ABSL_FLAG(int64_t, memory_limit_bytes, 0,
           "Memory this server may use in all (0: the cgroup limit, memory.max or "
-          "memory.limit_in_bytes, else the machine's physical memory)");
+          "memory.limit_in_bytes, else the machine's physical memory; or what ulimit -v / -d "
+          "leaves of the address space at start, when that is less)");
 ABSL_FLAG(int64_t, memory_budget_bytes, 0,
           "Memory the calls may reserve (0: the limit less max(256 MiB, 10%)). A call reserves "
           "2 x --max_message_bytes when it opens, its declared input as it arrives, and its "
@@ -316,6 +317,13 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   } else {
     s.memory_limit_bytes = PhysicalMemoryBytes();
     s.memory_source = "physical memory (no cgroup limit)";
+  }
+  if (absl::GetFlag(FLAGS_memory_limit_bytes) == 0) {
+    // Under `ulimit -v` (or -d) an allocation fails before the cgroup or the machine runs out.
+    if (std::optional<int64_t> left = AddressSpaceLeft(); left && *left < s.memory_limit_bytes) {
+      s.memory_limit_bytes = *left;
+      s.memory_source = "the address space left under ulimit -v / -d (RLIMIT_AS, RLIMIT_DATA)";
+    }
   }
   l.memory_budget_bytes = absl::GetFlag(FLAGS_memory_budget_bytes);
   if (l.memory_budget_bytes < 0) return Invalid("--memory_budget_bytes: must be >= 0");

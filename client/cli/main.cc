@@ -1,10 +1,13 @@
 // tetrefine: the command line. Everything but argument hand-over lives in tetrefine_cli.
 
+#include <cstdio>
 #include <cstdlib>
+#include <new>
 #include <string>
 #include <vector>
 
 #include "client/cli/commands.h"
+#include "client/cli/exit_codes.h"
 #include "grpc/support/log.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
@@ -26,5 +29,16 @@ int main(int argc, char** argv) {
   // report) and drop the per-call access line it writes at info level.
   spdlog::set_default_logger(spdlog::stderr_color_mt("tetrefine"));
   spdlog::set_level(spdlog::level::warn);
-  return tetrefine::cli::RunTetrefine(std::vector<std::string>(argv, argv + argc));
+  // A failed allocation in the command's own thread (reading, receiving, writing a large mesh)
+  // is a message and exit 1, not an abort with a core dump (an outside review, 2026-11-29, under
+  // `ulimit -v`); the embedded service turns one in a refinement into its call's error.
+  try {
+    return tetrefine::cli::RunTetrefine(std::vector<std::string>(argv, argv + argc));
+  } catch (const std::bad_alloc&) {
+    std::fputs(
+        "tetrefine: out of memory: this process could not allocate more (see `ulimit -v` and "
+        "the machine's memory); ask for less work (a larger --epsilon, a lower --max-tets)\n",
+        stderr);
+    return tetrefine::cli::kExitFailed;
+  }
 }

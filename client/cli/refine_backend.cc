@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <optional>
 #include <utility>
 
 #include "absl/strings/ascii.h"
@@ -10,6 +11,7 @@
 #include "absl/strings/str_split.h"
 #include "client/sharding/sharded_refine.h"
 #include "server/embedded_server.h"
+#include "server/memory_budget.h"
 
 namespace tetrefine::cli {
 namespace {
@@ -251,6 +253,15 @@ absl::StatusOr<std::unique_ptr<RefineBackend>> ChooseBackend(const BackendChoice
   limits.max_voxels = std::max(limits.max_voxels, choice.voxels);
   // The service admits 4 vertices per admitted tet.
   limits.max_input_tets = std::max({limits.max_input_tets, choice.tets, (choice.vertices + 3) / 4});
+  // Under `ulimit -v` or `-d` the tet budget is what the address space left holds, at the
+  // server's bytes per output tet (a whole CLI run peaked at 133 bytes of address space per output
+  // tet, 5.6 M tets, 2026-11-29): the run then stops at `tet_budget` with its last mesh written,
+  // where it ended on std::bad_alloc with nothing (an outside review, 2026-11-29). A --max-tets
+  // above that is the user's to ask for.
+  if (std::optional<int64_t> left = server::AddressSpaceLeft()) {
+    const int64_t fits = server::BudgetForLimit(*left) / server::kDefaultBytesPerOutputTet;
+    limits.max_output_tets = std::clamp<int64_t>(fits, 1, limits.max_output_tets);
+  }
   limits.max_output_tets = std::max(limits.max_output_tets, choice.max_tets.value_or(0));
   // The work caps too: the CLI's own flag ranges bound them, and a shared server's defaults
   // refused what the flags allowed (--lattice-n 17, --max-iterations 101) with a message naming

@@ -1,11 +1,17 @@
 // Limits on what a caller controls that tests/server does not cover, against a real
 // tetrefine_server process: the response chunk size a caller asks for is clamped both ways, an
 // absurd iteration count is harmless (work stays bounded by the tet budget and convergence), and
-// declared sizes within the limits that a memory-limited server cannot hold are refused by name.
+// declared sizes within the limits that a memory-limited server cannot hold are refused by name,
+// an address-space limit sizes the tet budget, and a call that runs out of memory ends alone.
+
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -178,6 +184,83 @@ TEST(HardeningMemoryLimitTest, DeclaredSizesThisProcessCannotHoldAreRefusedByNam
       client::RefineViaService(server->NewChannel(), w.volume, w.mesh, w.options);
   ASSERT_TRUE(good.ok()) << good.status();
   EXPECT_EQ(ResultDifference(CoreResult(w), good->result), "");
+  EXPECT_EQ(server->Stop(), 0) << server->process().Output();
+#endif
+}
+
+// Every edge of a small workload split every iteration: eight times the tets each time, until
+// the tet budget (or the memory) stops it.
+Workload SplitEverything() {
+  Workload w = SmallWorkloads()[1];
+  w.options.refine.epsilon = 1e-12;
+  w.options.refine.max_iterations = 16;
+  w.options.refine.min_edge_length = 0.0;
+  w.options.refine.lattice_n = 0;
+  w.options.skip_final_mesh = true;
+  return w;
+}
+
+// The tet budget of a server's start-up line ("... max_output_tets N, ...").
+int64_t LoggedMaxOutputTets(const std::string& log) {
+  const size_t at = log.find("max_output_tets ");
+  if (at == std::string::npos) return -1;
+  return std::stoll(log.substr(at + 16));
+}
+
+TEST(HardeningMemoryLimitTest, AnAddressSpaceLimitSizesTheTetBudget) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer maps terabytes of shadow memory: no address-space limit fits";
+#else
+  // Sized from physical memory, a server under `ulimit -v` offered tens of millions of tets a
+  // call and ended on std::bad_alloc (outside review, 2026-11-29).
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--drain_seconds=2", "--threads=1"}, 0, int64_t{1536} << 20);
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
+  EXPECT_THAT(server->Log(), ::testing::HasSubstr("the address space left under ulimit -v"));
+  // 1.5 GiB less the idle process, less the reserve, for 4 calls at 160 bytes a tet: about 1.6 M.
+  const int64_t budget = LoggedMaxOutputTets(server->Log());
+  EXPECT_GT(budget, 500'000) << server->Log();
+  EXPECT_LT(budget, 2'200'000) << server->Log();
+
+  const Workload w = SplitEverything();
+  absl::StatusOr<client::ClientResult> result =
+      client::RefineViaService(server->NewChannel(), w.volume, w.mesh, w.options);
+  ASSERT_TRUE(result.ok()) << result.status();
+  EXPECT_EQ(result->result.stop_reason, StopReason::kTetBudget);
+  EXPECT_LE(result->result.iterations.back().final_tets, budget);
+  EXPECT_EQ(server->Stop(), 0) << server->process().Output();
+#endif
+}
+
+TEST(HardeningMemoryLimitTest, RunningOutOfMemoryEndsTheCallNotTheServer) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer maps terabytes of shadow memory: no address-space limit fits";
+#else
+  // A memory limit the process does not have (as a misconfigured --memory_limit_bytes would
+  // claim), so that the tet budget lets a call run into the address-space limit: the call ends
+  // with RESOURCE_EXHAUSTED, and the server goes on serving (until 2026-11-29 the uncaught
+  // std::bad_alloc ended the process and every call in it).
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--drain_seconds=2", "--threads=1", "--memory_limit_bytes=40000000000",
+                            "--max_output_tets=50000000"},
+                           0, int64_t{1024} << 20);
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
+  const Workload greedy = SplitEverything();
+  absl::StatusOr<client::ClientResult> out_of_memory =
+      client::RefineViaService(server->NewChannel(), greedy.volume, greedy.mesh, greedy.options);
+  EXPECT_TRUE(absl::IsResourceExhausted(out_of_memory.status())) << out_of_memory.status();
+  EXPECT_THAT(out_of_memory.status().message(),
+              ::testing::HasSubstr("out of memory during the refinement, after"));
+
+  const Workload& w = SmallWorkloads()[0];
+  for (int i = 0; i < 2; ++i) {
+    absl::StatusOr<client::ClientResult> good =
+        client::RefineViaService(server->NewChannel(), w.volume, w.mesh, w.options);
+    ASSERT_TRUE(good.ok()) << good.status();
+    EXPECT_EQ(ResultDifference(CoreResult(w), good->result), "");
+  }
   EXPECT_EQ(server->Stop(), 0) << server->process().Output();
 #endif
 }

@@ -2,6 +2,8 @@
 // slots, memory and per-identity counts, bearer tokens, the cgroup memory limit and the worst
 // case of a call.
 
+#include <sys/resource.h>
+
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -346,6 +348,60 @@ TEST_F(CgroupTest, V1LimitAndItsUnlimitedValue) {
 TEST_F(CgroupTest, NoCgroupFilesNoLimit) {
   EXPECT_EQ(CgroupMemoryLimit(root_.string()), std::nullopt);
   EXPECT_GT(PhysicalMemoryBytes(), int64_t{64} << 20);
+}
+
+// The soft RLIMIT_AS of this process, set for the test's scope and put back after it.
+class AddressSpaceLimit {
+ public:
+  explicit AddressSpaceLimit(rlim_t soft) {
+    getrlimit(RLIMIT_AS, &saved_);
+    rlimit limited = saved_;
+    limited.rlim_cur = soft;
+    ok_ = setrlimit(RLIMIT_AS, &limited) == 0;
+  }
+  ~AddressSpaceLimit() { setrlimit(RLIMIT_AS, &saved_); }
+  bool ok() const { return ok_; }
+
+ private:
+  rlimit saved_{};
+  bool ok_ = false;
+};
+
+TEST(AddressSpaceLeftTest, WhatUlimitLeavesOfTheAddressSpace) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer maps terabytes of shadow memory: no address-space limit fits";
+#else
+  rlimit now{};
+  ASSERT_EQ(getrlimit(RLIMIT_AS, &now), 0);
+  rlimit data{};
+  ASSERT_EQ(getrlimit(RLIMIT_DATA, &data), 0);
+  if (now.rlim_cur == RLIM_INFINITY && data.rlim_cur == RLIM_INFINITY) {
+    EXPECT_EQ(AddressSpaceLeft(), std::nullopt);
+  }
+  // 512 MiB above what is mapped now (measured from /proc, as the function measures it).
+  int64_t mapped_kb = 0;
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmSize:", 0) == 0) mapped_kb = std::stoll(line.substr(7));
+  }
+  ASSERT_GT(mapped_kb, 0);
+  const int64_t extra = int64_t{512} << 20;
+  std::optional<int64_t> left;
+  {
+    AddressSpaceLimit limit(static_cast<rlim_t>(mapped_kb * 1024 + extra));
+    ASSERT_TRUE(limit.ok());
+    left = AddressSpaceLeft();
+  }
+  ASSERT_TRUE(left.has_value());
+  EXPECT_LE(*left, extra);
+  EXPECT_GT(*left, extra - (int64_t{64} << 20));  // less what the reading itself mapped
+  {
+    AddressSpaceLimit limit(static_cast<rlim_t>(mapped_kb * 1024 / 2));  // already exceeded
+    ASSERT_TRUE(limit.ok());
+    left = AddressSpaceLeft();
+  }
+  EXPECT_EQ(left, int64_t{0});
+#endif
 }
 
 TEST(MemoryBudgetTest, BudgetLeavesTheProcessItsShare) {
