@@ -37,6 +37,14 @@ absl::Status CallGate::Reservation::GrowTo(int64_t total, const std::string& wha
           what, " needs ", HumanBytes(total), " of this server's memory budget and ", gate_->Free(),
           "; retry in a few seconds, when running calls have finished"));
     }
+    if (gate_->OverIdentityCapLocked(identity_, bytes_, total)) {
+      return absl::ResourceExhaustedError(absl::StrCat(
+          what, " needs ", HumanBytes(total), " of this server's memory budget, and client ",
+          identity_, "'s other calls hold ", HumanBytes(gate_->HeldLocked(identity_) - bytes_),
+          " of the ", HumanBytes(gate_->config_.max_bytes_per_identity),
+          " one client's calls may hold together (results not yet read count until read); retry "
+          "when they have finished"));
+    }
     const int64_t cap = gate_->config_.max_input_bytes_per_identity;
     if (uploading_ && cap > 0) {
       int64_t& held = gate_->uploading_per_identity_[identity_];
@@ -54,6 +62,7 @@ absl::Status CallGate::Reservation::GrowTo(int64_t total, const std::string& wha
       input_bytes_ = total;
     }
     gate_->reserved_ += total - bytes_;
+    gate_->AddHeldLocked(identity_, total - bytes_);
     bytes_ = total;
   }
   return absl::OkStatus();
@@ -65,6 +74,7 @@ void CallGate::Reservation::ShrinkTo(int64_t total) {
   {
     std::lock_guard<std::mutex> lock(gate_->mu_);
     gate_->reserved_ -= bytes_ - std::max<int64_t>(total, 0);
+    gate_->AddHeldLocked(identity_, std::max<int64_t>(total, 0) - bytes_);
     bytes_ = std::max<int64_t>(total, 0);
     starts = gate_->Admit();
   }
@@ -77,6 +87,7 @@ void CallGate::Reservation::Release() {
   {
     std::lock_guard<std::mutex> lock(gate_->mu_);
     gate_->reserved_ -= bytes_;
+    gate_->AddHeldLocked(identity_, -bytes_);
     gate_->UncountUploadLocked(identity_, std::exchange(input_bytes_, 0));
     starts = gate_->Admit();
   }
@@ -112,6 +123,26 @@ void CallGate::UncountUploadLocked(const std::string& identity, int64_t bytes) {
     it->second -= bytes;
     if (it->second <= 0) uploading_per_identity_.erase(it);
   }
+}
+
+void CallGate::AddHeldLocked(const std::string& identity, int64_t delta) {
+  if (delta == 0) return;
+  int64_t& held = held_per_identity_[identity];
+  held += delta;
+  if (held <= 0) held_per_identity_.erase(identity);
+}
+
+int64_t CallGate::HeldLocked(const std::string& identity) const {
+  const auto it = held_per_identity_.find(identity);
+  return it == held_per_identity_.end() ? 0 : it->second;
+}
+
+bool CallGate::OverIdentityCapLocked(const std::string& identity, int64_t own,
+                                     int64_t total) const {
+  const int64_t cap = config_.max_bytes_per_identity;
+  if (cap <= 0) return false;
+  const int64_t others = HeldLocked(identity) - own;
+  return others > 0 && others + total > cap;
 }
 
 void CallGate::Ticket::EndForIdentity() {
@@ -235,6 +266,8 @@ std::vector<std::function<void()>> CallGate::Admit() {
       if (best != queue_.end() && h >= best_held) continue;
       const int64_t more = std::max<int64_t>(0, it->total_bytes - it->reservation->bytes_);
       if (budget > 0 && reserved_ + more > budget) continue;
+      const Reservation& r = *it->reservation;
+      if (OverIdentityCapLocked(r.identity_, r.bytes_, r.bytes_ + more)) continue;
       best = it;
       best_held = h;
     }
@@ -242,6 +275,7 @@ std::vector<std::function<void()>> CallGate::Admit() {
     Reservation& r = *best->reservation;
     const int64_t more = std::max<int64_t>(0, best->total_bytes - r.bytes_);
     reserved_ += more;
+    AddHeldLocked(r.identity_, more);
     r.bytes_ += more;
     // Admitted: no longer an upload.
     UncountUploadLocked(r.identity_, std::exchange(r.input_bytes_, 0));
@@ -306,6 +340,11 @@ int CallGate::queued() const {
 int64_t CallGate::reserved_bytes() const {
   std::lock_guard<std::mutex> lock(mu_);
   return reserved_;
+}
+
+int64_t CallGate::held_bytes(const std::string& identity) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return HeldLocked(identity);
 }
 
 }  // namespace tetrefine::server

@@ -14,6 +14,12 @@
 //     identity that holds the fewest: a client with four calls that stream every iteration and
 //     never read held all four slots of a server for a minute each, and every other client's call
 //     was refused (an outside review, 2026-11-28).
+// What one identity's calls hold together (uploads, refinements at their worst case, results
+// waiting for their reader) is capped too, unless it is one call's alone: a client that started
+// a call every 5 s and never read the results held the whole budget with finished calls until
+// the write stall ended each a minute later, and every other client's call was refused (an outside
+// review, 2026-11-29). The server sets the cap so that another client's call with default
+// options still fits beside it.
 
 #include <chrono>
 #include <condition_variable>
@@ -39,6 +45,9 @@ class CallGate {
     // refine), unless it is one call's alone; 0: no limit. Many slow uploads of one client filled
     // the budget and every other client was refused for memory (an outside review, 2026-11-28).
     int64_t max_input_bytes_per_identity = 0;
+    // Memory all of one identity's calls may hold together, in any phase, unless it is one
+    // call's alone; 0: no limit.
+    int64_t max_bytes_per_identity = 0;
     int64_t memory_budget_bytes = 0;  // 0: memory is not budgeted
   };
   explicit CallGate(const Config& config) : config_(config) {}
@@ -66,7 +75,7 @@ class CallGate {
     friend class CallGate;
     CallGate* gate_ = nullptr;
     int64_t bytes_ = 0;
-    std::string identity_;     // whose upload this is, for max_input_bytes_per_identity
+    std::string identity_;     // whose call this is, for the per-identity caps
     int64_t input_bytes_ = 0;  // of bytes_, counted as identity_'s upload (until admitted)
     bool uploading_ = true;    // not admitted to refine yet
   };
@@ -99,8 +108,9 @@ class CallGate {
   absl::StatusOr<Ticket> Open(const std::string& identity);
 
   // A reservation of `bytes` for a new call of `identity` (RESOURCE_EXHAUSTED if they do not
-  // fit, or its uploads would hold more than max_input_bytes_per_identity). Until the call is
-  // admitted to refine, what it grows to counts as its identity's upload.
+  // fit, or its uploads would hold more than max_input_bytes_per_identity, or all its calls more
+  // than max_bytes_per_identity). Until the call is admitted to refine, what it grows to counts
+  // as its identity's upload.
   absl::StatusOr<Reservation> Reserve(int64_t bytes, const std::string& what,
                                       const std::string& identity = "");
 
@@ -113,7 +123,8 @@ class CallGate {
   // A call that could never fit (total_bytes above the whole budget) is the caller's to refuse
   // first (see FitsEver).
   // Among calls that fit, the one whose identity holds the fewest slots starts first (then
-  // arrival order), and none whose identity holds max_slots_per_identity.
+  // arrival order), and none whose identity holds max_slots_per_identity, or whose identity's
+  // other calls and this one's total_bytes would hold more than max_bytes_per_identity.
   uint64_t Enqueue(const std::string& identity, Reservation* reservation, int64_t total_bytes,
                    std::function<void()> start);
   // Takes a queued call out: true if it had not started (its `start` will never run).
@@ -136,6 +147,7 @@ class CallGate {
   int64_t started_total() const;  // calls that have taken a slot since the gate was made
   int queued() const;
   int64_t reserved_bytes() const;
+  int64_t held_bytes(const std::string& identity) const;  // what `identity`'s calls hold
   const Config& config() const { return config_; }
 
  private:
@@ -154,6 +166,12 @@ class CallGate {
   void UncountLocked(const std::string& identity);  // one call fewer for `identity` (under mu_)
   // Takes `bytes` off `identity`'s uploads (under mu_).
   void UncountUploadLocked(const std::string& identity, int64_t bytes);
+  // Adds `delta` to what `identity`'s calls hold (under mu_).
+  void AddHeldLocked(const std::string& identity, int64_t delta);
+  int64_t HeldLocked(const std::string& identity) const;
+  // True when `identity`'s calls other than the one holding `own` bytes hold something, and with
+  // it grown to `total` more than max_bytes_per_identity (under mu_).
+  bool OverIdentityCapLocked(const std::string& identity, int64_t own, int64_t total) const;
 
   const Config config_;
   mutable std::mutex mu_;
@@ -164,6 +182,7 @@ class CallGate {
   int running_ = 0;
   std::map<std::string, int> running_per_identity_;
   std::map<std::string, int64_t> uploading_per_identity_;  // Reservation::input_bytes_ summed
+  std::map<std::string, int64_t> held_per_identity_;       // Reservation::bytes_ summed
   int64_t started_ = 0;
   int64_t reserved_ = 0;
   std::list<Waiter> queue_;

@@ -160,10 +160,10 @@ int Run(ShutdownSignals& signals) {
   const wire::ServiceLimits& l = config.limits;
   spdlog::info(
       "memory: limit {} ({}), budget for calls {}, {} bytes per output tet, max_output_tets {}, "
-      "gRPC's own {}",
+      "gRPC's own {}, one client's calls at most {} together",
       HumanBytes(settings->memory_limit_bytes), settings->memory_source,
       HumanBytes(l.memory_budget_bytes), l.bytes_per_output_tet, l.max_output_tets,
-      HumanBytes(settings->server.grpc_memory_bytes));
+      HumanBytes(settings->server.grpc_memory_bytes), HumanBytes(config.max_bytes_per_identity));
   spdlog::info(
       "calls: max_concurrent {}, queue {} s, input deadline {} s, idle timeout {} s, write stall "
       "{} s, max {} s a call, {} open calls and {} slots per client; auth: {}{}",

@@ -273,6 +273,16 @@ std::string RefineCall::WhyNotAdmitted() const {
                         " refinement slots of this server, as many as one client may "
                         "(--max_slots_per_identity), and the rest are kept for other clients");
   }
+  const int64_t identity_cap = gate.config().max_bytes_per_identity;
+  if (const int64_t mine = gate.held_bytes(identity_) - reservation_.bytes();
+      identity_cap > 0 && mine > 0 && mine + worst_case_bytes_ > identity_cap) {
+    return absl::StrCat("client ", identity_, "'s other calls hold ", HumanBytes(mine), " of the ",
+                        HumanBytes(identity_cap),
+                        " one client's calls may hold together (results not yet read count until "
+                        "read), and this call's worst case is ",
+                        HumanBytes(worst_case_bytes_),
+                        "; read their results, or retry when they have finished");
+  }
   // What this call needs and what would fit now (a service sweep saw small calls refused beside
   // a large one with only the other calls' total: nothing said the call's own default tet budget
   // was the reason, or that a max_tets would have run at once).

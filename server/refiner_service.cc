@@ -20,6 +20,7 @@ RefinerService::RefinerService(const ServiceConfig& config)
                              .max_calls_per_identity = config.limits.max_calls_per_identity,
                              .max_slots_per_identity = config.max_slots_per_identity,
                              .max_input_bytes_per_identity = config.max_input_bytes_per_identity,
+                             .max_bytes_per_identity = config.max_bytes_per_identity,
                              .memory_budget_bytes = config.limits.memory_budget_bytes}) {}
 
 RefinerService::~RefinerService() {

@@ -22,6 +22,8 @@ struct ServiceConfig {
   int max_slots_per_identity = 0;
   // Memory one identity's uploading calls may hold (server/call_gate.h); 0: no cap.
   int64_t max_input_bytes_per_identity = 0;
+  // Memory all of one identity's calls may hold together (server/call_gate.h); 0: no cap.
+  int64_t max_bytes_per_identity = 0;
   std::shared_ptr<ServiceMetrics> metrics;  // null: no metrics recorded
   AccessPolicy access;                      // tokens and certificate allow-list; none by default
 };

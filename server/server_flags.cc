@@ -382,6 +382,18 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
                                 HumanBytes(l.memory_budget_bytes), " (from ", s.memory_source,
                                 "): at most ", std::max<int64_t>(0, fitting_tets), " fit"));
   }
+  // What one client's calls may hold together (server/call_gate.h): the budget less one call
+  // with default options (at the tet budget, with its share of the tenth of the budget kept for
+  // inputs), so that another client's such call always fits beside them; at least half the
+  // budget. With the defaults that is three quarters: one client still runs --max_concurrent
+  // less one default calls at once (the slot rule's cap).
+  {
+    const int64_t concurrent = std::max(1, l.max_concurrent_refinements);
+    const int64_t one_call = call_floor + l.max_output_tets * l.bytes_per_output_tet +
+                             l.memory_budget_bytes / 10 / concurrent;
+    service.max_bytes_per_identity =
+        std::max(l.memory_budget_bytes / 2, l.memory_budget_bytes - one_call);
+  }
 
   // Identity.
   if (const std::string path = absl::GetFlag(FLAGS_token_file); !path.empty()) {

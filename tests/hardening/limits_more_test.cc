@@ -265,5 +265,79 @@ TEST(HardeningMemoryLimitTest, RunningOutOfMemoryEndsTheCallNotTheServer) {
 #endif
 }
 
+// A client that starts calls and never reads their results kept every other client out: the
+// finished calls held the memory budget until the write stall ended each a minute later (an
+// outside review, 2026-11-29). One client's calls now hold at most what leaves another client's
+// call with default options room.
+TEST(HardeningMemoryLimitTest, AClientThatNeverReadsLeavesRoomForAnotherClientsDefaultCall) {
+  const std::string tokens = (std::filesystem::temp_directory_path() /
+                              ("tetrefine_noread_tokens_" + std::to_string(::getpid())))
+                                 .string();
+  std::ofstream(tokens) << "hog hog-token-0123456789abcdef\nother other-token-0123456789abcdef\n";
+  // A budget of about 730 MB, a tet budget of 1.1 M tets a call (a worst case of about 185 MB):
+  // one client's calls may hold about 530 MB together.
+  absl::StatusOr<std::unique_ptr<ServerProcess>> started =
+      ServerProcess::Start({"--drain_seconds=2", "--threads=1", "--memory_limit_bytes=1000000000",
+                            "--max_output_tets=1100000", "--token_file=" + tokens,
+                            "--queue_seconds=3", "--write_stall_seconds=60"});
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerProcess> server = *std::move(started);
+
+  // The hog: four calls of 1.08 M-tet results (173 MB each once refined), none read past its
+  // first message. Two fit its share; the others may not start (until 2026-11-29 all four ran,
+  // and held 690 MB).
+  Workload hog = BigResultWorkload();
+  hog.options.SetMaxTets(1'100'000);
+  std::vector<v1::RefineRequest> requests;
+  wire::WriteRequest(hog.options, hog.volume, hog.mesh, size_t{1} << 20,
+                     [&](const v1::RefineRequest& r) {
+                       requests.push_back(r);
+                       return true;
+                     });
+  using Stream = grpc::ClientReaderWriter<v1::RefineRequest, v1::RefineResponse>;
+  const std::shared_ptr<grpc::Channel> hog_channel = server->NewChannel();
+  v1::Refiner::Stub hog_stub(hog_channel);
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<std::unique_ptr<Stream>> streams;
+  for (int call = 0; call < 4; ++call) {
+    contexts.push_back(std::make_unique<grpc::ClientContext>());
+    contexts.back()->AddMetadata("authorization", "Bearer hog-token-0123456789abcdef");
+    contexts.back()->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
+    streams.push_back(hog_stub.Refine(contexts.back().get()));
+    for (const v1::RefineRequest& r : requests) ASSERT_TRUE(streams.back()->Write(r));
+    streams.back()->WritesDone();
+    // The first message (the iteration's statistics) says the refinement ran; the rest, the
+    // mesh, is never read. The third and fourth wait for the share (3 s) and get no message.
+    v1::RefineResponse first;
+    EXPECT_EQ(streams.back()->Read(&first), call < 2) << "hog call " << call;
+  }
+
+  // Another client's call with default options (the server's tet budget, and 32 iterations, so
+  // that its worst case is that budget's 185 MB) runs at once.
+  Workload w = SmallWorkloads()[0];
+  w.options.refine.max_iterations = 32;
+  client::CallOptions other;
+  other.bearer_token = "other-token-0123456789abcdef";
+  absl::StatusOr<client::ClientResult> served =
+      client::RefineViaService(server->NewChannel(), w.volume, w.mesh, w.options, {}, other);
+  ASSERT_TRUE(served.ok()) << served.status();
+  EXPECT_EQ(ResultDifference(CoreResult(w), served->result), "");
+
+  // The hog's third and fourth calls waited for its share, then were refused by name.
+  for (int call = 2; call < 4; ++call) {
+    const grpc::Status refused = streams[call]->Finish();
+    EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED)
+        << refused.error_message();
+    EXPECT_THAT(refused.error_message(),
+                ::testing::HasSubstr("one client's calls may hold together"));
+  }
+  for (int call = 0; call < 2; ++call) {
+    contexts[call]->TryCancel();
+    streams[call]->Finish();
+  }
+  std::filesystem::remove(tokens);
+  EXPECT_EQ(server->Stop(), 0) << server->process().Output();
+}
+
 }  // namespace
 }  // namespace tetrefine::hardening

@@ -200,6 +200,47 @@ TEST(CallGateTest, OneClientsUploadsHoldAtMostTheirShare) {
   EXPECT_TRUE(again.ok()) << again.status();
 }
 
+// A client that started a call every 5 s and never read the results held the whole budget with
+// finished calls, and every other client was refused (an outside review, 2026-11-29). All of one
+// client's calls, in any phase, hold at most max_bytes_per_identity together, unless one call is
+// all it has: at arrival a call over it is refused, and a queued one waits.
+TEST(CallGateTest, OneClientsCallsHoldAtMostTheirShareInEveryPhase) {
+  CallGate gate({.slots = 4, .max_bytes_per_identity = 600, .memory_budget_bytes = 1000});
+  // Alice's first call refines and finishes; its result waits for a reader that never comes.
+  absl::StatusOr<CallGate::Reservation> result = gate.Reserve(100, "alice's first", "alice");
+  ASSERT_TRUE(result.ok());
+  bool started = false;
+  gate.Enqueue("alice", &*result, 700, [&] { started = true; });  // alone: past the share
+  ASSERT_TRUE(started);
+  gate.ReleaseSlot("alice");
+  result->ShrinkTo(500);
+  EXPECT_EQ(gate.held_bytes("alice"), 500);
+  // Her next call opens (500 + 50 <= 600) but may not start refining at its worst case.
+  absl::StatusOr<CallGate::Reservation> next = gate.Reserve(50, "alice's next", "alice");
+  ASSERT_TRUE(next.ok()) << next.status();
+  bool next_started = false;
+  const uint64_t waiting = gate.Enqueue("alice", &*next, 300, [&] { next_started = true; });
+  EXPECT_FALSE(next_started);
+  // A third may not even open: the arrival is refused by name.
+  const absl::StatusOr<CallGate::Reservation> third = gate.Reserve(100, "a new call", "alice");
+  ASSERT_EQ(third.status().code(), absl::StatusCode::kResourceExhausted);
+  EXPECT_THAT(third.status().message(),
+              HasSubstr("client alice's other calls hold 550 B of the 600 B one client's calls "
+                        "may hold together"));
+  // Bob's call fits beside hers and starts at once.
+  absl::StatusOr<CallGate::Reservation> bobs = gate.Reserve(50, "bob's", "bob");
+  ASSERT_TRUE(bobs.ok()) << bobs.status();
+  bool bob_started = false;
+  gate.Enqueue("bob", &*bobs, 300, [&] { bob_started = true; });
+  EXPECT_TRUE(bob_started);
+  EXPECT_FALSE(next_started);
+  // Once alice's result is read (released), her waiting call starts.
+  result->Release();
+  EXPECT_TRUE(next_started);
+  EXPECT_FALSE(gate.Withdraw(waiting));
+  EXPECT_EQ(gate.held_bytes("alice"), 300);
+}
+
 TEST(CallGateTest, AReservationThatDoesNotFitSaysHowMuchIsFree) {
   CallGate gate({.slots = 1, .memory_budget_bytes = 4 << 20});
   absl::StatusOr<CallGate::Reservation> a = gate.Reserve(3 << 20, "call a");

@@ -36,7 +36,10 @@ class RefinerServicer(object):
         Chunks of one kind must arrive in order without gaps or overlaps; chunks of different mesh
         kinds may interleave. A message after end_of_input is INVALID_ARGUMENT. No message may be
         larger than max_message_bytes (GetServerInfo). Each header is checked when it arrives, so a
-        bad or oversized header is answered before the data it announces is sent.
+        bad header, or one declaring more than the server's limits or its whole memory budget, is
+        answered before the data it announces is sent. Memory for the input is reserved as its data
+        arrives, not as it is declared (declarations alone held a server's budget): an input that
+        does not fit beside the other calls is refused during its upload, RESOURCE_EXHAUSTED.
         The server refines once the input is complete and the stream closed: only then does the call
         take one of the server's refinement slots and reserve memory for its worst case (volume,
         input, and the output at its tet budget; cut to the output's size once refined); it waits
