@@ -28,6 +28,10 @@ absl::StatusOr<io::MeshFile> LoadMesh(const std::string& path, const std::string
 // The volume's reading warnings, one stderr line each.
 void PrintVolumeWarnings(const io::VolumeFile& volume);
 
+// Without --norm-coeff, a constant volume's errors are taken relative to 1 (its value range is
+// 0): a warning naming `path` and the value says so.
+void WarnIfConstant(const Volume& volume, const std::string& path);
+
 // OK when --norm-coeff `norm` suits `volume` at `epsilon` as the service checks it
 // (CheckNormCoeffForRange, CheckValuePrecision); else INVALID_ARGUMENT "--norm-coeff X: ...
 // (volume_path)", with the remedy a user who gave the flag has: a larger --norm-coeff or none.

@@ -488,6 +488,7 @@ int RunRefinement(const RefineSettings& s) {
         FormatBytes(v.voxel_count() * static_cast<int64_t>(VoxelSize(v.type())))));
   }
   PrintVolumeWarnings(*volume);
+  if (!s.options.refine.norm_coeff.has_value()) WarnIfConstant(volume->volume, s.volume_path);
   if (s.options.refine.norm_coeff.has_value()) {
     // The service refuses these too, but its message names the mesh (or the volume) and the
     // wire's field; the user typed --norm-coeff (an outside review, 2026-11-28).

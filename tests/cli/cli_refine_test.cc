@@ -375,6 +375,37 @@ TEST_F(CliRefine, AnEpsilonTooSmallForTheVolumeNamesTheFlag) {
   EXPECT_FALSE(absl::StrContains(run.err, mesh)) << run.err;
 }
 
+// A constant volume has no value range: errors are relative to 1, which refine and verify say
+// (the help says "the volume's max - min"; an outside review, 2026-11-29, found 1 used silently).
+TEST_F(CliRefine, AConstantVolumeSaysItsErrorsAreRelativeToOne) {
+  const std::string constant = dir_.File("constant.nii");
+  absl::StatusOr<Volume> seven = Volume::FromDoubles(
+      GridGeometry{{9, 9, 9}, {0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}}, std::vector<double>(729, 7.0));
+  ASSERT_TRUE(seven.ok()) << seven.status();
+  WriteVolume(constant, *seven);
+  const std::string expected =
+      constant + ": every sample is 7: the value range is 0, so errors are taken relative to 1";
+  const ProcessResult run =
+      RunTetrefine({"refine", "--volume", constant, "--mesh", mesh_, "--epsilon", "0.1", "--output",
+                    dir_.File("constant_out.vtu")});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(absl::StrContains(run.err, expected)) << run.err;
+  const ProcessResult verify = RunTetrefine({"verify", "--volume", constant, "--mesh", mesh_});
+  EXPECT_TRUE(absl::StrContains(verify.err, expected)) << verify.err;
+  // With --norm-coeff the user chose: no warning.
+  const ProcessResult chosen =
+      RunTetrefine({"refine", "--volume", constant, "--mesh", mesh_, "--epsilon", "0.1",
+                    "--norm-coeff", "2", "--output", dir_.File("constant_out2.vtu")});
+  ASSERT_EQ(chosen.exit_code, 0) << chosen.err;
+  EXPECT_FALSE(absl::StrContains(chosen.err, "every sample is")) << chosen.err;
+  // The bump volume is not constant.
+  const ProcessResult bump =
+      RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.1", "--output",
+                    dir_.File("bump_out.vtu")});
+  ASSERT_EQ(bump.exit_code, 0) << bump.err;
+  EXPECT_FALSE(absl::StrContains(bump.err, "every sample is")) << bump.err;
+}
+
 // Arrays the output will not have are named, not dropped in silence (found by a CLI sweep).
 TEST_F(CliRefine, ArraysNotCarriedToTheOutputAreNamed) {
   const std::string mesh = dir_.File("arrays.vtk");
