@@ -195,6 +195,15 @@ absl::StatusOr<VolumeFile> ReadNifti(const std::string& path) {
   absl::StatusOr<VolumeFile> placed =
       PlaceOnGrid(path, affine, *dims, voxels->type, std::move(voxels->data));
   if (placed.ok() && !scaling_warning.empty()) placed->warnings.push_back(scaling_warning);
+  if (const int unit = header->xyzt_units & 0x07; placed.ok() && (unit == 1 || unit == 3)) {
+    // The standard's units, as niftilib and ITK apply them; nibabel ignores them, so a mesh
+    // made in its coordinates would not line up. Applied without a word until an outside
+    // review (2026-11-29) noticed.
+    placed->warnings.push_back(
+        absl::StrCat(path, ": xyzt_units says ", unit == 1 ? "metres" : "micrometres",
+                     ": coordinates are scaled to millimetres (x", unit == 1 ? "1000" : "0.001",
+                     "), as niftilib and ITK read them; nibabel does not scale them"));
+  }
   if (placed.ok() && transform == NiftiTransform::kPixdimOnly) {
     // The standard's method 1 places such a file with voxel (0, 0, 0) at the origin, as niftilib
     // does; nibabel centres it and mirrors x (its "base affine"), so a mesh made in nibabel's

@@ -8,6 +8,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "absl/strings/match.h"
@@ -148,6 +149,37 @@ TEST(IoNiftiFrameTest, NegativeXScaleSformIsWorldRas) {
   // Between voxels the trilinear value is the average of the neighbours, in world terms too.
   const double mid = file->volume.Sample({10.0 - 1.0, -20.0, 5.0});
   EXPECT_NEAR(mid, (values[0] + values[1]) / 2.0, 1e-9);
+}
+
+// Metres and micrometres are scaled to millimetres, as niftilib and ITK read them, and said:
+// nibabel does not scale them (an outside review, 2026-11-29, found it silent).
+TEST(IoNiftiFrameTest, MetresAndMicronsAreScaledAndSaid) {
+  ScratchDir dir;
+  const std::array<int, 3> n{2, 2, 2};
+  for (const auto& [units, scale, word] :
+       {std::tuple{1, 1000.0, "metres"}, {3, 0.001, "micrometres"}, {2, 1.0, ""}}) {
+    NiftiSpec spec;
+    spec.dim = {3, n[0], n[1], n[2], 1, 1, 1, 1};
+    spec.pixdim = {1, 2, 3, 1.5, 0, 0, 0, 0};
+    spec.sform_code = 2;
+    spec.srow = {{{2.0, 0, 0, 1.0}, {0, 3.0, 0, 0}, {0, 0, 1.5, 0}}};
+    spec.xyzt_units = units;
+    const std::string path = dir.File(absl::StrCat("units_", units, ".nii"));
+    WriteBytes(path, NiftiHeaderBytes(spec) + FloatSamples(Ramp(8), false));
+    absl::StatusOr<VolumeFile> file = ReadVolume(path);
+    ASSERT_TRUE(file.ok()) << file.status();
+    EXPECT_EQ(file->volume.grid().spacing, (Vec3{2.0 * scale, 3.0 * scale, 1.5 * scale}));
+    if (*word == '\0') {
+      EXPECT_TRUE(file->warnings.empty());
+    } else {
+      ASSERT_EQ(file->warnings.size(), 1u);
+      EXPECT_EQ(
+          file->warnings[0],
+          absl::StrCat(path, ": xyzt_units says ", word,
+                       ": coordinates are scaled to millimetres (x", units == 1 ? "1000" : "0.001",
+                       "), as niftilib and ITK read them; nibabel does not scale them"));
+    }
+  }
 }
 
 TEST(IoNiftiFrameTest, QformWithQfacIsWorldRas) {
