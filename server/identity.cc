@@ -216,9 +216,12 @@ absl::StatusOr<std::string> IdentifyCall(const AccessPolicy& policy,
           "<token>' (tetrefine CLI: --token-file)");
     }
     absl::string_view value(header->second.data(), header->second.size());
-    if (!absl::ConsumePrefix(&value, "Bearer ")) {
+    // The scheme's case does not matter (RFC 7235 section 2.1): proxies and HTTP clients
+    // that write "bearer" were refused (an outside review, 2026-11-29).
+    if (!absl::StartsWithIgnoreCase(value, "Bearer ")) {
       return absl::UnauthenticatedError("authorization metadata must be 'Bearer <token>'");
     }
+    value.remove_prefix(7);
     std::optional<std::string> identity = policy.tokens->Find(absl::StripAsciiWhitespace(value));
     if (!identity.has_value()) {
       return absl::UnauthenticatedError("the bearer token is not one this server knows");

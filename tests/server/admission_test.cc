@@ -520,6 +520,16 @@ TEST(AdmissionTest, BearerTokensIdentifyAndLimitClients) {
   EXPECT_EQ(client::GetServerInfo(server.NewChannel()).status().code(),
             absl::StatusCode::kUnauthenticated);
   EXPECT_TRUE(client::GetServerInfo(server.NewChannel(), std::nullopt, bob.bearer_token).ok());
+  // The scheme's case does not matter (RFC 7235); a scheme that is not Bearer is refused.
+  for (const auto& [scheme, ok] :
+       {std::pair{"bearer ", true}, {"BEARER ", true}, {"Basic ", false}, {"Bearer", false}}) {
+    v1::Refiner::Stub stub(server.NewChannel());
+    grpc::ClientContext context;
+    context.AddMetadata("authorization", std::string(scheme) + bob.bearer_token);
+    v1::ServerInfo reply;
+    const grpc::Status status = stub.GetServerInfo(&context, v1::GetServerInfoRequest(), &reply);
+    EXPECT_EQ(status.ok(), ok) << scheme << ": " << status.error_message();
+  }
   // Health stays open for probes.
   EXPECT_TRUE(client::CheckHealth(server.NewChannel()).ok());
 
