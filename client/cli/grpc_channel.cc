@@ -146,10 +146,7 @@ absl::Status CheckTargetPorts(const std::string& address) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
-                                                           const TlsFiles& tls) {
-  if (address.empty()) return absl::InvalidArgumentError("--server: empty address");
-  if (absl::Status ports = CheckTargetPorts(address); !ports.ok()) return ports;
+grpc::ChannelArguments ChannelArgumentsForCli() {
   grpc::ChannelArguments args;
   // Response chunks are at most 3 MiB, so the default 4 MiB receive limit suffices; say so
   // explicitly rather than depend on the default.
@@ -159,6 +156,19 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& ad
   // pings every 10 s (--keepalive_seconds documents its side).
   args.SetInt(GRPC_ARG_KEEPALIVE_TIME_MS, 30'000);
   args.SetInt(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 20'000);
+  // And without a limit: gRPC's default sends at most two pings while no data flows, so a call
+  // silent for a minute (a queue wait, a long iteration, the final lattice check) and then a
+  // frozen server left the CLI waiting for ever (an outside review, 2026-11-29: still waiting
+  // 260 s after the freeze). Every 30 s suits the server's policy (a ping every 10 s at most).
+  args.SetInt(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);
+  return args;
+}
+
+absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const std::string& address,
+                                                           const TlsFiles& tls) {
+  if (address.empty()) return absl::InvalidArgumentError("--server: empty address");
+  if (absl::Status ports = CheckTargetPorts(address); !ports.ok()) return ports;
+  const grpc::ChannelArguments args = ChannelArgumentsForCli();
   if (!tls.enabled()) {
     return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
   }

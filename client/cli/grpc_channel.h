@@ -7,6 +7,7 @@
 #include "absl/status/statusor.h"
 #include "client/cli/arg_parser.h"
 #include "grpcpp/channel.h"
+#include "grpcpp/support/channel_arguments.h"
 
 namespace tetrefine::cli {
 
@@ -42,6 +43,9 @@ absl::StatusOr<std::string> TokenFromArgs(const ParsedArgs& args);
 // is refused too; unix:/path and the like, and named ports, pass. The error names the target
 // and the port.
 absl::Status CheckTargetPorts(const std::string& address);
+
+// The arguments of MakeChannel's channels: the receive limit and the keepalive pings.
+grpc::ChannelArguments ChannelArgumentsForCli();
 
 // A channel to `address` (host:port, or any gRPC target such as unix:/path), plain or TLS.
 // Errors: a port out of range (CheckTargetPorts), an unreadable PEM file, named with its flag.

@@ -192,6 +192,9 @@ class Client:
             # about 50 s, as the CLI's channel does. tetrefine_server accepts a ping every 10 s.
             ("grpc.keepalive_time_ms", 30_000),
             ("grpc.keepalive_timeout_ms", 20_000),
+            # Without a limit on pings while no data flows (gRPC's default is two): a call silent
+            # for a minute, then a frozen server, waited for ever (outside review, 2026-11-29).
+            ("grpc.http2.max_pings_without_data", 0),
         ]
         if credentials is None:
             self._channel = grpc.insecure_channel(target, options=options)

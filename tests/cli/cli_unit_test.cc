@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <random>
 #include <string>
@@ -444,3 +445,19 @@ TEST(CliMeshReport, FindsDuplicatesInvertedTetsAndOverusedFaces) {
 
 }  // namespace
 }  // namespace tetrefine::cli
+
+// The CLI's channels ping every 30 s while a call is silent, with no limit on pings without data:
+// gRPC's default of two let a call that had been silent for a minute wait for ever on a server
+// that then froze (an outside review, 2026-11-29).
+TEST(CliChannel, KeepalivePingsHaveNoLimitWithoutData) {
+  const grpc::ChannelArguments args = tetrefine::cli::ChannelArgumentsForCli();
+  const grpc_channel_args c = args.c_channel_args();
+  std::map<std::string, int> ints;
+  for (size_t i = 0; i < c.num_args; ++i) {
+    if (c.args[i].type == GRPC_ARG_INTEGER) ints[c.args[i].key] = c.args[i].value.integer;
+  }
+  EXPECT_EQ(ints[GRPC_ARG_KEEPALIVE_TIME_MS], 30'000);
+  EXPECT_EQ(ints[GRPC_ARG_KEEPALIVE_TIMEOUT_MS], 20'000);
+  ASSERT_EQ(ints.count(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA), 1u);
+  EXPECT_EQ(ints[GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA], 0);
+}
