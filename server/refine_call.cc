@@ -133,12 +133,22 @@ void RefineCall::SendStatus(const grpc::Status& status, std::optional<int> retry
                                       .tets_in = tets_in,
                                       .tets_out = tets_out});
   }
-  spdlog::info(
-      "Refine peer={} identity={} bytes_in={} tets_in={} tets_out={} iterations={} "
-      "duration={:.3f}s status={} {}",
-      peer_, identity_, bytes_in, tets_in, tets_out, iterations_, seconds,
-      absl::StatusCodeToString(static_cast<absl::StatusCode>(status.error_code())),
-      status.error_message());
+  // Calls refused at arrival (identity, quota, memory) are logged at most 20 a second, saying how
+  // many were not (server/log_rate_limit.h).
+  int64_t unlogged = 0;
+  if (status.ok() || admitted_ || env_.refusal_log == nullptr ||
+      env_.refusal_log->Allow(&unlogged)) {
+    spdlog::info(
+        "Refine peer={} identity={} bytes_in={} tets_in={} tets_out={} iterations={} "
+        "duration={:.3f}s status={} {}{}",
+        peer_, identity_, bytes_in, tets_in, tets_out, iterations_, seconds,
+        absl::StatusCodeToString(static_cast<absl::StatusCode>(status.error_code())),
+        status.error_message(),
+        unlogged > 0 ? absl::StrCat(" (", unlogged,
+                                    " calls refused since the last such line "
+                                    "were not logged)")
+                     : std::string());
+  }
   if (retry_after_ms.has_value()) {
     context_->AddTrailingMetadata("grpc-retry-pushback-ms", std::to_string(*retry_after_ms));
   }

@@ -11,6 +11,7 @@
 
 #include "grpcpp/grpcpp.h"
 #include "server/call_gate.h"
+#include "server/log_rate_limit.h"
 #include "server/refiner_service.h"
 #include "server/watchdog.h"
 #include "tetrefine/v1/tetrefine.pb.h"
@@ -41,6 +42,7 @@ class RefineCall final : public grpc::ServerBidiReactor<v1::RefineRequest, v1::R
     const ServiceConfig* config;
     CallGate* gate;
     Watchdog* watchdog;
+    LogRateLimit* refusal_log;  // access lines of calls refused at arrival
   };
 
   // A new call; it keeps itself alive until gRPC is done with it (OnDone) and its refinement

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "server/metrics.h"
 #include "server/refine_call.h"
 #include "spdlog/spdlog.h"
@@ -31,8 +32,10 @@ RefinerService::~RefinerService() {
 
 grpc::ServerBidiReactor<v1::RefineRequest, v1::RefineResponse>* RefinerService::Refine(
     grpc::CallbackServerContext* context) {
-  return RefineCall::Start(
-      context, RefineCall::Environment{.config = &config_, .gate = &gate_, .watchdog = &watchdog_});
+  return RefineCall::Start(context, RefineCall::Environment{.config = &config_,
+                                                            .gate = &gate_,
+                                                            .watchdog = &watchdog_,
+                                                            .refusal_log = &refusal_log_});
 }
 
 grpc::Status RefinerService::GetServerInfo(grpc::ServerContext* context,
@@ -45,9 +48,16 @@ grpc::Status RefinerService::GetServerInfo(grpc::ServerContext* context,
   if (!status.ok()) {
     // Clients ask this before they refine, so a wrong token or certificate ends here: the
     // operator must see it (an operator sweep found three refused CLI runs left no trace).
-    spdlog::warn("GetServerInfo peer={} refused: {} {}", context->peer(),
-                 absl::StatusCodeToString(identity.status().code()),
-                 std::string(identity.status().message()));
+    // At most 20 refusals a second, with Refine's (a flood wrote 47 MB of log in 15 s).
+    if (int64_t unlogged = 0; refusal_log_.Allow(&unlogged)) {
+      spdlog::warn("GetServerInfo peer={} refused: {} {}{}", context->peer(),
+                   absl::StatusCodeToString(identity.status().code()),
+                   std::string(identity.status().message()),
+                   unlogged > 0 ? absl::StrCat(" (", unlogged,
+                                               " calls refused since the last such line were "
+                                               "not logged)")
+                                : std::string());
+    }
     return status;
   }
   response->set_version(TETREFINE_VERSION);

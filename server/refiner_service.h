@@ -5,6 +5,7 @@
 #include "grpcpp/grpcpp.h"
 #include "server/call_gate.h"
 #include "server/identity.h"
+#include "server/log_rate_limit.h"
 #include "server/watchdog.h"
 #include "tetrefine/v1/tetrefine.grpc.pb.h"
 #include "wire/service_limits.h"
@@ -64,6 +65,7 @@ class RefinerService final : public v1::Refiner::WithCallbackMethod_Refine<v1::R
   ServiceConfig config_;
   Watchdog watchdog_;
   CallGate gate_;
+  LogRateLimit refusal_log_{20};  // access lines of refused calls, Refine's and GetServerInfo's
 };
 
 }  // namespace tetrefine::server

@@ -17,6 +17,7 @@
 #include "gtest/gtest.h"
 #include "server/call_gate.h"
 #include "server/identity.h"
+#include "server/log_rate_limit.h"
 #include "server/memory_budget.h"
 #include "server/watchdog.h"
 
@@ -389,6 +390,26 @@ TEST_F(CgroupTest, V1LimitAndItsUnlimitedValue) {
 TEST_F(CgroupTest, NoCgroupFilesNoLimit) {
   EXPECT_EQ(CgroupMemoryLimit(root_.string()), std::nullopt);
   EXPECT_GT(PhysicalMemoryBytes(), int64_t{64} << 20);
+}
+
+// A flood of refused calls wrote 47 MB of access log in 15 s (an outside review, 2026-11-29): at
+// most `per_second` lines a second, and the next line says how many were left out.
+TEST(LogRateLimitTest, AtMostSoManyLinesASecondAndTheRestCounted) {
+  LogRateLimit limit(3);
+  const LogRateLimit::Clock::time_point t0 = LogRateLimit::Clock::now();
+  int64_t suppressed = -1;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(limit.Allow(&suppressed, t0 + std::chrono::milliseconds(100 * i)));
+    EXPECT_EQ(suppressed, 0);
+  }
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_FALSE(limit.Allow(&suppressed, t0 + std::chrono::milliseconds(500 + 10 * i)));
+  }
+  // A second later the window has room again, and the first line says five were not logged.
+  EXPECT_TRUE(limit.Allow(&suppressed, t0 + std::chrono::milliseconds(1000)));
+  EXPECT_EQ(suppressed, 5);
+  EXPECT_TRUE(limit.Allow(&suppressed, t0 + std::chrono::milliseconds(1001)));
+  EXPECT_EQ(suppressed, 0);
 }
 
 // The soft RLIMIT_AS of this process, set for the test's scope and put back after it.
