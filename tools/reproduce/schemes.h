@@ -23,10 +23,10 @@ inline constexpr Scheme kSchemes[] = {
      [](RefineOptions& o) { o.scheme = RefineScheme::kPaper; }},
     {"longest-edge",
      "`RefineScheme::kLongestEdge` (the default; docs/schemes.md): the "
-     "paper's midpoint marks, then the longest edge of every tet and of every face with a split "
-     "edge, and, where a split would make a much flatter child, the fewest more edges that "
-     "avoid it (all six at most), once more after the last closure where that spares the tets "
-     "around",
+     "paper's midpoint marks, then the longest edge of every face with a split edge (Plaza's "
+     "face rule, eight rounds), and, where a split would make a much flatter child, the fewest "
+     "more edges that avoid it (all six at most), once more after the last closure where that "
+     "spares the tets around",
      [](RefineOptions& o) { o.scheme = RefineScheme::kLongestEdge; }},
     {"certify",
      "longest-edge with `certify`: edges judged by their exact maximum discrepancy and every tet "
