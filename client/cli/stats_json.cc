@@ -96,6 +96,20 @@ void WriteOptions(JsonWriter& json, const RunDescription& run) {
   json.Bool(o.refine.certify);
   json.Key("lattice_n");
   json.Int(o.refine.lattice_n);
+  // These four change the result too: three runs of 100,440, 55,735 and 8,162 tets wrote the
+  // same options (an outside review, 2026-11-29), so a file could not repeat its run.
+  json.Key("lattice_max_tets");
+  json.Int(o.refine.lattice_max_tets);
+  json.Key("lattice_seed");
+  json.Int(static_cast<int64_t>(o.refine.lattice_seed));
+  json.Key("min_edge_length");  // null: the core's default (see refine --help)
+  if (o.refine.min_edge_length.has_value()) {
+    json.Number(*o.refine.min_edge_length);
+  } else {
+    json.Null();
+  }
+  json.Key("min_quality");
+  json.Number(o.refine.min_quality);
   json.Key("clamp");
   json.Bool(o.refine.outside == OutsidePolicy::kClamp);
   json.Key("fix_orientation");

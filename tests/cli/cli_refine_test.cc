@@ -164,7 +164,8 @@ TEST_F(CliRefine, StatsJsonParsesAndAgreesWithTheRun) {
   const std::string stats = dir_.File("stats.json");
   const ProcessResult run =
       RunTetrefine({"refine", "--volume", volume_, "--mesh", mesh_, "--epsilon", "0.05", "--output",
-                    out, "--stats-json", stats, "--quiet"});
+                    out, "--stats-json", stats, "--quiet", "--min-quality", "2e-6",
+                    "--lattice-seed", "7", "--lattice-max-tets", "1000"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(run.err, "") << "--quiet prints no progress";
   absl::StatusOr<io::MeshFile> got = io::ReadMesh(out);
@@ -179,7 +180,10 @@ TEST_F(CliRefine, StatsJsonParsesAndAgreesWithTheRun) {
       "assert sum(its[0]['configurations'].values()) == its[0]['initial_tets']\n"
       "assert set(its[0]['configurations']) == "
       "{'0','1','2a','2b','3a','3b','3c','4a','4b','5','6'}\n"
-      "assert d['options']['epsilon'] == 0.05\n"
+      "o = d['options']\n"
+      "assert o['epsilon'] == 0.05 and o['min_quality'] == 2e-6, o\n"
+      "assert o['lattice_seed'] == 7 and o['lattice_max_tets'] == 1000, o\n"
+      "assert o['min_edge_length'] is None, o\n"
       "l = d['lattice']\n"
       "assert 0 < l['volume_mean_error'] <= l['max_error']\n"
       "assert 0 <= l['volume_share_above_epsilon'] <= 1\n"
