@@ -302,11 +302,14 @@ absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const
   return absl::OkStatus();
 }
 
-volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void OnInterrupt(int) { g_interrupted = 1; }
+volatile std::sig_atomic_t g_interrupted = 0;  // the signal that interrupted the run, or 0
+extern "C" void OnInterrupt(int signal_number) { g_interrupted = signal_number; }
 
-// Ctrl-C cancels the call (the embedded service stops within an iteration's polling interval) so
-// nothing is left half-written; a second Ctrl-C kills as usual.
+// Ctrl-C, and SIGTERM or SIGHUP (what `timeout`, batch schedulers, container runtimes and a
+// closed terminal send), cancel the call (the embedded service stops within an iteration's
+// polling interval) so nothing is left half-written, and the run exits with 128 + the signal; a
+// second one kills as usual. SIGTERM and SIGHUP killed the process at once until an outside
+// review (2026-11-29) found each such kill during a write left a hidden temporary file (64 MB).
 class InterruptGuard {
  public:
   InterruptGuard() {
@@ -314,13 +317,24 @@ class InterruptGuard {
     action.sa_handler = OnInterrupt;
     action.sa_flags = SA_RESETHAND;
     sigemptyset(&action.sa_mask);
-    sigaction(SIGINT, &action, &previous_);
+    for (int i = 0; i < kSignals; ++i) sigaction(kHandled[i], &action, &previous_[i]);
   }
-  ~InterruptGuard() { sigaction(SIGINT, &previous_, nullptr); }
+  ~InterruptGuard() {
+    for (int i = 0; i < kSignals; ++i) sigaction(kHandled[i], &previous_[i], nullptr);
+  }
 
  private:
-  struct sigaction previous_ = {};
+  static constexpr int kSignals = 3;
+  static constexpr int kHandled[kSignals] = {SIGINT, SIGTERM, SIGHUP};
+  struct sigaction previous_[kSignals] = {};
 };
+
+// What the run says and returns when a signal interrupted it.
+std::string InterruptedBy() {
+  return g_interrupted == SIGINT    ? "interrupted"
+         : g_interrupted == SIGTERM ? "terminated (SIGTERM)"
+                                    : "hung up (SIGHUP)";
+}
 
 std::string IterationPath(const std::string& output, int iteration) {
   return absl::StrFormat("%s.iter%02d%s", PathStem(output), iteration, PathExtension(output));
@@ -723,7 +737,9 @@ int RunRefinement(const RefineSettings& s) {
                                FormatSeconds(SecondsSince(refine_start))));
   }
   if (!iteration_write.ok()) return Fail(iteration_write, kExitUsage);
-  if (g_interrupted != 0) return Fail("interrupted; no output written", 130);
+  if (g_interrupted != 0) {
+    return Fail(absl::StrCat(InterruptedBy(), "; no output written"), 128 + g_interrupted);
+  }
   if (!reply.ok()) {
     if (reply.status().code() == absl::StatusCode::kInvalidArgument &&
         absl::StartsWith(reply.status().message(), "options.")) {
@@ -793,15 +809,15 @@ int RunRefinement(const RefineSettings& s) {
   }
   absl::Status written = s.pvtu ? WritePiecesReported(s, progress, files, out_tets)
                                 : WriteMeshReported(s, progress, s.output_path, files[0]);
-  // Ctrl-C while writing: a regular file is finished rather than left half-written (written
+  // A signal while writing: a regular file is finished rather than left half-written (written
   // beside and renamed into place), a pipe's write fails; either way the run stops there, with
-  // 130 (it went on to exit 0, an outside review found).
+  // 128 + the signal (it went on to exit 0, an outside review found).
   if (g_interrupted != 0) {
-    return Fail(absl::StrCat("interrupted while writing ", s.output_path,
+    return Fail(absl::StrCat(InterruptedBy(), " while writing ", s.output_path,
                              written.ok() ? ", which was finished rather than left half-written"
                                           : absl::StrCat(" (", written.message(), ")"),
                              "; nothing else (series, statistics) was written"),
-                130);
+                128 + g_interrupted);
   }
   if (!written.ok()) return Fail(written, kExitUsage);
   const std::string series_path = s.every_iteration ? SeriesPath(s.output_path) : "";
