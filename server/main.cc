@@ -1,8 +1,11 @@
 // tetrefine_server: the tetrefine.v1 Refiner service over the network.
 
+#include <signal.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <fstream>
 #include <memory>
@@ -185,6 +188,21 @@ int Run(ShutdownSignals& signals) {
                tls ? (settings->tls_client_ca.empty() ? "on" : "mutual") : "off",
                l.max_concurrent_refinements);
 
+  if (settings->exit_when_stdin_closes) {
+    // A parent that is killed (SIGKILL, or SIGTERM to a Python pipeline) cannot stop its server:
+    // LocalServer's servers outlived their pipelines, each holding a port and its memory (an
+    // outside review, 2026-11-29). The kernel closes the parent's end of the pipe whatever
+    // ended it; the end of input then drains the server as SIGTERM does.
+    std::thread([] {
+      char buffer[256];
+      while (true) {
+        const ssize_t n = ::read(STDIN_FILENO, buffer, sizeof(buffer));
+        if (n == 0 || (n < 0 && errno != EINTR)) break;
+      }
+      spdlog::info("standard input closed (--exit_when_stdin_closes): draining");
+      ::kill(::getpid(), SIGTERM);
+    }).detach();
+  }
   const int signal_number = signals.Wait();
   const double drain = settings->drain_seconds;
   const auto deadline = std::chrono::system_clock::now() +

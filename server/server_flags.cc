@@ -42,6 +42,10 @@ ABSL_FLAG(double, keepalive_timeout_seconds, 20, "See --keepalive_seconds");
 ABSL_FLAG(double, max_connection_idle_seconds, 300,
           "Close a connection that has had no call for this long");
 ABSL_FLAG(bool, reflection, true, "Serve gRPC server reflection (what grpcurl uses)");
+ABSL_FLAG(bool, exit_when_stdin_closes, false,
+          "Drain and exit, as on SIGTERM, when standard input reaches its end: for a parent "
+          "process that keeps a pipe to it open, so that the server ends with the parent even "
+          "when the parent is killed");
 ABSL_FLAG(int, max_streams_per_connection, 100,
           "Streams (calls) one connection may have open at once; a client's next waits for one "
           "to end");
@@ -205,6 +209,7 @@ absl::StatusOr<ServerSettings> SettingsFromFlags() {
   s.tls_client_ca = absl::GetFlag(FLAGS_tls_client_ca);
   s.drain_seconds = absl::GetFlag(FLAGS_drain_seconds);
   s.log_level = absl::GetFlag(FLAGS_log_level);
+  s.exit_when_stdin_closes = absl::GetFlag(FLAGS_exit_when_stdin_closes);
   if (absl::Status valid = CheckListenAddress("listen", s.listen); !valid.ok()) return valid;
   if (!s.local_listen.empty()) {
     if (absl::Status valid = CheckListenAddress("local_listen", s.local_listen); !valid.ok()) {

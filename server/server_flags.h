@@ -21,6 +21,10 @@ struct ServerSettings {
   std::string tls_cert, tls_key, tls_client_ca;  // PEM files; empty: plaintext gRPC
   double drain_seconds = 30;
   std::string log_level;
+  // Drain and exit, as on SIGTERM, when standard input reaches its end: the parent that started
+  // this server holds the pipe's other end, and the kernel closes it when the parent dies however
+  // it dies (python/tetrefine/local_server.py).
+  bool exit_when_stdin_closes = false;
   std::string memory_source;  // where the memory limit came from, for the startup log
   int64_t memory_limit_bytes = 0;
 };

@@ -1,7 +1,9 @@
 """tetrefine.LocalServer: a tetrefine_server of the pipeline's own, as the CLI embeds one."""
 
 import os
-import stat
+import signal
+import subprocess
+import sys
 import threading
 import time
 
@@ -43,21 +45,68 @@ def test_only_callers_with_its_token_are_served(server_binary):
             assert client.server_info().version
 
 
-def test_the_token_file_is_private_and_removed(server_binary):
+def test_the_token_file_is_gone_once_the_server_listens(server_binary):
+    # The server reads it at start only; removed then, a killed pipeline leaves none behind.
     server = tetrefine.LocalServer(server_binary)
     try:
         token_file = next(a.split("=", 1)[1] for a in server._process.args
                           if a.startswith("--token_file="))
-        assert stat.S_IMODE(os.stat(token_file).st_mode) == 0o600
-        assert open(token_file).read() == f"local {server.token}\n"
+        assert not os.path.exists(token_file)
+        assert not os.path.exists(os.path.dirname(token_file))
+        with server.client() as client:
+            assert client.server_info().version
     finally:
         server.close()
-    assert not os.path.exists(token_file)
     assert not server.running
     with pytest.raises(tetrefine.TetrefineError) as stopped:
         server.client()
     assert stopped.value.code == grpc.StatusCode.FAILED_PRECONDITION
     assert "stopped" in stopped.value.details
+
+
+_PIPELINE = """
+import sys, time
+import tetrefine
+server = tetrefine.LocalServer(sys.argv[1])
+print(server._process.pid, flush=True)
+time.sleep(600)
+"""
+
+
+def _gone(pid, within):
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        # A zombie is gone for our purpose: its parent (the killed pipeline) will never reap it.
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                if f.read().split(") ", 1)[1].startswith("Z"):
+                    return True
+        except FileNotFoundError:
+            return True
+        time.sleep(0.1)
+    return False
+
+
+@pytest.mark.parametrize("signal_number", [signal.SIGKILL, signal.SIGTERM])
+def test_a_killed_pipeline_leaves_no_server_running(server_binary, signal_number):
+    # Killed by SIGTERM (timeout, SLURM, Kubernetes) or SIGKILL, a pipeline left its server
+    # running for good (an outside review, 2026-11-29): the server now ends with its stdin pipe.
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    pipeline = subprocess.Popen([sys.executable, "-c", _PIPELINE, server_binary],
+                                stdout=subprocess.PIPE, text=True, env=env)
+    try:
+        server_pid = int(pipeline.stdout.readline())
+        os.kill(server_pid, 0)  # running
+        pipeline.send_signal(signal_number)
+        pipeline.wait(timeout=30)
+        assert _gone(server_pid, within=20), f"tetrefine_server {server_pid} outlived its pipeline"
+    finally:
+        if pipeline.poll() is None:
+            pipeline.kill()
 
 
 def test_two_servers_at_once_get_their_own_ports(server_binary):

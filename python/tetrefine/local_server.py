@@ -86,10 +86,14 @@ class LocalServer:
         # Metrics off: its default port would clash with a second local server. A short drain:
         # close() comes when the pipeline is done with the server (or interrupted), and the
         # calls still in flight are its own; `flags` come last, so they can change both.
+        # The server ends when its standard input does: this process holds the pipe's write end,
+        # and the kernel closes it however this process ends. Killed by SIGTERM (what timeout,
+        # SLURM and Kubernetes send) or SIGKILL, a pipeline left its server running for good,
+        # with a port, its memory and the token file (an outside review, 2026-11-29).
         args = [self._binary, "--listen=127.0.0.1:0", "--metrics_listen=", "--drain_seconds=2",
-                f"--token_file={token_file}", *flags]
+                "--exit_when_stdin_closes", f"--token_file={token_file}", *flags]
         try:
-            self._process = subprocess.Popen(args, stdin=subprocess.DEVNULL,
+            self._process = subprocess.Popen(args, stdin=subprocess.PIPE,
                                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                              text=True, errors="replace")
         except OSError as error:
@@ -140,6 +144,9 @@ class LocalServer:
                                  f"LocalServer: {self._binary} {reason}" +
                                  (f"; its last lines:\n{log}" if log else ""))
         self.target = f"127.0.0.1:{port}"
+        # The server read its tokens at start and never again: the file goes now, so that a
+        # killed pipeline leaves none behind.
+        self._dir.cleanup()
 
     def client(self):
         """A Client of this server, with its token."""
@@ -156,6 +163,8 @@ class LocalServer:
             except subprocess.TimeoutExpired:
                 self._process.kill()
                 self._process.wait()
+        if self._process.stdin is not None:
+            self._process.stdin.close()
         self._dir.cleanup()
 
     def close(self):
