@@ -106,19 +106,6 @@ Workload BigResultInSmallMessages() {
   return w;
 }
 
-// A 1.8k-tet request with epsilon 1e-12: every edge splits every iteration, up to the server's
-// tet budget (the 83 KB request grew to 25.6M tets and 1.8 GB before budgets existed).
-Workload TinyEpsilon() {
-  Workload w = SmallWorkloads()[1];
-  w.name = "tiny-epsilon";
-  w.options.refine.epsilon = 1e-12;
-  w.options.refine.max_iterations = 16;
-  w.options.refine.min_edge_length = 0.0;
-  w.options.refine.lattice_n = 0;
-  w.options.skip_final_mesh = true;
-  return w;
-}
-
 TEST(HardeningAbuseLoadTest, GoodClientsAreServedCorrectlyAmongHostileOnesWithinTheMemoryBudget) {
   const std::vector<RefineResult> expected_small = [] {
     std::vector<RefineResult> out;

@@ -188,18 +188,6 @@ TEST(HardeningMemoryLimitTest, DeclaredSizesThisProcessCannotHoldAreRefusedByNam
 #endif
 }
 
-// Every edge of a small workload split every iteration: eight times the tets each time, until
-// the tet budget (or the memory) stops it.
-Workload SplitEverything() {
-  Workload w = SmallWorkloads()[1];
-  w.options.refine.epsilon = 1e-12;
-  w.options.refine.max_iterations = 16;
-  w.options.refine.min_edge_length = 0.0;
-  w.options.refine.lattice_n = 0;
-  w.options.skip_final_mesh = true;
-  return w;
-}
-
 // The tet budget of a server's start-up line ("... max_output_tets N, ...").
 int64_t LoggedMaxOutputTets(const std::string& log) {
   const size_t at = log.find("max_output_tets ");
@@ -223,7 +211,7 @@ TEST(HardeningMemoryLimitTest, AnAddressSpaceLimitSizesTheTetBudget) {
   EXPECT_GT(budget, 500'000) << server->Log();
   EXPECT_LT(budget, 2'200'000) << server->Log();
 
-  const Workload w = SplitEverything();
+  const Workload w = TinyEpsilon();
   absl::StatusOr<client::ClientResult> result =
       client::RefineViaService(server->NewChannel(), w.volume, w.mesh, w.options);
   ASSERT_TRUE(result.ok()) << result.status();
@@ -247,7 +235,7 @@ TEST(HardeningMemoryLimitTest, RunningOutOfMemoryEndsTheCallNotTheServer) {
                            0, int64_t{1024} << 20);
   ASSERT_TRUE(started.ok()) << started.status();
   std::unique_ptr<ServerProcess> server = *std::move(started);
-  const Workload greedy = SplitEverything();
+  const Workload greedy = TinyEpsilon();
   absl::StatusOr<client::ClientResult> out_of_memory =
       client::RefineViaService(server->NewChannel(), greedy.volume, greedy.mesh, greedy.options);
   EXPECT_TRUE(absl::IsResourceExhausted(out_of_memory.status())) << out_of_memory.status();

@@ -83,6 +83,17 @@ Workload BigResultWorkload() {
   return w;
 }
 
+Workload TinyEpsilon() {
+  Workload w = SmallWorkloads()[1];
+  w.name = "tiny-epsilon";
+  w.options.refine.epsilon = 1e-12;
+  w.options.refine.max_iterations = 16;
+  w.options.refine.min_edge_length = 0.0;
+  w.options.refine.lattice_n = 0;
+  w.options.skip_final_mesh = true;
+  return w;
+}
+
 RefineResult CoreResult(const Workload& w, const wire::ServiceLimits& limits) {
   absl::StatusOr<RefineResult> result =
       Refine(w.volume, w.mesh, wire::ToCoreOptions(w.options, limits));

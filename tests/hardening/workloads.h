@@ -33,6 +33,10 @@ const Workload& HeavyWorkload();
 // that never reads.
 Workload BigResultWorkload();
 
+// A 1.8k-tet request with epsilon 1e-12: every edge splits every iteration, up to the server's
+// tet budget (the 83 KB request grew to 25.6M tets and 1.8 GB before budgets existed).
+Workload TinyEpsilon();
+
 // Under AddressSanitizer freed memory sits in a quarantine of up to 256 MB and the shadow counts
 // too, so a process's VmRSS grows with churn whatever leaks: the memory bounds are checked only
 // without it (there LeakSanitizer checks the server at exit instead).
