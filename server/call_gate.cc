@@ -347,4 +347,9 @@ int64_t CallGate::held_bytes(const std::string& identity) const {
   return HeldLocked(identity);
 }
 
+bool CallGate::OverIdentityCap(const std::string& identity, int64_t own, int64_t total) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return OverIdentityCapLocked(identity, own, total);
+}
+
 }  // namespace tetrefine::server

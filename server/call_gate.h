@@ -148,6 +148,10 @@ class CallGate {
   int queued() const;
   int64_t reserved_bytes() const;
   int64_t held_bytes(const std::string& identity) const;  // what `identity`'s calls hold
+  // True when `identity`'s calls other than one holding `own` bytes hold something, and with
+  // that one grown to `total` bytes more than max_bytes_per_identity: the rule Reserve and
+  // Enqueue apply, for a caller that says why a call waits.
+  bool OverIdentityCap(const std::string& identity, int64_t own, int64_t total) const;
   const Config& config() const { return config_; }
 
  private:

@@ -1,5 +1,7 @@
 #include "server/log_rate_limit.h"
 
+#include "absl/strings/str_cat.h"
+
 namespace tetrefine::server {
 
 bool LogRateLimit::Allow(int64_t* suppressed, Clock::time_point now) {
@@ -16,6 +18,11 @@ bool LogRateLimit::Allow(int64_t* suppressed, Clock::time_point now) {
   *suppressed = dropped_;
   dropped_ = 0;
   return true;
+}
+
+std::string LogRateLimit::SuppressedNote(int64_t suppressed) {
+  if (suppressed <= 0) return "";
+  return absl::StrCat(" (", suppressed, " calls refused since the last such line were not logged)");
 }
 
 }  // namespace tetrefine::server

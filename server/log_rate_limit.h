@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdint>
 #include <mutex>
+#include <string>
 
 namespace tetrefine::server {
 
@@ -25,6 +26,10 @@ class LogRateLimit {
   // True when a line may be written at `now`; then *suppressed is the number of lines refused
   // since the last one allowed (0 if none), for the line to say.
   bool Allow(int64_t* suppressed, Clock::time_point now = Clock::now());
+
+  // What a line says of the `suppressed` lines Allow counted: "" for none, else
+  // " (N calls refused since the last such line were not logged)".
+  static std::string SuppressedNote(int64_t suppressed);
 
  private:
   std::mutex mu_;

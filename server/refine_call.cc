@@ -143,11 +143,7 @@ void RefineCall::SendStatus(const grpc::Status& status, std::optional<int> retry
         "duration={:.3f}s status={} {}{}",
         peer_, identity_, bytes_in, tets_in, tets_out, iterations_, seconds,
         absl::StatusCodeToString(static_cast<absl::StatusCode>(status.error_code())),
-        status.error_message(),
-        unlogged > 0 ? absl::StrCat(" (", unlogged,
-                                    " calls refused since the last such line "
-                                    "were not logged)")
-                     : std::string());
+        status.error_message(), LogRateLimit::SuppressedNote(unlogged));
   }
   if (retry_after_ms.has_value()) {
     context_->AddTrailingMetadata("grpc-retry-pushback-ms", std::to_string(*retry_after_ms));
@@ -283,11 +279,10 @@ std::string RefineCall::WhyNotAdmitted() const {
                         " refinement slots of this server, as many as one client may "
                         "(--max_slots_per_identity), and the rest are kept for other clients");
   }
-  const int64_t identity_cap = gate.config().max_bytes_per_identity;
-  if (const int64_t mine = gate.held_bytes(identity_) - reservation_.bytes();
-      identity_cap > 0 && mine > 0 && mine + worst_case_bytes_ > identity_cap) {
+  if (gate.OverIdentityCap(identity_, reservation_.bytes(), worst_case_bytes_)) {
+    const int64_t mine = gate.held_bytes(identity_) - reservation_.bytes();
     return absl::StrCat("client ", identity_, "'s other calls hold ", HumanBytes(mine), " of the ",
-                        HumanBytes(identity_cap),
+                        HumanBytes(gate.config().max_bytes_per_identity),
                         " one client's calls may hold together (results not yet read count until "
                         "read), and this call's worst case is ",
                         HumanBytes(worst_case_bytes_),

@@ -3,7 +3,6 @@
 #include <chrono>
 
 #include "absl/status/status.h"
-#include "absl/strings/str_cat.h"
 #include "server/metrics.h"
 #include "server/refine_call.h"
 #include "spdlog/spdlog.h"
@@ -53,10 +52,7 @@ grpc::Status RefinerService::GetServerInfo(grpc::ServerContext* context,
       spdlog::warn("GetServerInfo peer={} refused: {} {}{}", context->peer(),
                    absl::StatusCodeToString(identity.status().code()),
                    std::string(identity.status().message()),
-                   unlogged > 0 ? absl::StrCat(" (", unlogged,
-                                               " calls refused since the last such line were "
-                                               "not logged)")
-                                : std::string());
+                   LogRateLimit::SuppressedNote(unlogged));
     }
     return status;
   }

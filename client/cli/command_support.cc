@@ -82,10 +82,9 @@ void PrintVolumeWarnings(const io::VolumeFile& volume) {
   for (const std::string& warning : volume.warnings) PrintWarning(warning);
 }
 
-void WarnIfConstant(const Volume& volume, const std::string& path) {
+void WarnIfConstant(const std::array<double, 2>& range, const std::string& path) {
   // The default normCoeff, the value range, is 0 there; 1 stands in. The help said "the volume's
   // max - min" and nothing said otherwise (an outside review, 2026-11-29).
-  const std::array<double, 2> range = volume.ValueRange();
   if (range[0] != range[1]) return;
   PrintWarning(absl::StrCat(path, ": every sample is ", range[0],
                             ": the value range is 0, so errors are taken relative to 1 "

@@ -29,8 +29,8 @@ absl::StatusOr<io::MeshFile> LoadMesh(const std::string& path, const std::string
 void PrintVolumeWarnings(const io::VolumeFile& volume);
 
 // Without --norm-coeff, a constant volume's errors are taken relative to 1 (its value range is
-// 0): a warning naming `path` and the value says so.
-void WarnIfConstant(const Volume& volume, const std::string& path);
+// 0): a warning naming `path` and the value says so. `range`: Volume::ValueRange().
+void WarnIfConstant(const std::array<double, 2>& range, const std::string& path);
 
 // OK when --norm-coeff `norm` suits `volume` at `epsilon` as the service checks it
 // (CheckNormCoeffForRange, CheckValuePrecision); else INVALID_ARGUMENT "--norm-coeff X: ...

@@ -502,15 +502,14 @@ int RunRefinement(const RefineSettings& s) {
         FormatBytes(v.voxel_count() * static_cast<int64_t>(VoxelSize(v.type())))));
   }
   PrintVolumeWarnings(*volume);
-  if (!s.options.refine.norm_coeff.has_value()) WarnIfConstant(volume->volume, s.volume_path);
-  if (s.options.refine.norm_coeff.has_value()) {
+  if (!s.options.refine.norm_coeff.has_value()) {
+    WarnIfConstant(volume->volume.ValueRange(), s.volume_path);
+  } else if (absl::Status fits = CheckNormCoeffFlag(*s.options.refine.norm_coeff, volume->volume,
+                                                    s.options.refine.epsilon, s.volume_path);
+             !fits.ok()) {
     // The service refuses these too, but its message names the mesh (or the volume) and the
     // wire's field; the user typed --norm-coeff (an outside review, 2026-11-28).
-    if (absl::Status fits = CheckNormCoeffFlag(*s.options.refine.norm_coeff, volume->volume,
-                                               s.options.refine.epsilon, s.volume_path);
-        !fits.ok()) {
-      return Fail(fits, kExitUsage);
-    }
+    return Fail(fits, kExitUsage);
   }
   progress.Begin(absl::StrCat("reading mesh ", s.mesh_path));
   absl::StatusOr<io::MeshFile> mesh_file = LoadMesh(s.mesh_path, "--mesh");

@@ -153,8 +153,8 @@ int RunVerify(const std::vector<std::string>& args) {
     mesh.values[i] = volume.SampleIndex(u);
   }
   if (!norm_coeff.has_value()) {
-    WarnIfConstant(volume, volume_path);
     const std::array<double, 2> range = volume.ValueRange();
+    WarnIfConstant(range, volume_path);
     norm_coeff = range[1] > range[0] ? range[1] - range[0] : 1.0;
   } else if (absl::Status norm = CheckNormCoeffFlag(*norm_coeff, volume, epsilon, volume_path);
              !norm.ok()) {
