@@ -8,6 +8,7 @@
 
 #include "client/cli/commands.h"
 #include "client/cli/exit_codes.h"
+#include "client/io/temporary_files.h"
 #include "grpc/support/log.h"
 #include "spdlog/sinks/stdout_color_sinks.h"
 #include "spdlog/spdlog.h"
@@ -24,6 +25,8 @@ void GrpcCoreLogToDebug(gpr_log_func_args* args) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Before any thread: a signal that ends a command mid-write removes its temporary files.
+  tetrefine::io::RemoveTemporariesOnSignals();
   if (std::getenv("GRPC_VERBOSITY") == nullptr) gpr_set_log_function(GrpcCoreLogToDebug);
   // The embedded service logs through spdlog: keep its lines off stdout (which carries the
   // report) and drop the per-call access line it writes at info level.

@@ -310,6 +310,9 @@ extern "C" void OnInterrupt(int signal_number) { g_interrupted = signal_number; 
 // polling interval) so nothing is left half-written, and the run exits with 128 + the signal; a
 // second one kills as usual. SIGTERM and SIGHUP killed the process at once until an outside
 // review (2026-11-29) found each such kill during a write left a hidden temporary file (64 MB).
+// A signal the process was started with ignored stays ignored: `nohup tetrefine refine ... &`
+// must outlive its terminal, and a background job ignores Ctrl-C. The guard caught SIGHUP under
+// nohup too, until a read-through (2026-11-29) noticed: a closed terminal ended the run.
 class InterruptGuard {
  public:
   InterruptGuard() {
@@ -317,16 +320,23 @@ class InterruptGuard {
     action.sa_handler = OnInterrupt;
     action.sa_flags = SA_RESETHAND;
     sigemptyset(&action.sa_mask);
-    for (int i = 0; i < kSignals; ++i) sigaction(kHandled[i], &action, &previous_[i]);
+    for (int i = 0; i < kSignals; ++i) {
+      installed_[i] = sigaction(kHandled[i], nullptr, &previous_[i]) == 0 &&
+                      previous_[i].sa_handler != SIG_IGN &&
+                      sigaction(kHandled[i], &action, nullptr) == 0;
+    }
   }
   ~InterruptGuard() {
-    for (int i = 0; i < kSignals; ++i) sigaction(kHandled[i], &previous_[i], nullptr);
+    for (int i = 0; i < kSignals; ++i) {
+      if (installed_[i]) sigaction(kHandled[i], &previous_[i], nullptr);
+    }
   }
 
  private:
   static constexpr int kSignals = 3;
   static constexpr int kHandled[kSignals] = {SIGINT, SIGTERM, SIGHUP};
   struct sigaction previous_[kSignals] = {};
+  bool installed_[kSignals] = {};
 };
 
 // What the run says and returns when a signal interrupted it.

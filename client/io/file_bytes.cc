@@ -15,6 +15,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "client/io/io_error.h"
+#include "client/io/temporary_files.h"
 #include "client/io/zlib_codec.h"
 
 namespace tetrefine::io {
@@ -175,6 +176,7 @@ namespace {
 struct Prepared {
   bool in_place = false;
   std::string temporary, destination;
+  RegisteredTemporary registration;  // the temporary, for removal if a signal ends the process
 };
 
 absl::StatusOr<Prepared> WriteBeside(const std::string& path, absl::string_view content) {
@@ -187,7 +189,7 @@ absl::StatusOr<Prepared> WriteBeside(const std::string& path, absl::string_view 
     if (S_ISDIR(st.st_mode)) return ErrnoError(path, "cannot write", EISDIR);
     if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) {
       if (absl::Status s = WriteInPlace(path, content); !s.ok()) return s;
-      return Prepared{.in_place = true, .temporary = "", .destination = ""};
+      return Prepared{.in_place = true, .temporary = "", .destination = "", .registration = {}};
     }
     return absl::InvalidArgumentError(absl::StrCat(
         path, ": not a regular file, character device or FIFO (",
@@ -196,6 +198,8 @@ absl::StatusOr<Prepared> WriteBeside(const std::string& path, absl::string_view 
   Prepared prepared;
   prepared.destination = FileBehindLinks(path).string();
   prepared.temporary = TemporaryNameFor(prepared.destination);
+  // Registered before it exists, so that no moment of its life on disk is unregistered.
+  prepared.registration = RegisteredTemporary(prepared.temporary);
   std::FILE* file = std::fopen(prepared.temporary.c_str(), "wb");
   if (file == nullptr) return ErrnoError(path, "cannot create temporary file", errno);
   const bool written = std::fwrite(content.data(), 1, content.size(), file) == content.size();
@@ -211,10 +215,13 @@ absl::StatusOr<Prepared> WriteBeside(const std::string& path, absl::string_view 
   return prepared;
 }
 
-absl::Status RenameIntoPlace(const std::string& path, const Prepared& prepared) {
-  if (std::rename(prepared.temporary.c_str(), prepared.destination.c_str()) != 0) {
+// Renames `temporary` over `destination`, or removes it when that fails. The caller's
+// registration of `temporary` ends after this returns.
+absl::Status RenameIntoPlace(const std::string& path, const std::string& temporary,
+                             const std::string& destination) {
+  if (std::rename(temporary.c_str(), destination.c_str()) != 0) {
     const int err = errno;
-    std::remove(prepared.temporary.c_str());
+    std::remove(temporary.c_str());
     return ErrnoError(path, "cannot rename temporary file into place", err);
   }
   return absl::OkStatus();
@@ -226,7 +233,7 @@ absl::Status WriteFileAtomically(const std::string& path, absl::string_view cont
   absl::StatusOr<Prepared> prepared = WriteBeside(path, content);
   if (!prepared.ok()) return prepared.status();
   if (prepared->in_place) return absl::OkStatus();
-  return RenameIntoPlace(path, *prepared);
+  return RenameIntoPlace(path, prepared->temporary, prepared->destination);
 }
 
 StagedFiles::~StagedFiles() {
@@ -237,7 +244,8 @@ absl::Status StagedFiles::Write(const std::string& path, absl::string_view conte
   absl::StatusOr<Prepared> prepared = WriteBeside(path, content);
   if (!prepared.ok()) return prepared.status();
   if (!prepared->in_place) {
-    staged_.push_back({path, prepared->temporary, prepared->destination});
+    staged_.push_back(
+        {path, prepared->temporary, prepared->destination, std::move(prepared->registration)});
   }
   return absl::OkStatus();
 }
@@ -249,9 +257,7 @@ absl::Status StagedFiles::Commit() {
       std::remove(f.temporary.c_str());
       continue;
     }
-    first = RenameIntoPlace(
-        f.path,
-        Prepared{.in_place = false, .temporary = f.temporary, .destination = f.destination});
+    first = RenameIntoPlace(f.path, f.temporary, f.destination);
   }
   staged_.clear();
   return first;

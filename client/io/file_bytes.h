@@ -5,6 +5,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/strings/string_view.h"
+#include "client/io/temporary_files.h"
 
 namespace tetrefine::io {
 
@@ -70,6 +71,7 @@ class StagedFiles {
  private:
   struct Staged {
     std::string path, temporary, destination;
+    RegisteredTemporary registration;  // until renamed or removed
   };
   std::vector<Staged> staged_;
 };

@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdlib>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <random>
@@ -215,6 +216,78 @@ TEST_F(CliOutput, ASignalWhileWritingFinishesTheFileAndExitsWith128PlusIt) {
     EXPECT_TRUE(absl::StrContains(cli->Output(), absl::StrCat(said, " while writing ", out)))
         << cli->Output();
     EXPECT_FALSE(FileExists(stats));
+  }
+}
+
+// `nohup tetrefine refine ... &` must outlive its terminal: a SIGHUP the run was started with
+// ignored stays ignored. The refine command's own handler caught it anyway until a read-through
+// (2026-11-29): the closed terminal ended the run with 129. The output is a FIFO, so the run is
+// still writing when the SIGHUP comes; a reader then drains it, and the run finishes with 0.
+TEST_F(CliOutput, ASignalIgnoredUnderNohupDoesNotStopTheRun) {
+  const std::string mesh = LabelledMesh(0);
+  const std::string out = dir_.File("nohup.vtu");
+  ASSERT_EQ(mkfifo(out.c_str(), 0600), 0);
+  std::unique_ptr<testing::ChildProcess> cli =
+      testing::ChildProcess::Start({"/usr/bin/nohup", TetrefinePath(), "refine", "--volume",
+                                    volume_, "--mesh", mesh, "--epsilon", "0.05", "--output", out});
+  ASSERT_NE(cli, nullptr);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!absl::StrContains(cli->Output(), "writing " + out) &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(absl::StrContains(cli->Output(), "writing " + out)) << cli->Output();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // into the blocked open
+  cli->Signal(SIGHUP);
+  // Caught, the signal ends the blocked open and the run (129). Only a run still waiting there
+  // may be given a reader: opening the FIFO with no writer left would wait for ever.
+  const std::optional<int> early = cli->WaitExit(std::chrono::milliseconds(500));
+  ASSERT_FALSE(early.has_value()) << "exit " << *early << "\n" << cli->Output();
+  const std::string written = ReadBytes(out);  // opens the FIFO: the write goes on
+  const std::optional<int> code = cli->WaitExit(std::chrono::seconds(30));
+  ASSERT_TRUE(code.has_value()) << cli->Output();
+  EXPECT_EQ(*code, 0) << cli->Output();
+  EXPECT_TRUE(absl::StrContains(written, "</VTKFile>"));
+}
+
+// The bits of `signal_number` in a /proc/<pid>/status signal mask line ("SigCgt", "SigIgn").
+bool InSignalMask(pid_t pid, const std::string& field, int signal_number) {
+  std::ifstream status(absl::StrCat("/proc/", pid, "/status"));
+  std::string line;
+  while (std::getline(status, line)) {
+    if (absl::StartsWith(line, field + ":")) {
+      const uint64_t mask = std::stoull(line.substr(field.size() + 1), nullptr, 16);
+      return ((mask >> (signal_number - 1)) & 1) != 0;
+    }
+  }
+  return false;
+}
+
+// Every command catches SIGINT, SIGTERM and SIGHUP to remove the temporary file of a write in
+// progress (client/io/temporary_files.h, tested there), unless it was started ignoring one; the
+// process still ends by the signal. `info` on a FIFO with no writer waits in its open.
+TEST_F(CliOutput, EveryCommandCatchesTheEndingSignalsItDoesNotIgnore) {
+  for (const bool nohup : {false, true}) {
+    SCOPED_TRACE(nohup ? "under nohup" : "plain");
+    const std::string fifo = dir_.File(absl::StrCat("blocked", nohup, ".vtu"));
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    std::vector<std::string> argv = {TetrefinePath(), "info", fifo};
+    if (nohup) argv.insert(argv.begin(), "/usr/bin/nohup");
+    std::unique_ptr<testing::ChildProcess> cli = testing::ChildProcess::Start(argv);
+    ASSERT_NE(cli, nullptr);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (!InSignalMask(cli->pid(), "SigCgt", SIGTERM) &&
+           std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    EXPECT_TRUE(InSignalMask(cli->pid(), "SigCgt", SIGTERM));
+    EXPECT_TRUE(InSignalMask(cli->pid(), "SigCgt", SIGINT));
+    EXPECT_EQ(InSignalMask(cli->pid(), "SigCgt", SIGHUP), !nohup);
+    EXPECT_EQ(InSignalMask(cli->pid(), "SigIgn", SIGHUP), nohup);
+    cli->Signal(SIGTERM);
+    const std::optional<int> code = cli->WaitExit(std::chrono::seconds(30));
+    ASSERT_TRUE(code.has_value()) << cli->Output();
+    EXPECT_EQ(*code, 128 + SIGTERM) << cli->Output();
   }
 }
 
