@@ -10,14 +10,28 @@
 namespace tetrefine::server {
 namespace {
 
+// Whether the process was started with `signal_number` ignored (SIGHUP under nohup, SIGINT in
+// a background job). Blocking such a signal would undo that: the kernel queues a blocked signal
+// whatever its disposition, so sigwait would take it. `nohup tetrefine_server &` drained and
+// exited when its terminal closed until a read-through (2026-11-29) noticed.
+bool IgnoredAtStart(int signal_number) {
+  struct sigaction current = {};
+  return sigaction(signal_number, nullptr, &current) == 0 && current.sa_handler == SIG_IGN;
+}
+
+// The signals that start the drain: SIGINT, SIGTERM and SIGHUP, less those ignored at start
+// (read once, before any thread: nothing changes the dispositions after).
 sigset_t ShutdownSet() {
-  sigset_t set;
-  sigemptyset(&set);
-  sigaddset(&set, SIGINT);
-  sigaddset(&set, SIGTERM);
-  // A closed terminal (or `kill -HUP`) used to kill the server at once, cutting off its calls:
-  // it drains like SIGTERM. Nothing is reloaded on it.
-  sigaddset(&set, SIGHUP);
+  static const sigset_t set = [] {
+    sigset_t s;
+    sigemptyset(&s);
+    // A closed terminal (or `kill -HUP`) used to kill the server at once, cutting off its
+    // calls: it drains like SIGTERM. Nothing is reloaded on it.
+    for (const int signal_number : {SIGINT, SIGTERM, SIGHUP}) {
+      if (!IgnoredAtStart(signal_number)) sigaddset(&s, signal_number);
+    }
+    return s;
+  }();
   return set;
 }
 

@@ -8,7 +8,8 @@
 
 namespace tetrefine::server {
 
-// SIGTERM, SIGINT and SIGHUP for a server that drains before it exits. They are blocked in every
+// SIGTERM, SIGINT and SIGHUP for a server that drains before it exits (each unless the process
+// was started with it ignored, as nohup starts it with SIGHUP). They are blocked in every
 // thread and taken by one thread of their own with sigwait: the first starts the drain (Wait
 // returns it), and every later one is logged and ignored, so a second Ctrl-C or an impatient
 // orchestrator cannot cut off the calls being drained; the drain's own deadline bounds it.

@@ -28,6 +28,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using ::testing::Not;
+using ::tetrefine::testing::ChildProcess;
 using ::tetrefine::testing::ProcessResult;
 using ::tetrefine::testing::RunProcess;
 using ::tetrefine::testing::ServerProcess;
@@ -338,6 +339,24 @@ TEST(ServerCommandLineTest, SighupDrainsLikeSigterm) {
   ASSERT_TRUE(server->process().WaitForLine("draining", std::chrono::seconds(10)))
       << server->process().Output();
   EXPECT_EQ(server->process().WaitExit(std::chrono::seconds(30)), 0) << server->process().Output();
+}
+
+// Under nohup (SIGHUP ignored from the start) a closed terminal must not stop the server: it
+// blocked SIGHUP for its signal thread, which queued it whatever its disposition, and drained
+// (found by a read-through, 2026-11-29).
+TEST(ServerCommandLineTest, SighupIgnoredUnderNohupStaysIgnored) {
+  std::unique_ptr<ChildProcess> server =
+      ChildProcess::Start({"/usr/bin/nohup", TETREFINE_SERVER_BINARY, "--listen=127.0.0.1:0",
+                           "--metrics_listen=", "--drain_seconds=1"});
+  ASSERT_NE(server, nullptr);
+  ASSERT_TRUE(server->WaitForLine("listening on 127.0.0.1:", std::chrono::seconds(30)))
+      << server->Output();
+  server->Signal(SIGHUP);
+  EXPECT_FALSE(server->WaitExit(std::chrono::seconds(2)).has_value()) << server->Output();
+  EXPECT_FALSE(absl::StrContains(server->Output(), "draining")) << server->Output();
+  server->Signal(SIGTERM);
+  ASSERT_TRUE(server->WaitForLine("draining", std::chrono::seconds(10))) << server->Output();
+  EXPECT_EQ(server->WaitExit(std::chrono::seconds(30)), 0) << server->Output();
 }
 
 }  // namespace
