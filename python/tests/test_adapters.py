@@ -241,6 +241,52 @@ def test_labels_are_the_refs_of_a_medit_file_written_through_meshio(server, tmp_
     np.testing.assert_array_equal(result.to_meshio().cell_data["iteration"][0], result.iteration)
 
 
+def _tet_volumes(points, tets):
+    p = points[tets]
+    return np.einsum("ij,ij->i", p[:, 1] - p[:, 0],
+                     np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0])) / 6.0
+
+
+def test_gmsh_physical_names_come_back_through_meshio(server, cli_binary, tmp_path):
+    # An outside review (2026-11-29): meshio.read gives the physical names in field_data, and
+    # they were lost between mesh_from_meshio and to_meshio; the CLI's .msh output kept them.
+    volume = np.random.default_rng(7).uniform(0, 10, size=(10, 10, 10))
+    points, tets = box_mesh((1, 1, 1), (8, 8, 8), (2, 2, 2))
+    labels = np.where(np.arange(len(tets)) % 3 == 0, 7, 8)
+    original = meshio.Mesh(points, [("tetra", tets)],
+                           cell_data={"gmsh:physical": [labels], "gmsh:geometrical": [labels]},
+                           field_data={"liver": np.array([7, 3]), "tumour": np.array([8, 3]),
+                                       "skin": np.array([7, 2]), "unused": np.array([9, 3])})
+    original.write(tmp_path / "in.msh", file_format="gmsh22", binary=False)
+    mesh = tetrefine.mesh_from_meshio(meshio.read(tmp_path / "in.msh"))
+    # Only volumes (dimension 3) the labels use: Gmsh numbers surface groups apart.
+    assert mesh.label_name == "gmsh:physical"
+    assert mesh.region_names == {7: "liver", 8: "tumour"}
+    with tetrefine.Client(server.target) as client:
+        result = client.refine(volume, (1, 1, 1), (0, 0, 0), mesh.points, mesh.tets, 0.05,
+                               labels=mesh.labels, max_iterations=2)
+    assert len(result.tets) > len(tets)
+    # meshio 5.0 writes physical groups only in MSH 2.2 (its 4.1 writer leaves them out).
+    result.to_meshio(mesh.label_name, mesh.region_names).write(
+        tmp_path / "out.msh", file_format="gmsh22", binary=False)
+    back = meshio.read(tmp_path / "out.msh")
+    assert {k: v.tolist() for k, v in back.field_data.items()} == {"liver": [7, 3],
+                                                                   "tumour": [8, 3]}
+    np.testing.assert_array_equal(back.cell_data["gmsh:physical"][0], result.labels)
+    for label in (7, 8):  # every region's volume unchanged
+        before = _tet_volumes(points, tets[labels == label]).sum()
+        after = _tet_volumes(back.points, back.cells[0].data[result.labels == label]).sum()
+        assert after == pytest.approx(before, rel=1e-12)
+    info = subprocess.run([cli_binary, "info", str(tmp_path / "out.msh")], capture_output=True,
+                          text=True, check=True).stdout
+    assert re.search(r"regions +2: 7 \(\d+ tets\), 8 \(\d+ tets\)", info), info
+    # A mesh without names, or with labels under another name, has none to give back.
+    unnamed = meshio.Mesh(points, [("tetra", tets)], cell_data={"region": [labels]})
+    assert tetrefine.mesh_from_meshio(unnamed).region_names == {}
+    with pytest.raises(tetrefine.TetrefineError, match="region_names: label 8: name 'liver' is"):
+        result.to_meshio("gmsh:physical", {7: "liver", 8: "liver"})
+
+
 def test_fit_to_an_oblique_volume_equals_the_cli(server, cli_binary, tmp_path):
     # Found by a service sweep: on an oblique volume fit_to_volume moved 120 of 448 vertices by
     # up to 3e-14 from the CLI's --fit-mesh-to-volume (a column length taken by math.hypot, and

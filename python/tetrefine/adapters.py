@@ -262,13 +262,19 @@ def fit_to_volume(points, grid):
 
 class TetMesh:
     """A tet mesh ready for Client.refine: points (n, 3) float64, tets (m, 4) int64, labels
-    (m,) int32 or None, values (n,) float64 or None (a "value" point array)."""
+    (m,) int32 or None, values (n,) float64 or None (a "value" point array). label_name is the
+    cell array the labels came from (None without labels); region_names maps a label to its
+    name where the file names its regions (Gmsh's physical volumes, meshio's field_data), else
+    it is empty: pass both to RefineResult.to_meshio to write them back."""
 
-    def __init__(self, points, tets, labels=None, values=None):
+    def __init__(self, points, tets, labels=None, values=None, label_name=None,
+                 region_names=None):
         self.points = points
         self.tets = tets
         self.labels = labels
         self.values = values
+        self.label_name = label_name
+        self.region_names = dict(region_names or {})
 
 
 # The cell-data names taken as region labels, the first found winning, compared without case:
@@ -326,11 +332,13 @@ def mesh_from_meshio(mesh, label_name=None):
             by_lower.setdefault(key.lower(), key)
         names = [by_lower[n.lower()] for n in LABEL_NAMES if n.lower() in by_lower]
     labels = None
+    found_name = None
     for name in names:
         arrays = mesh.cell_data.get(name)
         if arrays is not None:
             labels = np.concatenate([_labels_of_block(name, mesh.cells[i], arrays[i])
                                      for i in blocks])
+            found_name = name
             break
     else:
         if label_name is not None:
@@ -343,7 +351,23 @@ def mesh_from_meshio(mesh, label_name=None):
             raise invalid("mesh", f"point data 'value' has shape {values.shape}, expected one "
                           f"number per point ({len(points)},)")
         values = values.reshape(-1)
-    return TetMesh(points, tets, labels, values)
+    region_names = _region_names(mesh, labels) if found_name == "gmsh:physical" else {}
+    return TetMesh(points, tets, labels, values, found_name, region_names)
+
+
+def _region_names(mesh, labels):
+    """Gmsh's physical volume names from meshio's field_data ({name: [tag, dimension]}), for
+    the tags the labels use. Surface and line groups share tags with volumes in Gmsh's
+    numbering, so only dimension 3 counts. The outside review of 2026-11-29 found the names
+    lost between meshio.read and meshio.write; the CLI's .msh output kept them."""
+    field_data = getattr(mesh, "field_data", None) or {}
+    used = set(np.unique(labels).tolist()) if labels is not None else set()
+    names = {}
+    for name, entry in field_data.items():
+        entry = np.asarray(entry).reshape(-1)
+        if len(entry) >= 2 and int(entry[1]) == 3 and int(entry[0]) in used:
+            names[int(entry[0])] = str(name)
+    return names
 
 
 def _labels_of_block(name, block, array):
@@ -367,9 +391,12 @@ def _labels_of_block(name, block, array):
     return labels.astype(np.int32)
 
 
-def result_to_meshio(result, label_name="labels"):
+def result_to_meshio(result, label_name="labels", region_names=None):
     """A meshio.Mesh of a RefineResult: one "tetra" block, point data "value", cell data
-    "iteration", "quality" and, when the result has labels, `label_name`."""
+    "iteration", "quality" and, when the result has labels, `label_name`. region_names
+    ({label: name}, TetMesh.region_names) become Gmsh physical volume names (field_data
+    {name: [label, 3]}); with label_name "gmsh:physical" the labels are also the elementary
+    volumes ("gmsh:geometrical"), as the CLI's .msh writer makes them."""
     import meshio
 
     # The labels first: formats with one integer per cell (Medit's ref) take meshio's first
@@ -378,6 +405,17 @@ def result_to_meshio(result, label_name="labels"):
     cell_data = {}
     if result.labels is not None:
         cell_data[label_name] = [result.labels]
+        if label_name == "gmsh:physical":
+            cell_data["gmsh:geometrical"] = [result.labels]
     cell_data.update({"iteration": [result.iteration], "quality": [result.quality]})
+    field_data = {}
+    for label, name in sorted((region_names or {}).items()):
+        if not isinstance(name, str) or not name:
+            raise invalid("region_names", f"label {label}: expected a name, got {name!r}")
+        if name in field_data:
+            raise invalid("region_names", f"label {label}: name {name!r} is already label "
+                          f"{field_data[name][0]}")
+        field_data[name] = np.array([int(label), 3])
     return meshio.Mesh(result.points, [("tetra", result.tets)],
-                       point_data={"value": result.values}, cell_data=cell_data)
+                       point_data={"value": result.values}, cell_data=cell_data,
+                       field_data=field_data)

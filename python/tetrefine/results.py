@@ -151,11 +151,13 @@ class RefineResult:
         self.stop_reason = summary.stop_reason
         self.lattice = summary.lattice
 
-    def to_meshio(self, label_name="labels"):
+    def to_meshio(self, label_name="labels", region_names=None):
         """A meshio.Mesh: point data "value", cell data "iteration" and "quality" (and
-        `label_name` when the result has labels). Needs the meshio package."""
+        `label_name` when the result has labels); region_names ({label: name}) as Gmsh
+        physical names. For the input's own: to_meshio(mesh.label_name or "labels",
+        mesh.region_names) with `mesh` from mesh_from_meshio. Needs the meshio package."""
         from tetrefine.adapters import result_to_meshio
-        return result_to_meshio(self, label_name=label_name)
+        return result_to_meshio(self, label_name=label_name, region_names=region_names)
 
     def __repr__(self):
         return (f"RefineResult({len(self.points)} vertices, {len(self.tets)} tets, "
