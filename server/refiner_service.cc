@@ -1,8 +1,11 @@
 #include "server/refiner_service.h"
 
 #include <chrono>
+#include <string>
+#include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "server/metrics.h"
 #include "server/refine_call.h"
 #include "spdlog/spdlog.h"
@@ -37,13 +40,27 @@ grpc::ServerBidiReactor<v1::RefineRequest, v1::RefineResponse>* RefinerService::
                                                             .refusal_log = &refusal_log_});
 }
 
-grpc::Status RefinerService::GetServerInfo(grpc::ServerContext* context,
-                                           const v1::GetServerInfoRequest* /*request*/,
-                                           v1::ServerInfo* response) {
+namespace {
+
+// The bytes of a received message, in one string.
+std::string BytesOf(const grpc::ByteBuffer& buffer) {
+  std::vector<grpc::Slice> slices;
+  std::string bytes;
+  if (!buffer.Dump(&slices).ok()) return bytes;
+  for (const grpc::Slice& slice : slices) {
+    bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+  }
+  return bytes;
+}
+
+}  // namespace
+
+grpc::ServerUnaryReactor* RefinerService::GetServerInfo(grpc::CallbackServerContext* context,
+                                                        const grpc::ByteBuffer* request,
+                                                        grpc::ByteBuffer* response) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   absl::StatusOr<std::string> identity = IdentifyCall(config_.access, *context);
-  const grpc::Status status =
-      identity.ok() ? grpc::Status::OK : wire::ToGrpcStatus(identity.status());
-  if (config_.metrics != nullptr) config_.metrics->RecordServerInfo(status.error_code());
+  grpc::Status status = identity.ok() ? grpc::Status::OK : wire::ToGrpcStatus(identity.status());
   if (!status.ok()) {
     // Clients ask this before they refine, so a wrong token or certificate ends here: the
     // operator must see it (an operator sweep found three refused CLI runs left no trace).
@@ -54,11 +71,20 @@ grpc::Status RefinerService::GetServerInfo(grpc::ServerContext* context,
                    std::string(identity.status().message()),
                    LogRateLimit::SuppressedNote(unlogged));
     }
-    return status;
+  } else if (v1::GetServerInfoRequest parsed; !parsed.ParseFromString(BytesOf(*request))) {
+    status = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                          absl::StrCat("GetServerInfo: the request (", request->Length(),
+                                       " bytes) did not parse as a GetServerInfoRequest"));
+  } else {
+    v1::ServerInfo info;
+    info.set_version(TETREFINE_VERSION);
+    wire::LimitsToWire(config_.limits, info.mutable_limits());
+    grpc::Slice slice(info.SerializeAsString());
+    *response = grpc::ByteBuffer(&slice, 1);
   }
-  response->set_version(TETREFINE_VERSION);
-  wire::LimitsToWire(config_.limits, response->mutable_limits());
-  return grpc::Status::OK;
+  if (config_.metrics != nullptr) config_.metrics->RecordServerInfo(status.error_code());
+  reactor->Finish(status);
+  return reactor;
 }
 
 }  // namespace tetrefine::server

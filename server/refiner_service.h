@@ -32,7 +32,11 @@ struct ServiceConfig {
 // The tetrefine.v1.Refiner service. Refine is a callback (reactor) method, so a call that sends
 // nothing costs no thread; GetServerInfo is synchronous. Stateless between calls: what a call
 // holds (server/call_gate.h) is released when it ends.
-class RefinerService final : public v1::Refiner::WithCallbackMethod_Refine<v1::Refiner::Service> {
+// GetServerInfo is a raw method (bytes in, bytes out), parsed here: a request that does not
+// parse is answered INVALID_ARGUMENT naming the method and the size, where gRPC's own parse
+// answered INTERNAL with an empty message (an outside review, 2026-11-29).
+class RefinerService final : public v1::Refiner::WithRawCallbackMethod_GetServerInfo<
+                                 v1::Refiner::WithCallbackMethod_Refine<v1::Refiner::Service>> {
  public:
   explicit RefinerService(const ServiceConfig& config);
   // Waits until every call has ended and released what it held (the server must have been shut
@@ -42,8 +46,9 @@ class RefinerService final : public v1::Refiner::WithCallbackMethod_Refine<v1::R
   grpc::ServerBidiReactor<v1::RefineRequest, v1::RefineResponse>* Refine(
       grpc::CallbackServerContext* context) override;
 
-  grpc::Status GetServerInfo(grpc::ServerContext* context, const v1::GetServerInfoRequest* request,
-                             v1::ServerInfo* response) override;
+  grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* context,
+                                          const grpc::ByteBuffer* request,
+                                          grpc::ByteBuffer* response) override;
 
   // Refine calls open (reading input, queued, refining or writing results).
   int open_calls() const { return gate_.open_calls(); }

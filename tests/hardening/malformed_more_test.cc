@@ -122,5 +122,34 @@ TEST_F(HardeningMalformedTest, GarbageBytesAreRefused) {
   ExpectServesAGoodRequest();
 }
 
+// GetServerInfo's request is parsed by the service: garbage is INVALID_ARGUMENT naming the
+// method, where gRPC's own parse answered INTERNAL with an empty message (an outside review,
+// 2026-11-29). An empty request, and one with a field this version does not know, are served.
+TEST_F(HardeningMalformedTest, GarbageServerInfoRequestsAreRefusedNamingTheMethod) {
+  ASSERT_NE(server_, nullptr);
+  for (const std::string& garbage :
+       {std::string("\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff", 10),
+        std::string("\x0a\xff\xff\xff\xff\x07", 6), std::string("GET / HTTP/1.1\r\n\r\n")}) {
+    const grpc::Status status =
+        SendRawBytes(server_->NewChannel(), {garbage}, std::chrono::seconds(30), kServerInfoMethod);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+    EXPECT_EQ(status.error_message(), "GetServerInfo: the request (" +
+                                          std::to_string(garbage.size()) +
+                                          " bytes) did not parse as a GetServerInfoRequest");
+  }
+  for (const std::string& good : {std::string(), std::string("\x08\x05", 2)}) {
+    std::vector<std::string> responses;
+    const grpc::Status status = SendRawBytes(
+        server_->NewChannel(), {good}, std::chrono::seconds(30), kServerInfoMethod, &responses);
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    ASSERT_EQ(responses.size(), 1u);
+    v1::ServerInfo info;
+    ASSERT_TRUE(info.ParseFromString(responses[0]));
+    EXPECT_FALSE(info.version().empty());
+    EXPECT_GT(info.limits().max_input_tets(), 0);
+  }
+  ExpectServesAGoodRequest();
+}
+
 }  // namespace
 }  // namespace tetrefine::hardening

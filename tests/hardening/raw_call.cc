@@ -1,5 +1,7 @@
 #include "tests/hardening/raw_call.h"
 
+#include <utility>
+
 #include "grpcpp/generic/generic_stub.h"
 
 namespace tetrefine::hardening {
@@ -19,13 +21,14 @@ bool Await(grpc::CompletionQueue& queue, void* tag) {
 
 grpc::Status SendRawBytes(const std::shared_ptr<grpc::Channel>& channel,
                           const std::vector<std::string>& messages,
-                          std::chrono::milliseconds timeout) {
+                          std::chrono::milliseconds timeout, const char* method,
+                          std::vector<std::string>* responses) {
   grpc::GenericStub stub(channel);
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + timeout);
   grpc::CompletionQueue queue;
   std::unique_ptr<grpc::GenericClientAsyncReaderWriter> call =
-      stub.PrepareCall(&context, "/tetrefine.v1.Refiner/Refine", &queue);
+      stub.PrepareCall(&context, method, &queue);
   int tag = 0;
   call->StartCall(&tag);
   bool open = Await(queue, &tag);
@@ -44,6 +47,15 @@ grpc::Status SendRawBytes(const std::shared_ptr<grpc::Channel>& channel,
   for (grpc::ByteBuffer response;;) {
     call->Read(&response, &tag);
     if (!Await(queue, &tag)) break;
+    if (responses == nullptr) continue;
+    std::vector<grpc::Slice> slices;
+    std::string bytes;
+    if (response.Dump(&slices).ok()) {
+      for (const grpc::Slice& slice : slices) {
+        bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+      }
+    }
+    responses->push_back(std::move(bytes));
   }
   grpc::Status status;
   call->Finish(&status, &tag);
