@@ -40,10 +40,10 @@ struct MeshWriteOptions {
 // What each format keeps: .vtu/.vtk keep values, iteration, quality, labels (under label_name)
 // and the frame tag; .msh keeps values, iteration, quality and labels (as physical groups,
 // zero and negative ones too, with region_names as $PhysicalNames); .mesh/.meshb keep only the
-// labels (as references); .ele (with its .node, written first) keeps only the labels (as the
-// region attribute). Formats without a frame tag get the coordinates of
-// `file.frame` untagged: an LPS mesh is written with its LPS numbers, so every input vertex keeps
-// its coordinates whatever the format (LpsTagLost says when).
+// labels (as references); .ele (with its .node; the two are renamed into place together, the
+// .node first) keeps only the labels (as the region attribute). Formats without a frame tag get the
+// coordinates of `file.frame` untagged: an LPS mesh is written with its LPS numbers, so every input
+// vertex keeps its coordinates whatever the format (LpsTagLost says when).
 absl::Status WriteMesh(const std::string& path, const MeshFile& file,
                        const MeshWriteOptions& options = {});
 // As WriteMesh, but into `staged` (client/io/file_bytes.h): the files are renamed into place

@@ -75,6 +75,29 @@ TEST(IoTetgenTest, AnUpperCaseEleGoesWithAnUpperCaseNode) {
   EXPECT_EQ(back->mesh.labels, mesh.mesh.labels);
 }
 
+// The .node and .ele are renamed into place together: when the .ele cannot be written, the
+// .node of the run before stays as it was (it was replaced first, so that `mesh --output X.ele`
+// killed during the .ele left a new .node beside the old .ele: an outside review, 2026-11-29).
+// A signal during the write removes both temporaries (StagedFiles, temporary_files_test.cc).
+TEST(IoTetgenTest, APairThatCannotBeWrittenWholeLeavesTheOldNode) {
+  ScratchDir dir;
+  const std::string path = dir.File("pair.ele");
+  ASSERT_TRUE(WriteMesh(path, RandomMesh(5, {})).ok());
+  const std::string old_node = iotest::ReadBytes(dir.File("pair.node"));
+  std::filesystem::remove(path);
+  std::filesystem::create_directory(path);  // the new .ele cannot be written there
+  const absl::Status written = WriteMesh(path, RandomMesh(6, {.tets = 40}));
+  ASSERT_FALSE(written.ok());
+  EXPECT_THAT(written.message(), HasSubstr(path));
+  EXPECT_EQ(iotest::ReadBytes(dir.File("pair.node")), old_node);
+  int entries = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
+    ++entries;
+  }
+  EXPECT_EQ(entries, 2);  // pair.node and the directory
+}
+
 // Found by a CLI sweep: the label -2147483648 was written and then refused as outside int32.
 TEST(IoTetgenTest, TheWholeInt32RangeOfLabelsRoundTrips) {
   ScratchDir dir;
