@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -25,6 +24,7 @@
 #include "client/cli/exit_codes.h"
 #include "client/cli/file_kind.h"
 #include "client/cli/grpc_channel.h"
+#include "client/cli/interrupt_guard.h"
 #include "client/cli/mesh_placement.h"
 #include "client/cli/mesh_write_flags.h"
 #include "client/cli/progress.h"
@@ -300,50 +300,6 @@ absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const
     }
   }
   return absl::OkStatus();
-}
-
-volatile std::sig_atomic_t g_interrupted = 0;  // the signal that interrupted the run, or 0
-extern "C" void OnInterrupt(int signal_number) { g_interrupted = signal_number; }
-
-// Ctrl-C, and SIGTERM or SIGHUP (what `timeout`, batch schedulers, container runtimes and a
-// closed terminal send), cancel the call (the embedded service stops within an iteration's
-// polling interval) so nothing is left half-written, and the run exits with 128 + the signal; a
-// second one kills as usual. SIGTERM and SIGHUP killed the process at once until an outside
-// review (2026-11-29) found each such kill during a write left a hidden temporary file (64 MB).
-// A signal the process was started with ignored stays ignored: `nohup tetrefine refine ... &`
-// must outlive its terminal, and a background job ignores Ctrl-C. The guard caught SIGHUP under
-// nohup too, until a read-through (2026-11-29) noticed: a closed terminal ended the run.
-class InterruptGuard {
- public:
-  InterruptGuard() {
-    struct sigaction action = {};
-    action.sa_handler = OnInterrupt;
-    action.sa_flags = SA_RESETHAND;
-    sigemptyset(&action.sa_mask);
-    for (int i = 0; i < kSignals; ++i) {
-      installed_[i] = sigaction(kHandled[i], nullptr, &previous_[i]) == 0 &&
-                      previous_[i].sa_handler != SIG_IGN &&
-                      sigaction(kHandled[i], &action, nullptr) == 0;
-    }
-  }
-  ~InterruptGuard() {
-    for (int i = 0; i < kSignals; ++i) {
-      if (installed_[i]) sigaction(kHandled[i], &previous_[i], nullptr);
-    }
-  }
-
- private:
-  static constexpr int kSignals = 3;
-  static constexpr int kHandled[kSignals] = {SIGINT, SIGTERM, SIGHUP};
-  struct sigaction previous_[kSignals] = {};
-  bool installed_[kSignals] = {};
-};
-
-// What the run says and returns when a signal interrupted it.
-std::string InterruptedBy() {
-  return g_interrupted == SIGINT    ? "interrupted"
-         : g_interrupted == SIGTERM ? "terminated (SIGTERM)"
-                                    : "hung up (SIGHUP)";
 }
 
 std::string IterationPath(const std::string& output, int iteration) {
@@ -723,7 +679,9 @@ int RunRefinement(const RefineSettings& s) {
   // Printed even with --quiet: a server that failed mid-run is the operator's to look at.
   callbacks.on_warning = [](const std::string& message) { PrintWarning(message); };
   InterruptGuard interrupt_guard;
-  callbacks.should_cancel = [&] { return g_interrupted != 0 || !iteration_write.ok(); };
+  callbacks.should_cancel = [&] {
+    return InterruptGuard::Interrupted() != 0 || !iteration_write.ok();
+  };
 
   const auto refine_start = std::chrono::steady_clock::now();
   // A .pvtu is written from the parts' own meshes: the result is never merged here.
@@ -746,8 +704,9 @@ int RunRefinement(const RefineSettings& s) {
                                FormatSeconds(SecondsSince(refine_start))));
   }
   if (!iteration_write.ok()) return Fail(iteration_write, kExitUsage);
-  if (g_interrupted != 0) {
-    return Fail(absl::StrCat(InterruptedBy(), "; no output written"), 128 + g_interrupted);
+  if (const int signal_number = InterruptGuard::Interrupted(); signal_number != 0) {
+    return Fail(absl::StrCat(InterruptGuard::InterruptedBy(), "; no output written"),
+                128 + signal_number);
   }
   if (!reply.ok()) {
     if (reply.status().code() == absl::StatusCode::kInvalidArgument &&
@@ -821,12 +780,12 @@ int RunRefinement(const RefineSettings& s) {
   // A signal while writing: a regular file is finished rather than left half-written (written
   // beside and renamed into place), a pipe's write fails; either way the run stops there, with
   // 128 + the signal (it went on to exit 0, an outside review found).
-  if (g_interrupted != 0) {
-    return Fail(absl::StrCat(InterruptedBy(), " while writing ", s.output_path,
+  if (const int signal_number = InterruptGuard::Interrupted(); signal_number != 0) {
+    return Fail(absl::StrCat(InterruptGuard::InterruptedBy(), " while writing ", s.output_path,
                              written.ok() ? ", which was finished rather than left half-written"
                                           : absl::StrCat(" (", written.message(), ")"),
                              "; nothing else (series, statistics) was written"),
-                128 + g_interrupted);
+                128 + signal_number);
   }
   if (!written.ok()) return Fail(written, kExitUsage);
   const std::string series_path = s.every_iteration ? SeriesPath(s.output_path) : "";

@@ -202,7 +202,15 @@ absl::StatusOr<Prepared> WriteBeside(const std::string& path, absl::string_view 
   prepared.registration = RegisteredTemporary(prepared.temporary);
   std::FILE* file = std::fopen(prepared.temporary.c_str(), "wb");
   if (file == nullptr) return ErrnoError(path, "cannot create temporary file", errno);
-  const bool written = std::fwrite(content.data(), 1, content.size(), file) == content.size();
+  // In pieces of 4 MiB: a signal handler runs only between system calls, and one write(2) of a
+  // few hundred MB to a slow disk held off a user's second Ctrl-C for as long (an outside
+  // review, 2026-11-29; cli/interrupt_guard.h).
+  constexpr size_t kPiece = size_t{4} << 20;
+  bool written = true;
+  for (size_t done = 0; written && done < content.size(); done += kPiece) {
+    const size_t n = std::min(kPiece, content.size() - done);
+    written = std::fwrite(content.data() + done, 1, n, file) == n;
+  }
   int err = errno;
   const bool flushed = written && std::fflush(file) == 0;
   if (written && !flushed) err = errno;

@@ -39,16 +39,20 @@ extern "C" void RemoveTemporariesAndDie(int signal_number) {
 
 }  // namespace
 
+void RemoveTemporariesOnSignal(int signal_number) {
+  struct sigaction action = {};
+  action.sa_handler = RemoveTemporariesAndDie;
+  action.sa_flags = SA_RESETHAND;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(signal_number, &action, nullptr);
+}
+
 void RemoveTemporariesOnSignals() {
   for (const int signal_number : kHandled) {
     struct sigaction previous = {};
     if (::sigaction(signal_number, nullptr, &previous) != 0) continue;
     if (previous.sa_handler == SIG_IGN) continue;  // nohup, or a background job's SIGINT
-    struct sigaction action = {};
-    action.sa_handler = RemoveTemporariesAndDie;
-    action.sa_flags = SA_RESETHAND;
-    sigemptyset(&action.sa_mask);
-    ::sigaction(signal_number, &action, nullptr);
+    RemoveTemporariesOnSignal(signal_number);
   }
 }
 

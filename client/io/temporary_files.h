@@ -18,6 +18,11 @@ namespace tetrefine::io {
 // replaces the handlers while it runs and restores them after.
 void RemoveTemporariesOnSignals();
 
+// The same handler for `signal_number` alone, whatever its action now. Async-signal-safe: a
+// command's own handler calls it from its handler so that the next signal ends the process at
+// once, with its temporaries removed (cli/interrupt_guard.h).
+void RemoveTemporariesOnSignal(int signal_number);
+
 // A temporary file registered for removal by those handlers while the object lives. Paths
 // longer than the registry's slot (4095 bytes) or beyond its 256 slots are not registered (the
 // write goes on; only the clean-up on a signal is lost). Movable, not copyable.
