@@ -318,7 +318,9 @@ absl::Status GmshParser::PhysicalNames() {
       return in_.Error(absl::StrCat("physical name of ", *tag, ": expected a quoted name"));
     }
     name = name.substr(1, name.size() - 2);
-    if (*dim == 3 && !name.empty()) region_names_[static_cast<int32_t>(*tag)] = std::string(name);
+    // A tag named twice keeps its first name, as Gmsh's own reader does: the last was kept, so
+    // a round trip through tetrefine renamed the region (an outside review, 2026-11-29).
+    if (*dim == 3 && !name.empty()) region_names_.emplace(static_cast<int32_t>(*tag), name);
   }
   return absl::OkStatus();
 }

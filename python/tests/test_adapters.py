@@ -285,6 +285,22 @@ def test_gmsh_physical_names_come_back_through_meshio(server, cli_binary, tmp_pa
     assert tetrefine.mesh_from_meshio(unnamed).region_names == {}
     with pytest.raises(tetrefine.TetrefineError, match="region_names: label 8: name 'liver' is"):
         result.to_meshio("gmsh:physical", {7: "liver", 8: "liver"})
+    # Checked, not coerced (an outside review, 2026-11-29: 1.5, True and "1" all became label 1;
+    # a name with a line break gave a file neither Gmsh nor meshio could read).
+    for bad, message in [({1.5: "x"}, "label 1.5: expected an integer label, got float"),
+                         ({True: "x"}, "label True: expected an integer label, got bool"),
+                         ({"1": "x"}, "label '1': expected an integer label, got str"),
+                         ({2**40: "x"}, f"label {2**40}: outside int32"),
+                         ({7: "two\nlines"}, "label 7: the name 'two\\\\nlines' holds a control"),
+                         ([(7, "x")], "expected a dict")]:
+        with pytest.raises(tetrefine.TetrefineError, match=f"region_names: {message}"):
+            result.to_meshio("gmsh:physical", bad)
+    assert result.to_meshio("gmsh:physical", {np.int32(7): "liver"}).field_data["liver"][0] == 7
+    # A tag named twice keeps its first name, as Gmsh does; a label array named in another case
+    # gives the names too.
+    twice = meshio.Mesh(points, [("tetra", tets)], cell_data={"GMSH:Physical": [labels]},
+                        field_data={"first": np.array([7, 3]), "second": np.array([7, 3])})
+    assert tetrefine.mesh_from_meshio(twice).region_names == {7: "first"}
 
 
 def test_fit_to_an_oblique_volume_equals_the_cli(server, cli_binary, tmp_path):

@@ -351,7 +351,8 @@ def mesh_from_meshio(mesh, label_name=None):
             raise invalid("mesh", f"point data 'value' has shape {values.shape}, expected one "
                           f"number per point ({len(points)},)")
         values = values.reshape(-1)
-    region_names = _region_names(mesh, labels) if found_name == "gmsh:physical" else {}
+    named = found_name is not None and found_name.lower() == "gmsh:physical"
+    region_names = _region_names(mesh, labels) if named else {}
     return TetMesh(points, tets, labels, values, found_name, region_names)
 
 
@@ -366,7 +367,8 @@ def _region_names(mesh, labels):
     for name, entry in field_data.items():
         entry = np.asarray(entry).reshape(-1)
         if len(entry) >= 2 and int(entry[1]) == 3 and int(entry[0]) in used:
-            names[int(entry[0])] = str(name)
+            # A tag named twice keeps its first name (the file's order), as Gmsh's reader does.
+            names.setdefault(int(entry[0]), str(name))
     return names
 
 
@@ -409,9 +411,24 @@ def result_to_meshio(result, label_name="labels", region_names=None):
             cell_data["gmsh:geometrical"] = [result.labels]
     cell_data.update({"iteration": [result.iteration], "quality": [result.quality]})
     field_data = {}
-    for label, name in sorted((region_names or {}).items()):
+    if region_names is not None and not isinstance(region_names, dict):
+        raise invalid("region_names", f"expected a dict {{label: name}}, got "
+                      f"{type(region_names).__name__}")
+    for label, name in (region_names or {}).items():
+        # Checked, not coerced: int(1.5), int(True) and int("1") all made label 1.
+        if isinstance(label, (bool, np.bool_)) or not isinstance(label, (int, np.integer)):
+            raise invalid("region_names", f"label {label!r}: expected an integer label, got "
+                          f"{type(label).__name__}")
+        if not -2**31 <= int(label) < 2**31:
+            raise invalid("region_names", f"label {label}: outside int32, as no label can be")
+    for label, name in sorted((int(k), v) for k, v in (region_names or {}).items()):
         if not isinstance(name, str) or not name:
             raise invalid("region_names", f"label {label}: expected a name, got {name!r}")
+        # A line break ends the $PhysicalNames line early: neither Gmsh nor meshio read the file
+        # back. The CLI's writer refuses the same.
+        if any(ord(c) < 32 or ord(c) == 127 for c in name):
+            raise invalid("region_names", f"label {label}: the name {name!r} holds a control "
+                          "character")
         if name in field_data:
             raise invalid("region_names", f"label {label}: name {name!r} is already label "
                           f"{field_data[name][0]}")

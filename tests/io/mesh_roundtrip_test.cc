@@ -376,6 +376,15 @@ TEST(IoMeshTest, GmshRegionNamesRoundTrip) {
   ASSERT_TRUE(named.ok()) << named.status();
   EXPECT_EQ(named->region_names,
             (std::map<int32_t, std::string>{{5, "liver"}, {7, "left kidney"}}));
+  // A tag named twice keeps its first name, as Gmsh's reader does (the last was kept: an outside
+  // review, 2026-11-29).
+  const std::string renamed =
+      absl::StrReplaceAll(text, {{"$PhysicalNames\n2\n", "$PhysicalNames\n3\n"},
+                                 {"$EndPhysicalNames", "3 5 \"renamed\"\n$EndPhysicalNames"}});
+  iotest::WriteBytes(dir.File("named_twice.msh"), renamed);
+  absl::StatusOr<MeshFile> twice = ReadMesh(dir.File("named_twice.msh"));
+  ASSERT_TRUE(twice.ok()) << twice.status();
+  EXPECT_EQ(twice->region_names.at(5), "liver");
   // Quotes inside a name, as Gmsh writes them (unescaped; read here from the line's first quote
   // to its last): kept both ways. They were refused, and so was Gmsh's own file.
   file.region_names[5] = "white matter \"WM\" \xc3\xa9";
