@@ -303,6 +303,37 @@ def test_gmsh_physical_names_come_back_through_meshio(server, cli_binary, tmp_pa
     assert tetrefine.mesh_from_meshio(twice).region_names == {7: "first"}
 
 
+def test_a_volume_in_two_physical_groups_reads_as_the_cli_reads_it(cli_binary, tmp_path):
+    # Gmsh's MSH 2 writer lists such a volume's tets once per group, and meshio reads each copy:
+    # the server refused the mesh ("an element listed twice") where the CLI reads the file
+    # (an outside review, 2026-11-29). A tet keeps its volume's first group, as in the CLI.
+    points, tets = box_mesh((0, 0, 0), (1, 1, 1), (2, 2, 2))
+    n, half = len(tets), len(tets) // 2
+    listed = np.concatenate([tets, tets[half:]])
+    physical = np.concatenate([np.full(half, 7), np.full(n - half, 8), np.full(n - half, 9)])
+    entity = np.concatenate([np.full(half, 1), np.full(2 * (n - half), 2)])
+    meshio.Mesh(points, [("tetra", listed)],
+                cell_data={"gmsh:physical": [physical], "gmsh:geometrical": [entity]},
+                field_data={"left": np.array([7, 3]), "right": np.array([8, 3]),
+                            "all of the right": np.array([9, 3])}).write(
+        tmp_path / "two_groups.msh", file_format="gmsh22", binary=False)
+    with pytest.warns(UserWarning, match=rf"physical group 9 of volume 2 .*; {n - half} "
+                      "repeated tets dropped"):
+        mesh = tetrefine.mesh_from_meshio(meshio.read(tmp_path / "two_groups.msh"))
+    np.testing.assert_array_equal(mesh.tets, tets)
+    np.testing.assert_array_equal(mesh.labels, [7] * half + [8] * (n - half))
+    assert mesh.region_names == {7: "left", 8: "right"}
+    info = subprocess.run([cli_binary, "info", str(tmp_path / "two_groups.msh")],
+                          capture_output=True, text=True, check=True).stdout
+    assert re.search(rf"tets +{n}\n", info), info
+    assert re.search(rf"regions +2: 7 \({half} tets\), 8 \({n - half} tets\)", info), info
+    # A tet repeated under the same group is a real repeat: kept, for the server to name.
+    repeated = meshio.Mesh(points, [("tetra", np.concatenate([tets, tets[:1]]))],
+                           cell_data={"gmsh:physical": [np.full(n + 1, 7)],
+                                      "gmsh:geometrical": [np.full(n + 1, 1)]})
+    assert len(tetrefine.mesh_from_meshio(repeated).tets) == n + 1
+
+
 def test_fit_to_an_oblique_volume_equals_the_cli(server, cli_binary, tmp_path):
     # Found by a service sweep: on an oblique volume fit_to_volume moved 120 of 448 vertices by
     # up to 3e-14 from the CLI's --fit-mesh-to-volume (a column length taken by math.hypot, and

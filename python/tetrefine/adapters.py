@@ -352,8 +352,43 @@ def mesh_from_meshio(mesh, label_name=None):
                           f"number per point ({len(points)},)")
         values = values.reshape(-1)
     named = found_name is not None and found_name.lower() == "gmsh:physical"
+    if named:
+        tets, labels = _drop_physical_copies(mesh, blocks, tets, labels)
     region_names = _region_names(mesh, labels) if named else {}
     return TetMesh(points, tets, labels, values, found_name, region_names)
+
+
+def _drop_physical_copies(mesh, blocks, tets, labels):
+    """Gmsh's MSH 2 writer repeats each element of a volume that is in several physical groups,
+    once per group, and meshio reads every copy: the server then refused the mesh ("an element
+    listed twice") where the CLI reads the file. As the CLI does (client/io/gmsh_reader.cc), a
+    tet keeps its first group's label: a later tet of the same elementary entity on the same
+    nodes with another physical label is dropped, with a warning naming the groups. One with the
+    same label is a real repeat, left for the server to name. (An outside review, 2026-11-29.)"""
+    entities = mesh.cell_data.get("gmsh:geometrical")
+    if entities is None or labels is None:
+        return tets, labels
+    entity = np.concatenate([np.asarray(entities[i]).reshape(-1) for i in blocks])
+    if entity.shape != (len(tets),):
+        return tets, labels
+    keys = np.concatenate([entity.astype(np.int64)[:, None], np.sort(tets, axis=1)], axis=1)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    if len(first) == len(tets):
+        return tets, labels
+    inverse = inverse.reshape(-1)
+    copy = np.ones(len(tets), dtype=bool)
+    copy[first] = False
+    copy &= labels != labels[first[inverse]]
+    if not copy.any():
+        return tets, labels
+    groups = sorted({(int(entity[i]), int(labels[i])) for i in np.flatnonzero(copy)})
+    listed = ", ".join(f"{g} of volume {e}" for e, g in groups[:4])
+    if len(groups) > 4:
+        listed += f" and {len(groups) - 4} more"
+    warnings.warn(f"not carried to the output: physical group{'s' if len(groups) > 1 else ''} "
+                  f"{listed} (a tet keeps one label: its volume's first physical group; "
+                  f"{int(copy.sum())} repeated tets dropped)")
+    return tets[~copy], labels[~copy]
 
 
 def _region_names(mesh, labels):
