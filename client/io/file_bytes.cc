@@ -259,6 +259,7 @@ absl::Status StagedFiles::Write(const std::string& path, absl::string_view conte
 }
 
 absl::Status StagedFiles::Commit() {
+  const CommitWindow window;  // the set is renamed whole before a signal ends the process
   absl::Status first;
   for (const Staged& f : staged_) {
     if (!first.ok()) {

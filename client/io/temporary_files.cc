@@ -26,11 +26,28 @@ Slot g_slots[kSlots];
 
 constexpr int kHandled[] = {SIGINT, SIGTERM, SIGHUP};
 
-extern "C" void RemoveTemporariesAndDie(int signal_number) {
-  const int saved_errno = errno;
+// Commits in progress (CommitWindow) and the signal that came during one, or 0.
+std::atomic<int> g_committing{0};
+std::atomic<int> g_deferred{0};
+
+void RemoveRegistered() {
   for (Slot& slot : g_slots) {
     if (slot.state.load(std::memory_order_acquire) == kReady) ::unlink(slot.path);
   }
+}
+
+extern "C" void RemoveTemporariesAndDie(int signal_number) {
+  const int saved_errno = errno;
+  if (g_committing.load() > 0) {
+    // Files are being renamed into place as a set: ending now would leave part of the set new
+    // and part old. The commit ends the process when its renames are done.
+    int none = 0;  // the first one deferred is the one the process ends by
+    g_deferred.compare_exchange_strong(none, signal_number);
+    RemoveTemporariesOnSignal(signal_number);  // SA_RESETHAND reset it: a third one is deferred too
+    errno = saved_errno;
+    return;
+  }
+  RemoveRegistered();
   errno = saved_errno;
   // SA_RESETHAND restored the default action; the signal is blocked while this handler runs, so
   // it is delivered, and ends the process, as the handler returns.
@@ -38,6 +55,17 @@ extern "C" void RemoveTemporariesAndDie(int signal_number) {
 }
 
 }  // namespace
+
+CommitWindow::CommitWindow() { g_committing.fetch_add(1); }
+
+CommitWindow::~CommitWindow() {
+  if (g_committing.fetch_sub(1) != 1) return;
+  if (const int signal_number = g_deferred.exchange(0); signal_number != 0) {
+    RemoveRegistered();
+    ::signal(signal_number, SIG_DFL);
+    ::raise(signal_number);
+  }
+}
 
 void RemoveTemporariesOnSignal(int signal_number) {
   struct sigaction action = {};

@@ -45,6 +45,19 @@ class RegisteredTemporary {
   int slot_ = -1;
 };
 
+// While one lives, the renames of a set of files into place (StagedFiles::Commit: a TetGen
+// .node and .ele, a .pvtu and its pieces) are not cut short by those handlers: a signal that
+// comes meanwhile ends the process when the last window closes. Without it, a signal between
+// the .node's rename and the .ele's left a new .node beside an old .ele (an outside review's
+// reproduction, rerun on the staged writer, 2026-11-29).
+class CommitWindow {
+ public:
+  CommitWindow();
+  ~CommitWindow();
+  CommitWindow(const CommitWindow&) = delete;
+  CommitWindow& operator=(const CommitWindow&) = delete;
+};
+
 // Temporaries registered now (tests).
 int RegisteredTemporaryCountForTesting();
 

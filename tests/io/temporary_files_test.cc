@@ -76,6 +76,31 @@ TEST_F(IoTemporaryFilesTest, AnEndedRegistrationIsNotRemoved) {
   EXPECT_TRUE(Exists(path));
 }
 
+// A signal during a commit (a set of files being renamed into place) waits for its end, then ends
+// the process as it would have, removing what is still registered.
+TEST_F(IoTemporaryFilesTest, ASignalDuringACommitEndsTheProcessAfterIt) {
+  ScratchDir dir;
+  const std::string path = dir.File("staged");
+  iotest::WriteBytes(path, "x");
+  EXPECT_EXIT(
+      {
+        RemoveTemporariesOnSignals();
+        RegisteredTemporary temporary(path);
+        {
+          CommitWindow outer;
+          {
+            CommitWindow inner;
+            ::raise(SIGTERM);
+            ::raise(SIGINT);  // a second one is held too; the first is the one that ends it
+          }
+          if (!Exists(path)) std::_Exit(3);  // still here: nothing ran yet
+        }
+        std::_Exit(4);  // not reached: the outer window's end ends the process
+      },
+      ::testing::KilledBySignal(SIGTERM), "");
+  EXPECT_FALSE(Exists(path));
+}
+
 // nohup starts a program with SIGHUP ignored: the handlers must leave that as it is, so the
 // process goes on (and the file stays: nothing ended the process).
 TEST_F(IoTemporaryFilesTest, ASignalTheProcessIgnoresStaysIgnored) {
