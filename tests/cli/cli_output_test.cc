@@ -183,6 +183,19 @@ class CliOutput : public ::testing::Test {
   std::string volume_;
 };
 
+// Waits (up to 60 s) until `cli` has started writing `out`, a FIFO nobody reads, and 200 ms more
+// so that it is blocked in the open: the progress line "writing <out> ... " ends only when the
+// write does. False if the line never came.
+bool WaitUntilWriting(testing::ChildProcess& cli, const std::string& out) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!absl::StrContains(cli.Output(), "writing " + out)) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  return true;
+}
+
 // Ctrl-C while the output is being written stops the run with 130 and nothing after it (the
 // statistics file here); it went on to exit 0 (an outside review, 2026-11-28). SIGTERM and SIGHUP
 // likewise, with 143 and 129: they killed the run at once and left a temporary file behind (an
@@ -201,14 +214,7 @@ TEST_F(CliOutput, ASignalWhileWritingFinishesTheFileAndExitsWith128PlusIt) {
         {TetrefinePath(), "refine", "--volume", volume_, "--mesh", mesh, "--epsilon", "0.05",
          "--output", out, "--stats-json", stats});
     ASSERT_NE(cli, nullptr);
-    // The progress line "writing <out> ... " ends only when the write does: poll for its start.
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-    while (!absl::StrContains(cli->Output(), "writing " + out) &&
-           std::chrono::steady_clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    ASSERT_TRUE(absl::StrContains(cli->Output(), "writing " + out)) << cli->Output();
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // into the blocked open
+    ASSERT_TRUE(WaitUntilWriting(*cli, out)) << cli->Output();
     cli->Signal(signal_number);
     const std::optional<int> code = cli->WaitExit(std::chrono::seconds(30));
     ASSERT_TRUE(code.has_value()) << cli->Output();
@@ -231,13 +237,7 @@ TEST_F(CliOutput, ASignalIgnoredUnderNohupDoesNotStopTheRun) {
       testing::ChildProcess::Start({"/usr/bin/nohup", TetrefinePath(), "refine", "--volume",
                                     volume_, "--mesh", mesh, "--epsilon", "0.05", "--output", out});
   ASSERT_NE(cli, nullptr);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!absl::StrContains(cli->Output(), "writing " + out) &&
-         std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  ASSERT_TRUE(absl::StrContains(cli->Output(), "writing " + out)) << cli->Output();
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // into the blocked open
+  ASSERT_TRUE(WaitUntilWriting(*cli, out)) << cli->Output();
   cli->Signal(SIGHUP);
   // Caught, the signal ends the blocked open and the run (129). Only a run still waiting there
   // may be given a reader: opening the FIFO with no writer left would wait for ever.
