@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <string>
-#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
@@ -42,15 +41,12 @@ grpc::ServerBidiReactor<v1::RefineRequest, v1::RefineResponse>* RefinerService::
 
 namespace {
 
-// The bytes of a received message, in one string.
-std::string BytesOf(const grpc::ByteBuffer& buffer) {
-  std::vector<grpc::Slice> slices;
-  std::string bytes;
-  if (!buffer.Dump(&slices).ok()) return bytes;
-  for (const grpc::Slice& slice : slices) {
-    bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
-  }
-  return bytes;
+// Whether `request` parses as a GetServerInfoRequest, by gRPC's own deserialiser. It consumes the
+// buffer it reads: it reads a copy, which shares the slices.
+bool IsServerInfoRequest(const grpc::ByteBuffer& request) {
+  grpc::ByteBuffer body(request);
+  v1::GetServerInfoRequest parsed;
+  return grpc::SerializationTraits<v1::GetServerInfoRequest>::Deserialize(&body, &parsed).ok();
 }
 
 }  // namespace
@@ -71,7 +67,7 @@ grpc::ServerUnaryReactor* RefinerService::GetServerInfo(grpc::CallbackServerCont
                    std::string(identity.status().message()),
                    LogRateLimit::SuppressedNote(unlogged));
     }
-  } else if (v1::GetServerInfoRequest parsed; !parsed.ParseFromString(BytesOf(*request))) {
+  } else if (!IsServerInfoRequest(*request)) {
     status = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
                           absl::StrCat("GetServerInfo: the request (", request->Length(),
                                        " bytes) did not parse as a GetServerInfoRequest"));
@@ -79,8 +75,8 @@ grpc::ServerUnaryReactor* RefinerService::GetServerInfo(grpc::CallbackServerCont
     v1::ServerInfo info;
     info.set_version(TETREFINE_VERSION);
     wire::LimitsToWire(config_.limits, info.mutable_limits());
-    grpc::Slice slice(info.SerializeAsString());
-    *response = grpc::ByteBuffer(&slice, 1);
+    bool own_buffer = false;
+    status = grpc::SerializationTraits<v1::ServerInfo>::Serialize(info, response, &own_buffer);
   }
   if (config_.metrics != nullptr) config_.metrics->RecordServerInfo(status.error_code());
   reactor->Finish(status);

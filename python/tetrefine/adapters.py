@@ -351,10 +351,10 @@ def mesh_from_meshio(mesh, label_name=None):
             raise invalid("mesh", f"point data 'value' has shape {values.shape}, expected one "
                           f"number per point ({len(points)},)")
         values = values.reshape(-1)
-    named = found_name is not None and found_name.lower() == "gmsh:physical"
-    if named:
+    region_names = {}
+    if found_name is not None and found_name.lower() == "gmsh:physical":
         tets, labels = _drop_physical_copies(mesh, blocks, tets, labels)
-    region_names = _region_names(mesh, labels) if named else {}
+        region_names = _region_names(mesh, labels)
     return TetMesh(points, tets, labels, values, found_name, region_names)
 
 
@@ -366,7 +366,7 @@ def _drop_physical_copies(mesh, blocks, tets, labels):
     nodes with another physical label is dropped, with a warning naming the groups. One with the
     same label is a real repeat, left for the server to name. (An outside review, 2026-11-29.)"""
     entities = mesh.cell_data.get("gmsh:geometrical")
-    if entities is None or labels is None:
+    if entities is None:
         return tets, labels
     entity = np.concatenate([np.asarray(entities[i]).reshape(-1) for i in blocks])
     if entity.shape != (len(tets),):
@@ -397,7 +397,7 @@ def _region_names(mesh, labels):
     numbering, so only dimension 3 counts. The outside review of 2026-11-29 found the names
     lost between meshio.read and meshio.write; the CLI's .msh output kept them."""
     field_data = getattr(mesh, "field_data", None) or {}
-    used = set(np.unique(labels).tolist()) if labels is not None else set()
+    used = set(np.unique(labels).tolist())
     names = {}
     for name, entry in field_data.items():
         entry = np.asarray(entry).reshape(-1)
