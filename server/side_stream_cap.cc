@@ -3,6 +3,8 @@
 #include <string_view>
 #include <utility>
 
+#include "grpcpp/server_context.h"
+
 namespace tetrefine::server {
 namespace {
 

@@ -335,10 +335,10 @@ TEST(IoIndependentReaderTest, GmshTwoFilesOfAVolumeInTwoGroupsReadAlike) {
   }
   ScratchDir dir;
   const std::string geo = dir.File("box.geo");
-  WriteBytes(geo,
-             "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 10, 10, 10};\n"
-             "Physical Volume(\"a\", 1) = {1};\nPhysical Volume(\"b\", 2) = {1};\n"
-             "Mesh.MeshSizeMax = 4;\n");
+  iotest::WriteBytes(geo,
+                     "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 10, 10, 10};\n"
+                     "Physical Volume(\"a\", 1) = {1};\nPhysical Volume(\"b\", 2) = {1};\n"
+                     "Mesh.MeshSizeMax = 4;\n");
   std::vector<std::pair<std::string, MeshFile>> files;
   for (const char* format : {"msh41", "msh22"}) {
     for (bool binary : {false, true}) {

@@ -159,9 +159,9 @@ TEST(IoFixtureTest, GmshVolumesInTwoPhysicalGroupsNameTheGroupNotKept) {
     ASSERT_NE(at, std::string::npos) << from;
     text.replace(at, from.size(), to);
   }
-  ScratchDir dir;
+  iotest::ScratchDir dir;
   const std::string path = dir.File("two_groups.msh");
-  WriteBytes(path, text);
+  iotest::WriteBytes(path, text);
   absl::StatusOr<MeshFile> file = ReadMesh(path);
   ASSERT_TRUE(file.ok()) << file.status();
   const std::map<int32_t, double> volume = RegionVolumes(*file);
@@ -194,9 +194,9 @@ TEST(IoFixtureTest, Gmsh2CopiesOfAnElementInAnotherGroupAreDropped) {
     std::string edited = text;
     edited.replace(edited.find("$Elements\n200\n"), 14, "$Elements\n201\n");
     edited.insert(edited.find(first) + first.size(), copy + "\n");
-    ScratchDir dir;
+    iotest::ScratchDir dir;
     const std::string path = dir.File("copies.msh");
-    WriteBytes(path, edited);
+    iotest::WriteBytes(path, edited);
     absl::StatusOr<MeshFile> file = ReadMesh(path);
     ASSERT_TRUE(file.ok()) << file.status();
     EXPECT_EQ(file->mesh.tets.size(), tets);
