@@ -8,6 +8,9 @@
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/flags/usage_config.h"
+#include "absl/strings/match.h"
 #include "bench/support/process_memory.h"
 #include "bench/support/ripple_workload.h"
 #include "core/refine.h"
@@ -17,6 +20,16 @@ ABSL_FLAG(int, threads, 1, "RefineOptions::threads (0: all cores)");
 ABSL_FLAG(int, max_iterations, 1, "RefineOptions::max_iterations");
 
 int main(int argc, char** argv) {
+  absl::SetProgramUsageMessage(
+      "Peak memory of one Refine call on the ripple workload, as one JSON object.\n"
+      "Usage: peak_memory [--cells=N] [--threads=N] [--max_iterations=N]");
+  // --help lists this file's flags (Abseil's default looks for files named after the program).
+  absl::FlagsUsageConfig usage;
+  usage.contains_help_flags = [](absl::string_view file) {
+    return absl::EndsWith(file, "bench/peak_memory_main.cc");
+  };
+  usage.contains_helpshort_flags = usage.contains_help_flags;
+  absl::SetFlagsUsageConfig(usage);
   absl::ParseCommandLine(argc, argv);
   using namespace tetrefine;  // NOLINT(build/namespaces): a tiny tool
   const int cells = absl::GetFlag(FLAGS_cells);

@@ -39,7 +39,8 @@ void PrintRows(const Rows& rows) {
 }
 
 std::string Triple(const std::array<double, 3>& v) {
-  return absl::StrCat("(", v[0], ", ", v[1], ", ", v[2], ")");
+  // + 0.0 prints a negative zero (a flipped axis's origin) as 0.
+  return absl::StrCat("(", v[0] + 0.0, ", ", v[1] + 0.0, ", ", v[2] + 0.0, ")");
 }
 
 int VolumeInfo(const std::string& path) {

@@ -22,7 +22,7 @@ const CommandSpec& MeshSpec() {
     auto* s = new CommandSpec{
         .name = "mesh",
         .summary = "Make an initial tet mesh of a volume's voxel grid",
-        .usage = "tetrefine mesh --volume V [--block B] [--mask-threshold T] --output OUT",
+        .usage = "tetrefine mesh --volume V [--block B] [--mask-threshold T] --output OUT [flags]",
         .description =
             "Cuts the volume's grid into cells of B x B x B voxels (the last cell along an axis\n"
             "takes what remains, so the mesh spans the whole volume) and each cell into 5 tets,\n"

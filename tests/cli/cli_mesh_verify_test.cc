@@ -273,6 +273,12 @@ TEST_F(CliMeshVerify, InfoOnAVolume) {
   ASSERT_EQ(lps.exit_code, 0) << lps.err;
   EXPECT_FALSE(absl::StrContains(lps.out, "-0 ")) << lps.out;
   EXPECT_FALSE(absl::StrContains(lps.out, "-0]")) << lps.out;
+  // The origin too: an outside review saw "origin (-0, -254, 0)" for the T1 volume (its affine
+  // has -0 in x, and its axes are swapped and flipped).
+  const ProcessResult t1 = RunTetrefine(
+      {"info", std::string(TETREFINE_SHARED_DATA_DIR) + "/t1_brain_128x128x62.nii.gz"});
+  ASSERT_EQ(t1.exit_code, 0) << t1.err;
+  EXPECT_TRUE(absl::StrContains(t1.out, "origin             (0, -254, 0) mm, world RAS")) << t1.out;
   EXPECT_TRUE(absl::StrContains(lps.out, "file affine (RAS)  [          -1            0"))
       << lps.out;
 }
