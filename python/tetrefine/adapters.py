@@ -353,8 +353,9 @@ def mesh_from_meshio(mesh, label_name=None):
         values = values.reshape(-1)
     region_names = {}
     if found_name is not None and found_name.lower() == "gmsh:physical":
+        kept_before = set(np.unique(labels).tolist())
         tets, labels = _drop_physical_copies(mesh, blocks, tets, labels)
-        region_names = _region_names(mesh, labels)
+        region_names = _region_names(mesh, labels, kept_before)
     return TetMesh(points, tets, labels, values, found_name, region_names)
 
 
@@ -391,19 +392,34 @@ def _drop_physical_copies(mesh, blocks, tets, labels):
     return tets[~copy], labels[~copy]
 
 
-def _region_names(mesh, labels):
+def _region_names(mesh, labels, labelled):
     """Gmsh's physical volume names from meshio's field_data ({name: [tag, dimension]}), for
     the tags the labels use. Surface and line groups share tags with volumes in Gmsh's
     numbering, so only dimension 3 counts. The outside review of 2026-11-29 found the names
-    lost between meshio.read and meshio.write; the CLI's .msh output kept them."""
+    lost between meshio.read and meshio.write; the CLI's .msh output kept them.
+
+    A named physical volume that no tet was read with (`labelled`: the labels before
+    _drop_physical_copies, which warns of its own) is named in a warning, as the CLI names the
+    groups it does not keep: meshio 5.0's MSH 4.1 reader keeps only a volume's first physical
+    group, so a second group vanished without a word (an outside review, 2026-11-29)."""
     field_data = getattr(mesh, "field_data", None) or {}
     used = set(np.unique(labels).tolist())
     names = {}
+    unread = []
     for name, entry in field_data.items():
         entry = np.asarray(entry).reshape(-1)
-        if len(entry) >= 2 and int(entry[1]) == 3 and int(entry[0]) in used:
+        if len(entry) < 2 or int(entry[1]) != 3:
+            continue
+        if int(entry[0]) in used:
             # A tag named twice keeps its first name (the file's order), as Gmsh's reader does.
             names.setdefault(int(entry[0]), str(name))
+        elif int(entry[0]) not in labelled:
+            unread.append(f"{int(entry[0])} ({name!r})")
+    if unread:
+        listed = ", ".join(unread[:4]) + (f" and {len(unread) - 4} more" if len(unread) > 4 else "")
+        warnings.warn(f"not carried to the output: physical volume{'s' if len(unread) > 1 else ''}"
+                      f" {listed}: no tet was read with it (empty, or a volume's second group:"
+                      " meshio's MSH 4.1 reader keeps a volume's first physical group only)")
     return names
 
 
