@@ -318,7 +318,7 @@ absl::StatusOr<RefineResult> RefineInArena(const Volume& volume, const Mesh& inp
   params.clamp = clamp;
   StepLimits limits;
   limits.max_tets = options.max_tets;
-  limits.min_quality = options.min_quality;
+  limits.min_quality = QualityFloor(options.min_quality, result.initial_quality.min);
   limits.clamp = clamp;
   limits.best_tiling = rules.marking.best_tiling;
 

@@ -166,4 +166,8 @@ absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>&
   return absl::OkStatus();
 }
 
+double QualityFloor(double min_quality, double input_worst) {
+  return std::min(min_quality, 0.5 * input_worst);
+}
+
 }  // namespace tetrefine

@@ -896,9 +896,11 @@ const CommandSpec& RefineSpec() {
                  "edges shorter than this (world units) are never split (default 1/64 of the "
                  "smallest voxel spacing; 0 disables the guard)"},
                 {"min-quality", "Q",
-                 absl::StrCat("an iteration that would make a tet of mean-ratio quality below Q is "
-                              "not applied (stop reason quality_floor); in [0, 1), default ",
-                              RefineOptions{}.min_quality)},
+                 absl::StrCat(
+                     "an iteration that would make a tet of mean-ratio quality below Q is "
+                     "not applied (stop reason quality_floor), or below half the input's worst tet "
+                     "where that is lower; in [0, 1), default ",
+                     RefineOptions{}.min_quality)},
                 {"output", "FILE",
                  "refined mesh, .vtu .vtk .msh .mesh .meshb .ele, or .pvtu with --shards (default "
                  "<mesh name>.refined.vtu "

@@ -17,6 +17,7 @@
 #include "absl/strings/str_format.h"
 #include "core/edge_statistics.h"
 #include "core/quality.h"
+#include "core/refine_options.h"
 #include "grpcpp/create_channel.h"
 #include "sharding/halo_parts.h"
 #include "sharding/mesh_partition.h"
@@ -381,6 +382,18 @@ QualityStats QualityOf(const std::vector<float>& q) {
   return s;
 }
 
+// The input's worst tet as core measures it (the float mean ratio of RefineResult's
+// initial_quality), for QualityFloor.
+double WorstInputQuality(const Mesh& mesh) {
+  double worst = mesh.tets.empty() ? 0.0 : 1.0;
+  for (const Tet& tet : mesh.tets) {
+    const auto& p = mesh.points;
+    worst = std::min(worst, static_cast<double>(static_cast<float>(
+                                MeanRatio(p[tet[0]], p[tet[1]], p[tet[2]], p[tet[3]]))));
+  }
+  return worst;
+}
+
 size_t LargestPart(const std::vector<HaloPart>& parts) {
   size_t largest = 0;
   for (const HaloPart& h : parts) largest = std::max(largest, h.part.mesh.tets.size());
@@ -475,6 +488,8 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
         static_cast<float>(MeanRatio(p[tet[0]], p[tet[1]], p[tet[2]], p[tet[3]]));
   }
   result.initial_quality = QualityOf(whole.tet_quality);
+  // The whole input's floor, as the unsharded call holds its iterations to.
+  const double quality_floor = QualityFloor(options.refine.min_quality, result.initial_quality.min);
 
   // Each round: one iteration, every part under the server's own tet limit and with only
   // degenerate tets refused (the floor is judged here on the owned tets); no verification unless
@@ -570,8 +585,7 @@ absl::StatusOr<ShardedResult> ShardedRefineWithHalos(
       result.next_iteration_tets = next_tets;
       break;
     }
-    if (merged->worst_new_quality <= 0.0 ||
-        merged->worst_new_quality < options.refine.min_quality) {
+    if (merged->worst_new_quality <= 0.0 || merged->worst_new_quality < quality_floor) {
       stopped = StopReason::kQualityFloor;
       result.next_iteration_min_quality = merged->worst_new_quality;
       break;
@@ -706,6 +720,9 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   }
   client::RefineRequestOptions sent = options;
   sent.refine.norm_coeff = options.refine.norm_coeff.value_or(WholeRange(volume));
+  // The whole input's quality floor (QualityFloor): a part whose own worst tet is better than
+  // the whole's would hold its iterations to a higher floor than the unsharded call.
+  sent.refine.min_quality = QualityFloor(options.refine.min_quality, WorstInputQuality(mesh));
   sent.stream_every_iteration = false;
   sent.skip_final_mesh = false;  // the parts' meshes are the result
 

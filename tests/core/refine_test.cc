@@ -12,6 +12,9 @@
 #include <set>
 #include <utility>
 
+#include "core/mesh_validation.h"
+#include "core/quality.h"
+#include "core/refine_options.h"
 #include "tests/support/geometry.h"
 #include "tests/support/mesh_checks.h"
 #include "tests/support/scheme_printer.h"
@@ -465,6 +468,57 @@ TEST(VolumeCreate, ValuesBeyondTheMagnitudeBoundAreRefused) {
   ASSERT_FALSE(b->iterations.empty());
   EXPECT_TRUE(std::isfinite(b->iterations[0].max_error));
   EXPECT_NEAR(b->iterations[0].max_error, a->iterations[0].max_error, 1e-9);
+}
+
+// An input whose own worst tet is below min_quality (1e-6): its children are about as flat,
+// and the fixed floor stopped every scheme before its first iteration with nothing refined (an
+// outside review: a TetGen mesh of a jittered grid, "Stopped after 0 iterations:
+// quality_floor"). The floor is half the input's worst for such inputs (QualityFloor).
+TEST_P(RefineEveryScheme, AnInputSliverBelowTheFloorIsRefinedNotRefused) {
+  const GridGeometry g = HeartGrid();
+  const Volume volume = testing::AnalyticVolume(g, BlobField{{20.3, 37.1, 31.7}, 12.0});
+  Mesh mesh;
+  // A cap: the fourth corner 5e-9 mm above the interior of a 40 mm triangle.
+  mesh.points = {{0, 10, 20}, {40, 10, 20}, {0, 50, 20}, {13, 23, 20 + 5e-9}};
+  mesh.tets = {{0, 1, 2, 3}};
+  const double input_worst =
+      MeanRatio(mesh.points[0], mesh.points[1], mesh.points[2], mesh.points[3]);
+  ASSERT_LT(input_worst, 0.5e-6);
+  const double input_volume6 =
+      SignedVolume6(mesh.points[0], mesh.points[1], mesh.points[2], mesh.points[3]);
+  for (const bool certify : {false, true}) {
+    SCOPED_TRACE(::testing::Message() << "certify " << certify);
+    RefineOptions o;
+    o.scheme = GetParam();
+    o.certify = certify;
+    o.epsilon = 0.05;
+    o.max_iterations = 4;
+    o.on_iteration = [&](const IterationStats& s, const Mesh& m) {
+      // Conformal and positive (testing::ConformityProblem also compares volumes to 1e-9 of
+      // the total, which a sliver's own rounding exceeds: its volume is 1e-12 of its edges'
+      // cube, so the midpoints' rounding moves it by about 1e-6 of itself).
+      EXPECT_TRUE(CheckConformity(m.points, m.tets).ok()) << "iteration " << s.iteration;
+      double volume6 = 0.0;
+      for (const Tet& t : m.tets) {
+        const double v6 =
+            SignedVolume6(m.points[t[0]], m.points[t[1]], m.points[t[2]], m.points[t[3]]);
+        EXPECT_GT(v6, 0.0) << "iteration " << s.iteration;
+        volume6 += v6;
+      }
+      EXPECT_NEAR(volume6, input_volume6, 1e-4 * input_volume6) << "iteration " << s.iteration;
+      // Held to half the input's worst, not to 1e-6.
+      EXPECT_GE(s.quality.min, static_cast<float>(0.5 * input_worst) * (1 - 1e-6));
+    };
+    auto r = Refine(volume, mesh, o);
+    ASSERT_TRUE(r.ok()) << r.status();
+    ASSERT_FALSE(r->iterations.empty()) << StopReasonName(r->stop_reason);
+    // What the fixed floor refused: the first iteration's children are below 1e-6.
+    EXPECT_LT(r->iterations[0].quality.min, 1e-6);
+    EXPECT_GT(r->mesh.tets.size(), 1u);
+  }
+  EXPECT_EQ(QualityFloor(1e-6, 1e-7), 0.5e-7);
+  EXPECT_EQ(QualityFloor(1e-6, 0.4), 1e-6);
+  EXPECT_EQ(QualityFloor(0.0, 1e-7), 0.0);
 }
 
 TEST_P(RefineEveryScheme, StopsBeforeExceedingTheTetBudget) {

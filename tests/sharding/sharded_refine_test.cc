@@ -315,6 +315,46 @@ TEST_F(ShardedRefineTest, QualityFloorStopsWhereTheWholeStops) {
   }
 }
 
+// An input sliver below min_quality (1e-6): the floor is half the whole input's worst tet
+// (QualityFloor), not a part's, whose own worst may be better; a part held to a higher floor
+// would stop where the whole goes on.
+TEST_F(ShardedRefineTest, AnInputSliverSetsTheWholeRunsFloor) {
+  for (const RefineScheme scheme : {RefineScheme::kPaper, RefineScheme::kLongestEdge}) {
+    SCOPED_TRACE(RefineSchemeName(scheme));
+    UnitCubeCase c;
+    // Above the cube (z 0.5-25.5, the volume reaches 28.4): a cap, its fourth corner just above
+    // the interior of a right triangle with legs of `size` mm, mean ratio about 3.5e-7. Under
+    // the paper's scheme it is 0.06 mm across, so its edges pass and it is never split, while
+    // the cube's needles go below 1e-6 (where a part without it stopped); under the default,
+    // 24 mm across, its own children go below 1e-6.
+    const double size = scheme == RefineScheme::kPaper ? 0.06 : 24.0;
+    const uint32_t base = static_cast<uint32_t>(c.mesh.points.size());
+    for (const Vec3& p :
+         std::vector<Vec3>{{1, 3, 27},
+                           {1 + size, 3, 27},
+                           {1, 3 + size, 27},
+                           {1 + 0.325 * size, 3 + 0.575 * size, 27 + 1.25e-10 * size}}) {
+      c.mesh.points.push_back(p);
+    }
+    c.mesh.tets.push_back({base, base + 1, base + 2, base + 3});
+    if (!c.mesh.labels.empty()) c.mesh.labels.push_back(c.mesh.labels.back());
+    client::RefineRequestOptions options =
+        scheme == RefineScheme::kPaper ? Options(0.01, 24) : Options(0.05, 3);
+    options.refine.orientation = OrientationPolicy::kNormalize;
+    options.refine.scheme = scheme;
+    const client::ClientResult whole = Unsharded(c.volume, c.mesh, options);
+    ASSERT_LT(whole.result.initial_quality.min, 0.5e-6);
+    ASSERT_FALSE(whole.result.iterations.empty());
+    // Without the whole input's floor the sharded runs differed: the paper's parts without the
+    // sliver stopped at 1e-6 (16 iterations unsharded), and the default's merge judged 1e-6.
+    for (int k : {2, 3, 4}) {
+      SCOPED_TRACE(::testing::Message() << "shards = " << k);
+      const sharding::ShardedResult sharded = Sharded(c.volume, c.mesh, options, k);
+      ExpectSameRefinement(c.mesh, whole.result, sharded.reply.result);
+    }
+  }
+}
+
 // Only edges shorter than min_edge_length left above epsilon: the sharded run stops with
 // kMinEdgeLength as the whole does, in every scheme (the measuring round and CombineStops).
 TEST_F(ShardedRefineTest, MinEdgeLengthStopsWhereTheWholeStops) {
