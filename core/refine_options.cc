@@ -52,8 +52,8 @@ absl::Status ValidateRefineOptions(const RefineOptions& o) {
   if (o.min_edge_length.has_value() && !FiniteNonNegative(*o.min_edge_length)) {
     return Invalid("min_edge_length", *o.min_edge_length, "must be finite and >= 0");
   }
-  if (!(o.min_quality >= 0.0 && o.min_quality < 1.0)) {
-    return Invalid("min_quality", o.min_quality, "must be in [0, 1)");
+  if (o.min_quality.has_value() && !(*o.min_quality >= 0.0 && *o.min_quality < 1.0)) {
+    return Invalid("min_quality", *o.min_quality, "must be in [0, 1)");
   }
   if (o.lattice_n < 0 || o.lattice_n > 64) {
     return Invalid("lattice_n", o.lattice_n, "must be in [0, 64]");
@@ -166,8 +166,8 @@ absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>&
   return absl::OkStatus();
 }
 
-double QualityFloor(double min_quality, double input_worst) {
-  return std::min(min_quality, 0.5 * input_worst);
+double QualityFloor(const std::optional<double>& min_quality, double input_worst) {
+  return min_quality.value_or(std::min(kDefaultMinQuality, 0.5 * input_worst));
 }
 
 }  // namespace tetrefine

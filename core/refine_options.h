@@ -88,9 +88,10 @@ struct RefineOptions {
   // The scheme can still flatten tets step by step near such a feature (long edges split inside
   // tets that are already slivers). An iteration that would create a tet whose mean-ratio
   // quality is below this, or whose volume is not positive, is not applied: refinement stops
-  // before it (kQualityFloor) and the output keeps no degenerate tet. An input whose own worst
-  // tet is below twice this is held to half its worst instead (QualityFloor). In [0, 1).
-  double min_quality = 1e-6;
+  // before it (kQualityFloor) and the output keeps no degenerate tet. Unset: 1e-6
+  // (kDefaultMinQuality), or half the input's worst tet where that is lower (QualityFloor); set,
+  // exactly the value given. In [0, 1).
+  std::optional<double> min_quality;
 
   // The default reaches epsilon with bounded quality on real scans, where the paper's scheme
   // stops with needles (docs/schemes.md; SchemeRules in core/refine.cc). kPaper stays available
@@ -149,18 +150,21 @@ absl::Status CheckNormCoeffForRange(double norm_coeff, const std::array<double, 
 absl::Status CheckValuePrecision(double norm_coeff, const std::array<double, 2>& range,
                                  double epsilon, bool norm_given = false);
 
-// The quality an iteration's new tets are held to (RefineOptions::min_quality's floor): the
-// smaller of min_quality and half the input's worst tet (`input_worst`, its mean ratio). Why:
+inline constexpr double kDefaultMinQuality = 1e-6;
+
+// The quality an iteration's new tets are held to: min_quality when given, else the smaller of
+// kDefaultMinQuality and half the input's worst tet (`input_worst`, its mean ratio). Why:
 // the floor exists to stop needles the scheme makes; a sliver the input already has is split
 // into children about as flat as itself, so a fixed floor above the input's worst stopped every
 // scheme before its first iteration, with nothing refined (an outside review, 2026-11-29: a
 // TetGen mesh of a jittered grid, worst tet below 1e-6 once fitted, "Stopped after 0
 // iterations: quality_floor" at every epsilon; with the relative floor it converges in 8
 // iterations, its worst tet no lower than the input's). Half matches the longest-edge guard's
-// share of the input's worst. Inputs whose worst tet is at least 2 x min_quality (every mesh of
-// the reproduction) keep min_quality, so their results are unchanged. A sharded run computes it
-// from the whole input (client/sharding).
-double QualityFloor(double min_quality, double input_worst);
+// share of the input's worst. Inputs whose worst tet is at least 2e-6 (every mesh of the
+// reproduction) keep 1e-6, so their results are unchanged; a floor the caller sets is theirs
+// (min_quality 0.9 still refuses an iteration that makes a tet below 0.9). A sharded run
+// computes it from the whole input (client/sharding).
+double QualityFloor(const std::optional<double>& min_quality, double input_worst);
 
 // OK, or INVALID_ARGUMENT naming the first offending field and its value, e.g.
 // "options.epsilon: must be finite and > 0, got 0". Refine checks its options with this; so does

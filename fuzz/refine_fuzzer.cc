@@ -209,9 +209,9 @@ void Describe(const Volume& volume, const Mesh& mesh, const RefineOptions& o,
   std::fprintf(stderr,
                "epsilon %g max_iterations %d max_tets %lld min_quality %g min_edge_length %g "
                "orientation %d outside %d\n",
-               o.epsilon, o.max_iterations, static_cast<long long>(o.max_tets), o.min_quality,
-               o.min_edge_length.value_or(-1), static_cast<int>(o.orientation),
-               static_cast<int>(o.outside));
+               o.epsilon, o.max_iterations, static_cast<long long>(o.max_tets),
+               o.min_quality.value_or(-1.0), o.min_edge_length.value_or(-1),
+               static_cast<int>(o.orientation), static_cast<int>(o.outside));
   if (!result.ok()) {
     std::fprintf(stderr, "refine: %s\n", result.status().ToString().c_str());
   } else {

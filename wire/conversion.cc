@@ -137,7 +137,7 @@ void RequestOptionsToWire(const RequestOptions& o, v1::RefineOptions* out) {
   out->set_lattice_max_tets(r.lattice_max_tets);
   out->set_lattice_seed(r.lattice_seed);
   if (r.min_edge_length.has_value()) out->set_min_edge_length(*r.min_edge_length);
-  out->set_min_quality(r.min_quality);
+  if (r.min_quality.has_value()) out->set_min_quality(*r.min_quality);
   if (r.quality_reference.has_value()) out->set_quality_reference(*r.quality_reference);
   out->set_scheme(RefineSchemeToWire(r.scheme));
   out->set_certify(r.certify);

@@ -108,7 +108,13 @@ absl::Status CheckNotTheSameFile(const NamedPath& output, const std::vector<Name
   const std::filesystem::path file = FileNamedBy(output.path);
   if (IsSpecialFile(file)) return absl::OkStatus();
   for (const NamedPath& other : others) {
-    if (other.path.empty() || FileNamedBy(other.path) != file) continue;
+    if (other.path.empty()) continue;
+    // A hard link names the same file under another path: equivalent() compares the device and
+    // inode of two files that exist (an outside review wrote over an input through one).
+    std::error_code ec;
+    if (FileNamedBy(other.path) != file && !std::filesystem::equivalent(file, other.path, ec)) {
+      continue;
+    }
     return absl::InvalidArgumentError(
         absl::StrCat(output.path, ": ", output.flag, " names the same file as ", other.flag,
                      other.path == output.path ? "" : absl::StrCat(" (", other.path, ")"),

@@ -31,10 +31,10 @@ struct NamedPath {
   std::string flag;
   std::string path;
 };
-// Checks that `output` names a file that none of `others` names (through links, "./" and the
-// like: the same file, not the same string), so that one output cannot overwrite another or an
-// input. Character devices and FIFOs (/dev/null for two outputs) may be shared. The message names
-// both flags and the path.
+// Checks that `output` names a file that none of `others` names (through symbolic and hard links,
+// "./" and the like: the same file, not the same string), so that one output cannot overwrite
+// another or an input. Character devices and FIFOs (/dev/null for two outputs) may be shared. The
+// message names both flags and the path.
 absl::Status CheckNotTheSameFile(const NamedPath& output, const std::vector<NamedPath>& others);
 
 }  // namespace tetrefine::cli

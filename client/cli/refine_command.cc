@@ -293,8 +293,8 @@ absl::Status CheckPlacement(const RefineSettings& s, const Volume& volume, const
       if (SignedVolume6(mesh.points[k[0]], mesh.points[k[1]], mesh.points[k[2]],
                         mesh.points[k[3]]) < 0.0) {
         return absl::InvalidArgumentError(
-            absl::StrCat(s.mesh_path, ": tet ", t,
-                         " is inverted (negative volume); use --fix-orientation to flip inverted "
+            absl::StrCat(s.mesh_path, ": mesh.tets[", t,
+                         "] is inverted (negative volume); use --fix-orientation to flip inverted "
                          "tets"));
       }
     }
@@ -896,11 +896,10 @@ const CommandSpec& RefineSpec() {
                  "edges shorter than this (world units) are never split (default 1/64 of the "
                  "smallest voxel spacing; 0 disables the guard)"},
                 {"min-quality", "Q",
-                 absl::StrCat(
-                     "an iteration that would make a tet of mean-ratio quality below Q is "
-                     "not applied (stop reason quality_floor), or below half the input's worst tet "
-                     "where that is lower; in [0, 1), default ",
-                     RefineOptions{}.min_quality)},
+                 absl::StrCat("an iteration that would make a tet of mean-ratio quality below Q is "
+                              "not applied (stop reason quality_floor); in [0, 1), default ",
+                              kDefaultMinQuality,
+                              ", or half the input's worst tet where that is lower")},
                 {"output", "FILE",
                  "refined mesh, .vtu .vtk .msh .mesh .meshb .ele, or .pvtu with --shards (default "
                  "<mesh name>.refined.vtu "

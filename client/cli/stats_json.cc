@@ -109,7 +109,11 @@ void WriteOptions(JsonWriter& json, const RunDescription& run) {
     json.Null();
   }
   json.Key("min_quality");
-  json.Number(o.refine.min_quality);
+  if (o.refine.min_quality.has_value()) {
+    json.Number(*o.refine.min_quality);
+  } else {
+    json.Null();
+  }
   json.Key("clamp");
   json.Bool(o.refine.outside == OutsidePolicy::kClamp);
   json.Key("fix_orientation");

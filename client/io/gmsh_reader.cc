@@ -6,6 +6,7 @@
 #include <map>
 #include <numeric>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -233,8 +234,9 @@ class GmshParser {
   std::vector<Tet> tets_;
   std::vector<int64_t> tet_tags_;
   std::vector<int32_t> labels_;
-  std::vector<int64_t> entities22_;  // MSH 2: each tet's elementary entity (its second tag)
-  TagMap tet_index_;                 // built once the elements are read
+  std::vector<int64_t> entities22_;   // MSH 2: each tet's elementary entity (its second tag)
+  std::set<int64_t> tet_entities41_;  // MSH 4: the volume entities whose blocks hold tets
+  TagMap tet_index_;                  // built once the elements are read
   std::vector<double> values_;
   std::vector<double> iteration_;
   std::vector<double> quality_;
@@ -763,6 +765,7 @@ absl::Status GmshParser::Elements41() {
         it != entity_physical_.end()) {
       physical = it->second;
     }
+    if (*type == kGmshTet && *in_block > 0) tet_entities41_.insert(*entity);
     if (binary_) {
       absl::StatusOr<absl::string_view> data = Binary(*in_block * (1 + nn), 8, "elements");
       if (!data.ok()) return data.status();
@@ -1030,6 +1033,27 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
           " (a tet keeps one label: its volume's first physical group)"));
     }
     file.region_names = std::move(region_names_);
+  } else {
+    // Without physical groups Gmsh's elementary volumes are the only regions the file has, and
+    // they were merged into one without a word (an outside review: two boxes meshed without
+    // `Physical Volume` came out unlabelled). They are named as not carried; labels stay the
+    // physical groups', as every other reader and writer of Gmsh files takes them.
+    std::set<int64_t> entities = tet_entities41_;
+    entities.insert(entities22_.begin(), entities22_.end());
+    if (entities.size() > 1) {
+      std::vector<std::string> listed;
+      for (const int64_t entity : entities) {
+        if (listed.size() == 4) {
+          listed.push_back(absl::StrCat("and ", entities.size() - 4, " more"));
+          break;
+        }
+        listed.push_back(absl::StrCat(entity));
+      }
+      file.dropped_arrays.push_back(absl::StrCat(
+          "elementary volumes ", absl::StrJoin(listed, ", "),
+          " as regions (the file has no physical groups, so its tets are one region: a "
+          "Physical Volume for each keeps them apart)"));
+    }
   }
   DropNonFiniteDerivedArrays(&file);
   if (absl::Status s = ValidateMeshFile(file, path_); !s.ok()) return s;

@@ -306,9 +306,9 @@ class Client:
             --lattice-seed.
           min_edge_length: edges shorter than this (world units) are never split (default 1/64
             of the smallest voxel spacing; 0 disables it).
-          min_quality: an iteration that would make a tet of mean ratio below this (or below
-            half the input's worst tet, where that is lower) is not applied (stop reason
-            QUALITY_FLOOR); in [0, 1), default 1e-6.
+          min_quality: an iteration that would make a tet of mean ratio below this is not
+            applied (stop reason QUALITY_FLOOR); in [0, 1), default 1e-6, or half the input's
+            worst tet where that is lower.
 
         direction, labels, scheme and certify need a protocol that has them: without it they
         raise TetrefineError with code UNIMPLEMENTED naming the missing field.

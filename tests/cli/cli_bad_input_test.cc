@@ -52,6 +52,7 @@ class CliBadInput : public ::testing::TestWithParam<BadCase> {
     WriteVolume(volume, BumpVolume({9, 9, 9}, {0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}));
     const Mesh grid = testing::FiveTetMesh({1, 1, 1}, {7, 7, 7}, {2, 2, 2});
     WriteMeshFile(dir_->File("m.vtu"), grid);
+    std::filesystem::create_hard_link(dir_->File("m.vtu"), dir_->File("m_linked.vtu"));
     WriteMeshFile(dir_->File("m.msh"), grid);
     const std::string nifti = ReadBytes(volume);
     const std::string vtu = ReadBytes(dir_->File("m.vtu"));
@@ -200,7 +201,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"MeshOutsideVolume", RefineWith("--mesh", "$D/outside.vtu"), "$D/outside.vtu"},
         BadCase{"UnusedVertexOutsideVolume", RefineWith("--mesh", "$D/unused_outside.vtu"),
                 "no tet uses it: remove the unused vertices"},
-        BadCase{"MeshInverted", RefineWith("--mesh", "$D/inverted.vtu"), "--fix-orientation"},
+        // Named as every other message names a tet (it said "tet 3" alone).
+        BadCase{"MeshInverted", RefineWith("--mesh", "$D/inverted.vtu"),
+                "$D/inverted.vtu: mesh.tets[3] is inverted (negative volume); use "
+                "--fix-orientation"},
         BadCase{"MeshWithoutTets", RefineWith("--mesh", "$D/no_tets.vtu"), "$D/no_tets.vtu"},
         // info reported such files as tetrahedral meshes of 0 tets (an outside review,
         // 2026-11-28); every command now refuses them alike.
@@ -235,6 +239,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "$D/m.vtu: --output names the same file as --mesh"},
         BadCase{"OutputIsTheMeshByAnotherName", RefineWith("--output", "$D/./m.vtu"),
                 "--output names the same file as --mesh ($D/m.vtu)"},
+        // A hard link is the same file under another name (an outside review refined into one).
+        BadCase{"OutputIsTheMeshThroughAHardLink", RefineWith("--output", "$D/m_linked.vtu"),
+                "$D/m_linked.vtu: --output names the same file as --mesh ($D/m.vtu)"},
         BadCase{"OutputIsTheVolume",
                 Refine({"--epsilon", "0.1", "--output", "$D/image.vtk"},
                        {"refine", "--volume", "$D/image.vtk", "--mesh", "$D/m.vtu"}),

@@ -516,8 +516,11 @@ TEST_P(RefineEveryScheme, AnInputSliverBelowTheFloorIsRefinedNotRefused) {
     EXPECT_LT(r->iterations[0].quality.min, 1e-6);
     EXPECT_GT(r->mesh.tets.size(), 1u);
   }
-  EXPECT_EQ(QualityFloor(1e-6, 1e-7), 0.5e-7);
-  EXPECT_EQ(QualityFloor(1e-6, 0.4), 1e-6);
+  EXPECT_EQ(QualityFloor(std::nullopt, 1e-7), 0.5e-7);
+  EXPECT_EQ(QualityFloor(std::nullopt, 0.4), kDefaultMinQuality);
+  // A floor the caller sets is theirs.
+  EXPECT_EQ(QualityFloor(0.3, 0.4), 0.3);
+  EXPECT_EQ(QualityFloor(1e-6, 1e-7), 1e-6);
   EXPECT_EQ(QualityFloor(0.0, 1e-7), 0.0);
 }
 

@@ -14,6 +14,7 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
 #include "client/io/mesh_io.h"
 #include "gtest/gtest.h"
 #include "tests/io/io_test_util.h"
@@ -176,6 +177,48 @@ TEST(IoFixtureTest, GmshVolumesInTwoPhysicalGroupsNameTheGroupNotKept) {
   absl::StatusOr<MeshFile> plain = ReadMesh(FixturePath("gmsh_41_ascii.msh"));
   ASSERT_TRUE(plain.ok()) << plain.status();
   EXPECT_TRUE(plain->dropped_arrays.empty());
+}
+
+// Two elementary volumes and no physical groups: the tets are one region (labels are physical
+// groups, as Gmsh's other readers take them), and the volumes are named as not carried; they
+// were merged without a word (an outside review: two boxes meshed without `Physical Volume`).
+TEST(IoFixtureTest, GmshVolumesWithoutPhysicalGroupsAreNamedAsNotCarried) {
+  const std::string note =
+      "elementary volumes 1, 2 as regions (the file has no physical groups, so its tets are one "
+      "region: a Physical Volume for each keeps them apart)";
+  for (const char* fixture : {"gmsh_41_ascii.msh", "gmsh_22_ascii.msh"}) {
+    SCOPED_TRACE(fixture);
+    std::ifstream in(FixturePath(fixture));
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (absl::StrContains(fixture, "41")) {
+      // The volumes' entity lines: one physical tag each (5 and 7), then their surfaces.
+      for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+               {" 1 5 6 1 2 3 4 5 6 \n", " 0 6 1 2 3 4 5 6 \n"},
+               {" 1 7 6 2 7 8 9 10 11 \n", " 0 6 2 7 8 9 10 11 \n"}}) {
+        const size_t at = text.find(from);
+        ASSERT_NE(at, std::string::npos) << from;
+        text.replace(at, from.size(), to);
+      }
+    } else {
+      // Every element line "tag type 2 physical entity ...": physical 0.
+      std::istringstream lines(text);
+      std::string edited, line;
+      while (std::getline(lines, line)) {
+        std::vector<std::string> f = absl::StrSplit(line, ' ');
+        if (f.size() > 4 && f[2] == "2" && (f[1] == "4" || f[1] == "2" || f[1] == "1")) f[3] = "0";
+        edited += absl::StrJoin(f, " ") + "\n";
+      }
+      text = edited;
+    }
+    iotest::ScratchDir dir;
+    const std::string path = dir.File("no_physical.msh");
+    iotest::WriteBytes(path, text);
+    absl::StatusOr<MeshFile> file = ReadMesh(path);
+    ASSERT_TRUE(file.ok()) << file.status();
+    EXPECT_EQ(file->mesh.tets.size(), 200u);
+    EXPECT_TRUE(file->mesh.labels.empty());
+    EXPECT_EQ(file->dropped_arrays, std::vector<std::string>{note});
+  }
 }
 
 // A Gmsh 2 file lists an element once per physical group of its entity, under a new tag: the

@@ -80,7 +80,10 @@ void ExpectSameOptions(const RequestOptions& expected, const RequestOptions& act
   EXPECT_EQ(e.lattice_seed, a.lattice_seed);
   EXPECT_EQ(e.min_edge_length, a.min_edge_length);
   EXPECT_EQ(e.quality_reference, a.quality_reference);
-  EXPECT_EQ(std::bit_cast<uint64_t>(e.min_quality), std::bit_cast<uint64_t>(a.min_quality));
+  ASSERT_EQ(e.min_quality.has_value(), a.min_quality.has_value());
+  if (e.min_quality.has_value()) {
+    EXPECT_EQ(std::bit_cast<uint64_t>(*e.min_quality), std::bit_cast<uint64_t>(*a.min_quality));
+  }
   EXPECT_EQ(e.scheme, a.scheme);
   EXPECT_EQ(e.certify, a.certify);
   EXPECT_EQ(e.track_parents, a.track_parents);
