@@ -27,6 +27,22 @@ namespace {
 
 constexpr int64_t kMaxCount = int64_t{1} << 40;
 
+// `items` described one by one and joined with ", ", the first four only, then "and N more": a
+// note names a few of thousands, not all of them.
+template <typename Items, typename Describe>
+std::string FirstFewJoined(const Items& items, Describe describe) {
+  constexpr size_t kListed = 4;
+  std::vector<std::string> listed;
+  for (const auto& item : items) {
+    if (listed.size() == kListed) {
+      listed.push_back(absl::StrCat("and ", items.size() - kListed, " more"));
+      break;
+    }
+    listed.push_back(describe(item));
+  }
+  return absl::StrJoin(listed, ", ");
+}
+
 // Nodes per element of the Gmsh element types this reader knows; 0 for unknown.
 int NodesPerElement(int64_t type) {
   static constexpr int kNodes[] = {0, 2,  3,  4,  4, 8,  6,  5,  3,  6,  9, 10, 27, 18, 14, 1,
@@ -1017,20 +1033,16 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
     // A Gmsh 4 volume in two physical groups (a "ball" inside an "everything") lost the second
     // without a word: the output had only the first.
     if (!other_groups_.empty()) {
-      std::vector<std::string> listed;
-      for (const auto& [entity, group] : other_groups_) {
-        if (listed.size() == 4) {
-          listed.push_back(absl::StrCat("and ", other_groups_.size() - 4, " more"));
-          break;
-        }
+      const std::string listed = FirstFewJoined(other_groups_, [&](const auto& entity_group) {
+        const auto& [entity, group] = entity_group;
         const auto name = region_names_.find(static_cast<int32_t>(group));
-        listed.push_back(absl::StrCat(
+        return absl::StrCat(
             group, name == region_names_.end() ? "" : absl::StrCat(" (\"", name->second, "\")"),
-            " of volume ", entity));
-      }
-      file.dropped_arrays.push_back(absl::StrCat(
-          "physical group", other_groups_.size() == 1 ? " " : "s ", absl::StrJoin(listed, ", "),
-          " (a tet keeps one label: its volume's first physical group)"));
+            " of volume ", entity);
+      });
+      file.dropped_arrays.push_back(
+          absl::StrCat("physical group", other_groups_.size() == 1 ? " " : "s ", listed,
+                       " (a tet keeps one label: its volume's first physical group)"));
     }
     file.region_names = std::move(region_names_);
   } else {
@@ -1041,16 +1053,9 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
     std::set<int64_t> entities = tet_entities41_;
     entities.insert(entities22_.begin(), entities22_.end());
     if (entities.size() > 1) {
-      std::vector<std::string> listed;
-      for (const int64_t entity : entities) {
-        if (listed.size() == 4) {
-          listed.push_back(absl::StrCat("and ", entities.size() - 4, " more"));
-          break;
-        }
-        listed.push_back(absl::StrCat(entity));
-      }
       file.dropped_arrays.push_back(absl::StrCat(
-          "elementary volumes ", absl::StrJoin(listed, ", "),
+          "elementary volumes ",
+          FirstFewJoined(entities, [](int64_t entity) { return absl::StrCat(entity); }),
           " as regions (the file has no physical groups, so its tets are one region: a "
           "Physical Volume for each keeps them apart)"));
     }

@@ -722,7 +722,10 @@ absl::StatusOr<ShardedResult> ShardedRefine(
   sent.refine.norm_coeff = options.refine.norm_coeff.value_or(WholeRange(volume));
   // The whole input's quality floor (QualityFloor): a part whose own worst tet is better than
   // the whole's would hold its iterations to a higher floor than the unsharded call.
-  sent.refine.min_quality = QualityFloor(options.refine.min_quality, WorstInputQuality(mesh));
+  // The floor given is used as given: the input's quality is read only when none is.
+  if (!sent.refine.min_quality) {
+    sent.refine.min_quality = QualityFloor(std::nullopt, WorstInputQuality(mesh));
+  }
   sent.stream_every_iteration = false;
   sent.skip_final_mesh = false;  // the parts' meshes are the result
 
