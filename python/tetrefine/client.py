@@ -23,6 +23,11 @@ DEFAULT_CHUNK_BYTES = 1 << 20
 # Response chunks are at most 3 MiB of payload (wire/conversion.h, kMaxChunkBytes): room
 # for that plus framing.
 _MAX_RECEIVE_BYTES = 16 << 20
+# A server that stops answering (frozen, or its host gone without a reset) left a call without a
+# timeout waiting forever; pings end it with UNAVAILABLE within about 50 s, as the CLI's channel
+# does. tetrefine_server accepts a ping every 10 s (server/server_setup.h).
+_KEEPALIVE_TIME_MS = 30_000
+_KEEPALIVE_TIMEOUT_MS = 20_000
 
 
 def _read_bytes(name, value):
@@ -187,11 +192,8 @@ class Client:
         credentials, options = _credentials(tls)
         options = options + [
             ("grpc.max_receive_message_length", _MAX_RECEIVE_BYTES),
-            # A server that stops answering (frozen, or its host gone without a reset) left a
-            # call without a timeout waiting forever; pings end it with UNAVAILABLE within
-            # about 50 s, as the CLI's channel does. tetrefine_server accepts a ping every 10 s.
-            ("grpc.keepalive_time_ms", 30_000),
-            ("grpc.keepalive_timeout_ms", 20_000),
+            ("grpc.keepalive_time_ms", _KEEPALIVE_TIME_MS),
+            ("grpc.keepalive_timeout_ms", _KEEPALIVE_TIMEOUT_MS),
             # Without a limit on pings while no data flows (gRPC's default is two): a call silent
             # for a minute, then a frozen server, waited for ever (outside review, 2026-11-29).
             ("grpc.http2.max_pings_without_data", 0),
