@@ -151,8 +151,12 @@ std::string FormatGmsh41(const MeshFile& file, const GmshWriteOptions& options) 
   const std::vector<Group> groups = GroupByLabel(file);
 
   std::string out = absl::StrCat("$MeshFormat\n4.1 ", binary ? 1 : 0, " 8\n");
-  // Binary sizes are known; text takes about as much again per number.
-  ReserveHuge(out, 1024 + 80 * groups.size() + v * (8 + 24 + 12) + t * (40 + 24) +
+  // Binary sizes are known; text takes about as much again per number. Per group: its entity
+  // (72 bytes in binary), its element block's header (20) and its name's line. 80 bytes a group
+  // was short of that, and a mesh of many labels then copied its file into a doubled buffer.
+  size_t names_bytes = 0;
+  for (const auto& [label, name] : file.region_names) names_bytes += 32 + name.size();
+  ReserveHuge(out, 1024 + 128 * groups.size() + names_bytes + v * (8 + 24 + 12) + t * (40 + 24) +
                        (binary ? 0 : v * 40 + t * 20));
   if (binary) {
     AppendNative<int32_t>(out, 1);

@@ -843,6 +843,12 @@ std::string FormatVtkLegacy(const MeshFile& file, const VtkLegacyWriteOptions& o
   const bool wide = v > static_cast<size_t>(std::numeric_limits<int32_t>::max());
   std::string out =
       absl::StrCat("# vtk DataFile Version ", wide ? "5.1" : "4.2", "\ntetrefine mesh");
+  if (binary) {
+    // Binary sizes are known: the headers, points and values (32 bytes a vertex), cells and
+    // types (24 a tet, 44 with 64-bit offsets and indices), three cell arrays (12). Grown
+    // instead, the file was copied into a doubled buffer a few times over, each on fresh pages.
+    ReserveHuge(out, 4096 + LabelArrayName(file).size() + v * 32 + t * (wide ? 44 + 12 : 24 + 12));
+  }
   if (file.frame != MeshFrame::kUntagged) absl::StrAppend(&out, " SPACE=", FrameTag(file.frame));
   absl::StrAppend(&out, "\n", binary ? "BINARY" : "ASCII", "\nDATASET UNSTRUCTURED_GRID\n");
   absl::StrAppend(&out, "POINTS ", v, " double\n");
