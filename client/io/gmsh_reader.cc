@@ -1051,7 +1051,11 @@ absl::StatusOr<MeshFile> GmshParser::Finish(GmshReadInfo* info) {
     // `Physical Volume` came out unlabelled). They are named as not carried; labels stay the
     // physical groups', as every other reader and writer of Gmsh files takes them.
     std::set<int64_t> entities = tet_entities41_;
-    entities.insert(entities22_.begin(), entities22_.end());
+    // A set insertion per tet only where the entity changes: Gmsh writes an entity's tets in a
+    // run, so this is one per volume, not one per tet (2.2 files; 4.1 lists entities per block).
+    for (size_t i = 0; i < entities22_.size(); ++i) {
+      if (i == 0 || entities22_[i] != entities22_[i - 1]) entities.insert(entities22_[i]);
+    }
     if (entities.size() > 1) {
       file.dropped_arrays.push_back(absl::StrCat(
           "elementary volumes ",
