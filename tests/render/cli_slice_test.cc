@@ -155,11 +155,25 @@ TEST(CliSlice, AMeshOutsideTheVolumeIsNamedNotShownAsPerfect) {
   EXPECT_TRUE(absl::StrContains(far.err, "the volume spans [-8, 8] x [-6, 6] x [0, 8] mm"))
       << far.err;
   EXPECT_TRUE(absl::StrContains(far.err, "cuts the mesh only outside the volume")) << far.err;
+  // Nor does the summary line give a max and mean of nothing (it said "max 0.000000, mean
+  // 0.000000 over 0 pixels").
+  EXPECT_TRUE(absl::StrContains(far.out, "no discrepancy on the plane (no pixel has both values)"))
+      << far.out;
+  EXPECT_FALSE(absl::StrContains(far.out, "over 0 pixels")) << far.out;
   const ProcessResult part = RunTetrefine({"slice", "--volume", dir.File("v.nii"), "--mesh",
                                            dir.File("part.vtu"), "--output", dir.File("part.png")});
   ASSERT_EQ(part.exit_code, 0) << part.err;
   EXPECT_TRUE(absl::StrContains(part.err, "vertices lie outside the volume")) << part.err;
   EXPECT_FALSE(absl::StrContains(part.err, "cuts the mesh only outside")) << part.err;
+  EXPECT_TRUE(absl::StrContains(part.out, "discrepancy on the plane max ")) << part.out;
+  // A plane inside the volume that misses the mesh (z 1 to 7) is named, and so is what it shows.
+  const ProcessResult miss =
+      RunTetrefine({"slice", "--volume", dir.File("v.nii"), "--mesh", dir.File("part.vtu"),
+                    "--position", "0.5", "--output", dir.File("miss.png")});
+  ASSERT_EQ(miss.exit_code, 0) << miss.err;
+  EXPECT_TRUE(absl::StrContains(miss.err, "the plane z = 0.5 mm cuts no tet")) << miss.err;
+  EXPECT_TRUE(absl::StrContains(miss.out, "0 cut by the plane; no discrepancy on the plane"))
+      << miss.out;
 }
 
 struct BadCase {
