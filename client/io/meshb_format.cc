@@ -305,8 +305,9 @@ std::string FormatMeshb(const MeshFile& file, const MeshbWriteOptions& options) 
   MeshbWriter w(version);
   const Sizes& s = w.sizes();
   // The exact size: the version and dimension words, four keywords (code and position), the
-  // dimension, two counts, then the records. A round 64 for the first three lines was 12 bytes
-  // short at versions 3 and 4, and the last keyword copied the file into a doubled buffer.
+  // dimension, two counts, then the records. A round 64 for the first three lines was 4 bytes
+  // short at version 3 and 12 at version 4, and the last keyword copied the file into a doubled
+  // buffer.
   ReserveHuge(w.out(), 4 + 4 + 4 * (4 + s.position) + 4 + 2 * s.integer +
                            v * (3 * s.real + s.integer) + t * 5 * s.integer);
   w.Word(1);

@@ -153,9 +153,9 @@ std::vector<Variant> AllVariants() {
 // A binary file's size is known before it is written, and its writer reserves it: the default
 // .vtu's reservation was 2 bytes short, so its last append copied the whole file into a doubled
 // buffer whose small pages all faulted in (0.12 s of the 0.55 s that writing
-// bench/file_to_file.sh's 42 MB output took, 2026-11-29); .meshb versions 3 and 4 were 12 bytes
-// short, .msh 4.1 binary 12 bytes a region, and legacy .vtk reserved nothing. A reallocation
-// leaves the capacity at about twice the size.
+// bench/file_to_file.sh's 42 MB output took, 2026-11-29); .meshb versions 3 and 4 were 4 and
+// 12 bytes short, .msh 4.1 binary 12 bytes a region, and legacy .vtk reserved nothing. A
+// reallocation leaves the capacity at about twice the size.
 TEST_P(IoMeshRoundTripTest, ABinaryFileIsAssembledInTheBufferReservedForIt) {
   const Variant& variant = GetParam();
   const bool binary = absl::StrContains(variant.name, "appended") ||
