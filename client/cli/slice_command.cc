@@ -256,20 +256,16 @@ int RunSlice(const std::vector<std::string>& args) {
           s.mesh_paths[i], axis_name, position));
     }
     largest = std::max(largest, row.samples.max_discrepancy);
+    std::printf("%s%s: %zu tets, %zu cut by the plane; ", which.c_str(), s.mesh_paths[i].c_str(),
+                mesh.tets.size(), row.samples.sections.size());
     if (row.samples.covered_pixels == 0) {
       // "max 0.000000, mean 0.000000 over 0 pixels" after the warning still read as a perfect
       // mesh to a script that parses this line.
-      std::printf(
-          "%s%s: %zu tets, %zu cut by the plane; no discrepancy on the plane (no pixel "
-          "has both values)\n",
-          which.c_str(), s.mesh_paths[i].c_str(), mesh.tets.size(), row.samples.sections.size());
+      std::printf("no discrepancy on the plane (no pixel has both values)\n");
     } else {
-      std::printf(
-          "%s%s: %zu tets, %zu cut by the plane; discrepancy on the plane max %.6f, mean "
-          "%.6f over %lld pixels\n",
-          which.c_str(), s.mesh_paths[i].c_str(), mesh.tets.size(), row.samples.sections.size(),
-          row.samples.max_discrepancy, row.samples.mean_discrepancy,
-          static_cast<long long>(row.samples.covered_pixels));
+      std::printf("discrepancy on the plane max %.6f, mean %.6f over %lld pixels\n",
+                  row.samples.max_discrepancy, row.samples.mean_discrepancy,
+                  static_cast<long long>(row.samples.covered_pixels));
     }
     rows.push_back(std::move(row));
   }
